@@ -1,0 +1,45 @@
+//! Command-line interface (clap derive).
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Meshless (MLSM) solver for 2D linear elasticity.
+#[derive(Debug, Parser)]
+#[command(name = "mlsm", version, about, long_about = None)]
+pub struct Cli {
+    /// Print nothing but errors.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Solve a scene and write solution.vtu and summary.json.
+    Run {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output folder (default: output/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Validate a scene file without solving it.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+    /// Solve at K halvings of the spacing; print and write errors and observed orders.
+    Convergence {
+        /// Scene file (TOML) with an [exact] solution.
+        scene: PathBuf,
+        /// Number of halvings of the spacing (K + 1 runs).
+        #[arg(long, default_value_t = 3)]
+        levels: usize,
+        /// Output folder (default: output/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}

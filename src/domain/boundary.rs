@@ -1,0 +1,197 @@
+//! Boundary nodes: each primitive edge is clipped to the boundary of the CSG solid
+//! and sampled at the target spacing, endpoints included.
+//!
+//! A point of an edge lies on the solid's boundary iff the solid's signed distance
+//! vanishes there (`|d| <= tol`). Edges are classified on a fine parameter sample
+//! (step `h / 8`); every change of class is located by bisection to `1e-13` of the
+//! edge length, so the corners where two primitives meet are found to round-off
+//! and both edges produce the same corner point. Points closer than `1e-6 h` are
+//! merged into one node that remembers every part it touches, with the normal of
+//! each ([`BoundarySample::touches`]).
+//!
+//! Corner rule: a node touching several parts carries the normalised sum of their
+//! normals (the bisector at a rectangle corner); how the boundary conditions of the
+//! parts are combined there is decided in `elasticity::conditions`.
+
+use super::shape::{BoundaryCurve, Domain, Point};
+
+/// A boundary node before it joins the node set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoundarySample {
+    /// Position.
+    pub position: Point,
+    /// Every boundary part at this point with that part's outward unit normal.
+    pub touches: Vec<(usize, Point)>,
+}
+
+impl BoundarySample {
+    /// Outward unit normal of the node: the normalised sum of the normals of its parts.
+    pub fn normal(&self) -> Point {
+        let mut n = [0.0, 0.0];
+        for (_, m) in &self.touches {
+            n[0] += m[0];
+            n[1] += m[1];
+        }
+        let l = n[0].hypot(n[1]);
+        if l > 1e-12 {
+            [n[0] / l, n[1] / l]
+        } else {
+            self.touches[0].1
+        }
+    }
+}
+
+/// Parameter intervals `[s0, s1]` of `curve` that lie on the solid's boundary.
+fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -> Vec<(f64, f64)> {
+    let len = c.curve.length();
+    let on = |s: f64| domain.signed_distance(c.curve.at(s).0).abs() <= tol;
+    let samples = ((len / (h / 8.0)).ceil() as usize).max(16);
+    let ds = len / samples as f64;
+    // Bisection between an "on" and an "off" parameter: returns the last "on" point.
+    let refine = |mut s_on: f64, mut s_off: f64| {
+        while (s_on - s_off).abs() > 1e-13 * len {
+            let mid = 0.5 * (s_on + s_off);
+            if on(mid) {
+                s_on = mid;
+            } else {
+                s_off = mid;
+            }
+        }
+        s_on
+    };
+    let mut intervals = Vec::new();
+    let mut start = if on(0.0) { Some(0.0) } else { None };
+    let mut prev = 0.0;
+    for k in 1..=samples {
+        let s = if k == samples { len } else { k as f64 * ds };
+        match (start, on(s)) {
+            (None, true) => start = Some(refine(s, prev)),
+            (Some(s0), false) => {
+                intervals.push((s0, refine(prev, s)));
+                start = None;
+            }
+            _ => {}
+        }
+        prev = s;
+    }
+    if let Some(s0) = start {
+        intervals.push((s0, len));
+    }
+    // A closed curve whose first and last intervals meet at s = 0 is one interval.
+    if c.curve.is_closed() && intervals.len() > 1 && intervals[0].0 == 0.0 && intervals.last().unwrap().1 == len {
+        let last = intervals.pop().unwrap();
+        intervals[0].0 = last.0 - len;
+    }
+    intervals
+}
+
+/// Sample the boundary of `domain` at spacing about `h` (see module docs).
+pub fn discretise_boundary(domain: &Domain, h: f64) -> Vec<BoundarySample> {
+    let tol = 1e-9 * domain.scale();
+    let mut raw: Vec<BoundarySample> = Vec::new();
+    for c in domain.boundary_curves() {
+        let len = c.curve.length();
+        for (s0, s1) in on_boundary_intervals(domain, &c, h, tol) {
+            let whole_closed = c.curve.is_closed() && s0 == 0.0 && s1 == len;
+            let segments = (((s1 - s0) / h).round() as usize).max(1);
+            let count = if whole_closed { segments } else { segments + 1 };
+            for k in 0..count {
+                let s = s0 + (s1 - s0) * k as f64 / segments as f64;
+                let (p, n) = c.curve.at(s.rem_euclid(len));
+                raw.push(BoundarySample { position: p, touches: vec![(c.part, n)] });
+            }
+        }
+    }
+    merge_coincident(raw, 1e-6 * h)
+}
+
+/// Merge samples closer than `eps` (corners produced by two edges).
+fn merge_coincident(raw: Vec<BoundarySample>, eps: f64) -> Vec<BoundarySample> {
+    let mut out: Vec<BoundarySample> = Vec::with_capacity(raw.len());
+    // Corners are few: index the kept samples by a coarse hash of their position.
+    let key = |p: Point| ((p[0] / eps).floor() as i64, (p[1] / eps).floor() as i64);
+    let mut index: std::collections::HashMap<(i64, i64), Vec<usize>> = std::collections::HashMap::new();
+    for s in raw {
+        let (kx, ky) = key(s.position);
+        let mut found = None;
+        'search: for dx in -1..=1 {
+            for dy in -1..=1 {
+                if let Some(list) = index.get(&(kx + dx, ky + dy)) {
+                    for &i in list {
+                        let q = out[i].position;
+                        if (q[0] - s.position[0]).hypot(q[1] - s.position[1]) <= eps {
+                            found = Some(i);
+                            break 'search;
+                        }
+                    }
+                }
+            }
+        }
+        match found {
+            Some(i) => {
+                for t in s.touches {
+                    if !out[i].touches.iter().any(|(p, _)| *p == t.0) {
+                        out[i].touches.push(t);
+                    }
+                }
+            }
+            None => {
+                index.entry((kx, ky)).or_default().push(out.len());
+                out.push(s);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::shape::{CsgOp, Primitive, Region};
+    use super::*;
+
+    fn quarter_plate() -> Domain {
+        Domain {
+            regions: vec![
+                Region { primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [4.0, 4.0] }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] },
+                Region { primitive: Primitive::Disc { center: [0.0, 0.0], radius: 1.0 }, op: CsgOp::Subtract, edge_parts: vec![4] },
+            ],
+            parts: ["bottom", "right", "top", "left", "hole"].iter().map(|s| s.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn rectangle_corners_are_shared_and_bisected() {
+        let d = Domain {
+            regions: vec![Region { primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [2.0, 1.0] }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] }],
+            parts: ["bottom", "right", "top", "left"].iter().map(|s| s.to_string()).collect(),
+        };
+        let b = discretise_boundary(&d, 0.1);
+        // 20 + 10 segments per side pair: perimeter / h = 60 distinct nodes.
+        assert_eq!(b.len(), 60);
+        let corners: Vec<_> = b.iter().filter(|s| s.touches.len() == 2).collect();
+        assert_eq!(corners.len(), 4);
+        let c = corners.iter().find(|s| s.position == [0.0, 0.0]).unwrap();
+        let n = c.normal();
+        assert!((n[0] + 0.5f64.sqrt()).abs() < 1e-15 && (n[1] + 0.5f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn hole_meets_edges_at_exact_corners() {
+        let b = discretise_boundary(&quarter_plate(), 0.05);
+        // The hole arc meets the left edge at (0, 1) and the bottom edge at (1, 0).
+        for target in [[0.0, 1.0], [1.0, 0.0]] {
+            let s = b.iter().find(|s| (s.position[0] - target[0]).hypot(s.position[1] - target[1]) < 1e-9).expect("corner node");
+            assert_eq!(s.touches.len(), 2, "{:?}", s);
+        }
+        // No node inside the hole, all on the boundary.
+        for s in &b {
+            let r = s.position[0].hypot(s.position[1]);
+            assert!(r > 1.0 - 1e-9, "{:?}", s.position);
+            // Hole normals point to the centre (outward of the solid).
+            if s.touches.iter().all(|t| t.0 == 4) {
+                let n = s.normal();
+                assert!((n[0] * s.position[0] + n[1] * s.position[1] + r).abs() < 1e-9);
+            }
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! Cross-solver tests on a collocation-like system.

@@ -1,0 +1,25 @@
+//! Meshless shape functions (MLSM): weighted least squares over each node's support.
+//!
+//! [`basis`] defines the local bases and weights, [`wls`] one local solve,
+//! [`shapes`] the parallel computation for all nodes of exactly the operators each
+//! node needs.
+
+pub mod basis;
+pub mod ops;
+pub mod shapes;
+pub mod wls;
+
+pub use basis::{Basis, RbfKind, Weight};
+pub use ops::{Op, OpSet};
+pub use shapes::{compute_shapes, ShapeError, Shapes};
+
+/// Basis, weight and support size of the local fits.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Approximation {
+    /// Local basis.
+    pub basis: Basis,
+    /// Local weight.
+    pub weight: Weight,
+    /// Support size `n` (the node itself included).
+    pub support: usize,
+}

@@ -1,0 +1,113 @@
+//! Shape functions of all nodes, computed in parallel (rayon) for exactly the
+//! operators each node needs, and stored node by node.
+
+use super::ops::{Op, OpSet};
+use super::wls::shape_functions;
+use super::Approximation;
+use crate::domain::neighbors::Supports;
+use crate::domain::Point;
+use rayon::prelude::*;
+
+/// A support whose local least-squares matrix is rank deficient.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error(
+    "degenerate support at node {node} ({x:.6e}, {y:.6e}): the weighted basis matrix has rank < {basis_size} \
+     (smallest relative QR pivot {ratio:.1e}); the {support} nearest nodes are too close to collinear or too few \
+     for the basis. Use a larger support, a lower degree, or a finer/more regular node fill"
+)]
+pub struct ShapeError {
+    /// Node index.
+    pub node: usize,
+    /// Node position x.
+    pub x: f64,
+    /// Node position y.
+    pub y: f64,
+    /// Basis size m.
+    pub basis_size: usize,
+    /// Support size n.
+    pub support: usize,
+    /// Smallest `|R_kk| / max |R_kk|`.
+    pub ratio: f64,
+}
+
+/// Shape functions per node and operator.
+#[derive(Debug, Clone)]
+pub struct Shapes {
+    support: usize,
+    /// Operators stored for every node (slots), and per node which of them were computed.
+    stored: OpSet,
+    slot: [usize; 6],
+    computed: Vec<OpSet>,
+    data: Vec<f64>,
+}
+
+impl Shapes {
+    /// Union of the operators computed at any node.
+    pub fn operators(&self) -> OpSet {
+        self.stored
+    }
+
+    /// Operators computed at node `i`.
+    pub fn computed_at(&self, i: usize) -> OpSet {
+        self.computed[i]
+    }
+
+    /// Shape function of `op` at node `i`, aligned with `supports.of(i)`.
+    pub fn get(&self, i: usize, op: Op) -> &[f64] {
+        debug_assert!(self.computed[i].contains(op), "shape {op:?} not computed at node {i}");
+        let per_node = self.stored.len() * self.support;
+        let start = i * per_node + self.slot[op as usize] * self.support;
+        &self.data[start..start + self.support]
+    }
+
+    /// Number of (node, operator) shape functions actually computed.
+    pub fn count(&self) -> usize {
+        self.computed.iter().map(|s| s.len()).sum()
+    }
+}
+
+/// Compute, for every node `i`, the shapes of the operators `needs[i]`.
+pub fn compute_shapes(
+    positions: &[Point],
+    supports: &Supports,
+    approx: &Approximation,
+    needs: &[OpSet],
+) -> Result<Shapes, ShapeError> {
+    let n = supports.size();
+    let stored = needs.iter().fold(OpSet::EMPTY, |a, &b| a | b);
+    let mut slot = [usize::MAX; 6];
+    for (k, op) in stored.iter().enumerate() {
+        slot[op as usize] = k;
+    }
+    let per_node = stored.len() * n;
+    let mut data = vec![0.0; positions.len() * per_node];
+    if per_node > 0 {
+        data.par_chunks_mut(per_node).enumerate().try_for_each_init(
+            || (Vec::with_capacity(n), Vec::with_capacity(6 * n)),
+            |(pts, buf): &mut (Vec<Point>, Vec<f64>), (i, record)| {
+                let ops: Vec<Op> = needs[i].iter().collect();
+                if ops.is_empty() {
+                    return Ok(());
+                }
+                pts.clear();
+                pts.extend(supports.of(i).iter().map(|&j| positions[j as usize]));
+                buf.clear();
+                buf.resize(ops.len() * n, 0.0);
+                shape_functions(&approx.basis, &approx.weight, positions[i], pts, &ops, buf).map_err(|e| ShapeError {
+                    node: i,
+                    x: positions[i][0],
+                    y: positions[i][1],
+                    basis_size: e.basis_size,
+                    support: n,
+                    ratio: e.ratio,
+                })?;
+                for (k, op) in ops.iter().enumerate() {
+                    let s = slot[*op as usize];
+                    record[s * n..(s + 1) * n].copy_from_slice(&buf[k * n..(k + 1) * n]);
+                }
+                Ok(())
+            },
+        )?;
+    }
+    Ok(Shapes { support: n, stored, slot, computed: needs.to_vec(), data })
+}

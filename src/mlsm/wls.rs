@@ -1,0 +1,85 @@
+//! One weighted least-squares solve: the shape functions of a set of operators at
+//! one node (seed 002, eq. 10).
+//!
+//! With `B_jk = b_k(z_j)` (support in local coordinates `z = (x - p)/s`),
+//! `W = diag(sqrt(w_j))` and `l = (L b)(p)`, the shape function is
+//! `phi_L = (L b)(p)^T (W B)^+ W`, so that `(L u)(p) ~= phi_L . u[support]`.
+//! It is evaluated through a thin QR factorisation `W B = Q R` (never through the
+//! normal equations, which square the condition number):
+//! `phi_L = W Q R^-T l`. Derivatives in local coordinates are converted back by
+//! `d^k/dx^k = s^-k d^k/dz^k`. A rank-deficient `W B` (collinear support,
+//! duplicated nodes) is reported, not turned into NaNs.
+
+use super::basis::{Basis, LocalBasis, Weight};
+use super::ops::Op;
+use nalgebra::DMatrix;
+
+/// Why a local fit failed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RankDeficient {
+    /// Smallest `|R_kk| / max |R_kk|` found.
+    pub ratio: f64,
+    /// Basis size `m`.
+    pub basis_size: usize,
+}
+
+/// Relative size of the smallest QR pivot below which `W B` counts as rank deficient.
+pub fn rank_tolerance(basis: &Basis) -> f64 {
+    match basis {
+        // RBF collocation matrices are notoriously ill-conditioned but still usable.
+        Basis::Rbf { .. } => 1e-15,
+        _ => 1e-10,
+    }
+}
+
+/// Shape functions of `ops` at `centre` for the support `points` (the centre first),
+/// written to `out[k * n .. (k + 1) * n]` for the k-th operator.
+pub fn shape_functions(
+    basis: &Basis,
+    weight: &Weight,
+    centre: [f64; 2],
+    points: &[[f64; 2]],
+    ops: &[Op],
+    out: &mut [f64],
+) -> Result<(), RankDeficient> {
+    let n = points.len();
+    let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
+    let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
+    let s = dist.iter().cloned().fold(0.0, f64::max);
+    let h_p = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+    let z: Vec<[f64; 2]> = rel.iter().map(|d| [d[0] / s, d[1] / s]).collect();
+    let sw: Vec<f64> = dist.iter().map(|&r| weight.sqrt_weight(r, h_p)).collect();
+    let local = LocalBasis::new(basis, &z, h_p / s);
+    let m = local.len();
+
+    let mut row = vec![0.0; m];
+    let mut wb = DMatrix::<f64>::zeros(n, m);
+    for j in 0..n {
+        local.values(z[j], &mut row);
+        for k in 0..m {
+            wb[(j, k)] = sw[j] * row[k];
+        }
+    }
+    let qr = wb.qr();
+    let r = qr.r();
+    let diag_max = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
+    let diag_min = (0..m).map(|k| r[(k, k)].abs()).fold(f64::INFINITY, f64::min);
+    let ratio = if diag_max > 0.0 { diag_min / diag_max } else { 0.0 };
+    if !(ratio > rank_tolerance(basis)) {
+        return Err(RankDeficient { ratio, basis_size: m });
+    }
+    let q = qr.q();
+    let rt = r.transpose();
+    let mut l = nalgebra::DVector::<f64>::zeros(m);
+    for (k, &op) in ops.iter().enumerate() {
+        local.operator_at_centre(op, l.as_mut_slice());
+        let scale = s.powi(-op.order());
+        // R^T y = l (forward substitution; R^T is lower triangular).
+        let y = rt.solve_lower_triangular(&l).expect("nonzero pivots checked above");
+        let phi = &q * y;
+        for j in 0..n {
+            out[k * n + j] = sw[j] * phi[j] * scale;
+        }
+    }
+    Ok(())
+}

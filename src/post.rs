@@ -1,0 +1,66 @@
+//! Error norms against an exact solution (verification.md, "Error norms"):
+//! `e_inf(u) = max_{i,c} |u_h - u| / max_{i,c} |u|`, the same for the stress
+//! components `(sigma_xx, sigma_yy, sigma_xy)`, and discrete relative L2 norms
+//! `sqrt(sum |u_h - u|^2 / sum |u|^2)` over the nodes.
+
+use serde::Serialize;
+
+/// Errors of one run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ErrorNorms {
+    /// Relative max-norm error of the displacement.
+    pub e_inf_u: f64,
+    /// Relative max-norm error of the stress components.
+    pub e_inf_sigma: Option<f64>,
+    /// Relative discrete L2 error of the displacement.
+    pub rel_l2_u: f64,
+    /// Relative discrete L2 error of the stress components.
+    pub rel_l2_sigma: Option<f64>,
+}
+
+/// `(max |a - b| / max |b|, sqrt(sum |a - b|^2 / sum |b|^2))` over all components.
+pub fn relative_errors<const K: usize>(numerical: &[[f64; K]], exact: &[[f64; K]]) -> (f64, f64) {
+    let (mut max_d, mut max_e, mut sum_d, mut sum_e) = (0.0f64, 0.0f64, 0.0, 0.0);
+    for (a, b) in numerical.iter().zip(exact) {
+        for k in 0..K {
+            let d = (a[k] - b[k]).abs();
+            max_d = max_d.max(d);
+            max_e = max_e.max(b[k].abs());
+            sum_d += d * d;
+            sum_e += b[k] * b[k];
+        }
+    }
+    (max_d / max_e, (sum_d / sum_e).sqrt())
+}
+
+/// Least-squares slope of `log e` against `log h`: the observed order of convergence.
+pub fn observed_order(h: &[f64], e: &[f64]) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = h.iter().zip(e).filter(|(h, e)| **h > 0.0 && **e > 0.0).map(|(h, e)| (h.ln(), e.ln())).collect();
+    if pts.len() < 2 {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slope_of_power_law() {
+        let h = [0.1, 0.05, 0.025];
+        let e: Vec<f64> = h.iter().map(|h: &f64| 3.0 * h.powf(2.5)).collect();
+        assert!((observed_order(&h, &e).unwrap() - 2.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn relative_errors_scale_free() {
+        let (i, l) = relative_errors(&[[1.1, 0.0], [2.0, 0.0]], &[[1.0, 0.0], [2.0, 0.0]]);
+        assert!((i - 0.05).abs() < 1e-15);
+        assert!((l - (0.01f64 / 5.0).sqrt()).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,141 @@
+//! The validated problem: built once from a scene file by [`Problem::from_file`].
+//! After this point no code handles raw strings or unchecked numbers.
+
+pub mod spec;
+pub mod validate;
+
+use crate::domain::{Domain, FillParams};
+use crate::elasticity::material::Material;
+use crate::linalg::SolverParams;
+use crate::mlsm::Approximation;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// A scene file that cannot be used, with the file, the field and the reason.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{}: {field}: {reason}", file.display())]
+pub struct ProblemError {
+    /// The scene file.
+    pub file: PathBuf,
+    /// Dotted path of the offending field (`approximation.support`, `boundary[2].part`, ...).
+    pub field: String,
+    /// What is wrong and what to change.
+    pub reason: String,
+}
+
+/// How a displacement component is constrained on a boundary part.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ComponentCondition {
+    /// Prescribed displacement component.
+    Displacement,
+    /// Prescribed traction component `(sigma n)_c`.
+    Traction,
+}
+
+/// Where a boundary or body-force value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Value {
+    /// A constant vector.
+    Constant([f64; 2]),
+    /// The scene's exact solution (displacement, traction `sigma n`, or body force).
+    Exact,
+}
+
+/// The condition imposed on one boundary part.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BoundaryCondition {
+    /// Condition on the x and y components.
+    pub components: [ComponentCondition; 2],
+    /// Prescribed displacement or traction.
+    pub value: Value,
+}
+
+/// A closed-form solution named in the scene (built by [`crate::exact::from_kind`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum ExactKind {
+    /// Timoshenko cantilever, variant A (verification.md 1).
+    Cantilever { load: f64, length: f64, depth: f64 },
+    /// Kirsch plate with a hole (verification.md 2).
+    Kirsch { tension: f64, radius: f64 },
+    /// Lame thick cylinder under internal pressure (verification.md 3).
+    Lame { pressure: f64, inner: f64, outer: f64 },
+    /// `u = (sin(pi x) cos(pi y), x^2 y^3)` with its body force (verification.md 6).
+    Manufactured,
+}
+
+/// Output fields a run writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+pub struct Outputs {
+    /// Displacement vector.
+    pub displacement: bool,
+    /// Strain components.
+    pub strain: bool,
+    /// Stress components.
+    pub stress: bool,
+    /// Von Mises stress.
+    pub von_mises: bool,
+    /// Error fields and norms against the exact solution.
+    pub error: bool,
+}
+
+impl Outputs {
+    /// Whether post-processing needs the displacement gradient (first-derivative shapes everywhere).
+    pub fn needs_gradient(&self) -> bool {
+        self.strain || self.stress || self.von_mises || self.error
+    }
+}
+
+/// A validated scene.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// Scene name (output folder).
+    pub name: String,
+    /// The scene file it came from.
+    pub source: PathBuf,
+    /// The solid.
+    pub domain: Domain,
+    /// Node generation (spacing resolved).
+    pub fill: FillParams,
+    /// Local approximation.
+    pub approximation: Approximation,
+    /// Material.
+    pub material: Material,
+    /// Body force.
+    pub body_force: Value,
+    /// Condition of each boundary part, indexed like `domain.parts`.
+    pub conditions: Vec<BoundaryCondition>,
+    /// Linear solver.
+    pub solver: SolverParams,
+    /// Requested fields.
+    pub outputs: Outputs,
+    /// Closed-form solution, if any.
+    pub exact: Option<ExactKind>,
+}
+
+impl Problem {
+    /// Read, parse and validate a scene file.
+    pub fn from_file(path: &Path) -> Result<Problem, ProblemError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ProblemError {
+            file: path.to_path_buf(),
+            field: "(file)".into(),
+            reason: format!("cannot read the scene file: {e}"),
+        })?;
+        Problem::from_str(&text, path)
+    }
+
+    /// Parse and validate scene text; `path` is used in messages and for the default name.
+    pub fn from_str(text: &str, path: &Path) -> Result<Problem, ProblemError> {
+        let spec = validate::parse(text, path)?;
+        validate::validate(spec, path)
+    }
+
+    /// The same problem at another node spacing (used by convergence studies).
+    pub fn with_spacing(&self, spacing: f64) -> Problem {
+        let mut p = self.clone();
+        p.fill.spacing = spacing;
+        p
+    }
+}

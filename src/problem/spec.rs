@@ -1,0 +1,214 @@
+//! Raw mirror of the scene file (TOML). Every table denies unknown keys; every
+//! semantic check happens in `validate`, which turns a [`SceneSpec`] into a
+//! [`super::Problem`].
+
+use serde::Deserialize;
+
+/// A whole scene file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    /// Scene name (default: the file stem); names the output folder.
+    pub name: Option<String>,
+    /// Free text shown in the summary.
+    pub description: Option<String>,
+    /// The solid.
+    pub domain: DomainSpec,
+    /// Node generation.
+    pub nodes: NodesSpec,
+    /// Local approximation (defaults: monomials of degree 2, Gaussian weight).
+    #[serde(default)]
+    pub approximation: ApproximationSpec,
+    /// Elastic constants and planar model.
+    pub material: MaterialSpec,
+    /// Body force `[fx, fy]` (N/m^3) or `"exact"`.
+    pub body_force: Option<VectorOrExact>,
+    /// One condition per boundary part.
+    #[serde(default)]
+    pub boundary: Vec<BoundarySpec>,
+    /// Linear solver.
+    #[serde(default)]
+    pub solver: SolverSpec,
+    /// Requested output fields.
+    #[serde(default)]
+    pub output: OutputSpec,
+    /// Closed-form solution to compare with (and to take boundary values from).
+    pub exact: Option<ExactSpec>,
+}
+
+/// `[domain]`: a list of regions combined left to right.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    /// `[[domain.region]]` entries.
+    pub region: Vec<RegionSpec>,
+}
+
+/// `[[domain.region]]`: one primitive and how it combines with the regions before it.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    /// `rectangle`, `disc` or `polygon`.
+    pub shape: String,
+    /// `union` (default), `subtract` or `intersect`.
+    pub op: Option<String>,
+    /// Rectangle corner with the smallest coordinates.
+    pub min: Option<[f64; 2]>,
+    /// Rectangle corner with the largest coordinates.
+    pub max: Option<[f64; 2]>,
+    /// Disc centre.
+    pub center: Option<[f64; 2]>,
+    /// Disc radius.
+    pub radius: Option<f64>,
+    /// Polygon vertices (either orientation).
+    pub vertices: Option<Vec<[f64; 2]>>,
+    /// Boundary part name of a disc.
+    pub name: Option<String>,
+    /// Part names of a rectangle's edges (keys `bottom`, `right`, `top`, `left`) ...
+    pub names: Option<RectangleNames>,
+    /// ... or of a polygon's edges (edge k runs from vertex k to vertex k+1).
+    pub edge_names: Option<Vec<String>>,
+}
+
+/// Renamed rectangle edges.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RectangleNames {
+    /// Edge `y = min.y`.
+    pub bottom: Option<String>,
+    /// Edge `x = max.x`.
+    pub right: Option<String>,
+    /// Edge `y = max.y`.
+    pub top: Option<String>,
+    /// Edge `x = min.x`.
+    pub left: Option<String>,
+}
+
+/// `[nodes]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodesSpec {
+    /// Target spacing (m).
+    pub spacing: Option<f64>,
+    /// Approximate node count (alternative to `spacing`).
+    pub count: Option<usize>,
+    /// `grid` or `scattered`.
+    pub fill: Option<String>,
+    /// Random seed.
+    pub seed: Option<u64>,
+    /// Relaxation sweeps.
+    pub relax: Option<usize>,
+}
+
+/// `[approximation]`.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ApproximationSpec {
+    /// `monomials`, `tensor`, `gaussian`, `mq`, `imq`.
+    pub basis: Option<String>,
+    /// Polynomial degree.
+    pub degree: Option<u32>,
+    /// RBF shape parameter in units of the local spacing.
+    pub shape: Option<f64>,
+    /// `gaussian` or `none`.
+    pub weight: Option<String>,
+    /// Gaussian weight width in units of the local spacing.
+    pub sigma: Option<f64>,
+    /// Support size n.
+    pub support: Option<usize>,
+}
+
+/// `[material]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Young's modulus (Pa).
+    #[serde(rename = "E")]
+    pub young: Option<f64>,
+    /// Poisson's ratio.
+    pub nu: Option<f64>,
+    /// First Lame parameter of the 3D solid (Pa).
+    pub lambda: Option<f64>,
+    /// Shear modulus (Pa).
+    pub mu: Option<f64>,
+    /// `stress` or `strain`.
+    pub plane: String,
+}
+
+/// A 2-vector or the word `"exact"`.
+#[derive(Debug, Deserialize, Clone)]
+#[serde(untagged)]
+pub enum VectorOrExact {
+    /// Constant value.
+    Vector([f64; 2]),
+    /// A word (only `exact` is valid).
+    Word(String),
+}
+
+/// `[[boundary]]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// Boundary part name.
+    pub part: String,
+    /// `displacement`, `traction` or `mixed`.
+    pub kind: String,
+    /// For `mixed`: condition on the x component (`displacement` or `traction`).
+    pub x: Option<String>,
+    /// For `mixed`: condition on the y component.
+    pub y: Option<String>,
+    /// Value (m or Pa) or `"exact"`; default `[0, 0]`.
+    pub value: Option<VectorOrExact>,
+}
+
+/// `[solver]`.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSpec {
+    /// `lu` or `bicgstab`.
+    pub kind: Option<String>,
+    /// `ilu0`, `ilut` or `jacobi`.
+    pub preconditioner: Option<String>,
+    /// ILUT drop tolerance.
+    pub drop: Option<f64>,
+    /// ILUT fill per row.
+    pub fill: Option<usize>,
+    /// Relative residual tolerance.
+    pub tolerance: Option<f64>,
+    /// Iteration limit.
+    pub max_iterations: Option<usize>,
+    /// Row equilibration.
+    pub equilibrate: Option<bool>,
+}
+
+/// `[output]`.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Fields: `displacement`, `strain`, `stress`, `von_mises`, `error`.
+    pub fields: Option<Vec<String>>,
+}
+
+/// `[exact]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExactSpec {
+    /// `cantilever`, `kirsch`, `lame`, `manufactured`.
+    pub kind: String,
+    /// Cantilever end load P (N/m).
+    pub load: Option<f64>,
+    /// Cantilever length L (m).
+    pub length: Option<f64>,
+    /// Cantilever depth D (m).
+    pub depth: Option<f64>,
+    /// Kirsch far-field tension T (Pa).
+    pub tension: Option<f64>,
+    /// Kirsch hole radius a (m).
+    pub radius: Option<f64>,
+    /// Lame internal pressure p (Pa).
+    pub pressure: Option<f64>,
+    /// Lame inner radius a (m).
+    pub inner: Option<f64>,
+    /// Lame outer radius b (m).
+    pub outer: Option<f64>,
+}

@@ -1,0 +1,610 @@
+//! Scene text -> [`SceneSpec`] (syntax, types, unknown keys) -> [`Problem`]
+//! (physics and consistency). Every error names the file, the field and the reason.
+
+use super::spec::*;
+use super::{BoundaryCondition, ComponentCondition, ExactKind, Outputs, Problem, ProblemError, Value};
+use crate::domain::{CsgOp, Domain, FillKind, FillParams, Primitive, Region};
+use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
+use crate::linalg::{Preconditioner, SolverKind, SolverParams};
+use crate::mlsm::{Approximation, Basis, RbfKind, Weight};
+use std::path::Path;
+
+/// Default support size: 12 nearest nodes for degree-2 monomials (m = 6) keeps the
+/// least-squares fit over-determined by a factor 2 on scattered nodes.
+pub const DEFAULT_SUPPORT: usize = 12;
+
+/// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
+/// `nodes.count` into a spacing (the scattered fill packs about 1.1 nodes per h^2).
+fn packing(kind: FillKind) -> f64 {
+    match kind {
+        FillKind::Grid => 1.0,
+        FillKind::Scattered => 1.1,
+    }
+}
+
+/// TOML syntax, types and unknown keys; the message carries line, column and key path.
+pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, ProblemError> {
+    let err = |field: String, reason: String| ProblemError { file: path.to_path_buf(), field, reason };
+    let de = toml::Deserializer::parse(text).map_err(|e| err("(syntax)".into(), located(text, &e)))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        err(if field == "." { "(top level)".into() } else { field }, located(text, &inner))
+    })
+}
+
+fn located(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().to_string();
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {col}: {msg}")
+        }
+        None => msg,
+    }
+}
+
+struct Ctx<'a> {
+    path: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn err<T>(&self, field: impl Into<String>, reason: impl Into<String>) -> Result<T, ProblemError> {
+        Err(ProblemError { file: self.path.to_path_buf(), field: field.into(), reason: reason.into() })
+    }
+
+    fn positive(&self, field: &str, v: f64) -> Result<f64, ProblemError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            self.err(field, format!("must be a positive finite number, got {v}"))
+        }
+    }
+
+    fn finite(&self, field: &str, v: &[f64]) -> Result<(), ProblemError> {
+        match v.iter().find(|x| !x.is_finite()) {
+            Some(x) => self.err(field, format!("must be finite, got {x}")),
+            None => Ok(()),
+        }
+    }
+
+    fn need<T: Copy>(&self, field: &str, v: Option<T>, what: &str) -> Result<T, ProblemError> {
+        match v {
+            Some(x) => Ok(x),
+            None => self.err(field, format!("missing: {what}")),
+        }
+    }
+
+    fn word<'w, T: Copy>(&self, field: &str, got: &str, options: &[(&'w str, T)]) -> Result<T, ProblemError> {
+        match options.iter().find(|(k, _)| *k == got) {
+            Some((_, v)) => Ok(*v),
+            None => {
+                let known: Vec<_> = options.iter().map(|(k, _)| format!("\"{k}\"")).collect();
+                self.err(field, format!("unknown value \"{got}\" (expected one of {})", known.join(", ")))
+            }
+        }
+    }
+}
+
+/// Semantic validation: physics, geometry, consistency of names and options.
+pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
+    let c = Ctx { path };
+    let name = match &spec.name {
+        Some(n) if n.is_empty() || n.contains(['/', '\\']) || n == "." || n == ".." => {
+            return c.err("name", format!("\"{n}\" cannot name an output folder (no slashes, not empty)"))
+        }
+        Some(n) => n.clone(),
+        None => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into()),
+    };
+    let domain = domain(&c, &spec.domain)?;
+    let (lo, hi) = domain.bounding_box();
+    let area = domain.area_estimate(400);
+    if !(hi[0] > lo[0] && hi[1] > lo[1]) || area <= 0.0 {
+        return c.err("domain.region", "the regions leave no material (empty intersection or everything subtracted)");
+    }
+    let approximation = approximation(&c, &spec.approximation)?;
+    let fill = nodes(&c, &spec.nodes, &domain, area)?;
+    let expected_nodes = area / fill.spacing.powi(2) * packing(fill.kind);
+    if expected_nodes < 2.0 * approximation.support as f64 {
+        return c.err(
+            "nodes.spacing",
+            format!(
+                "spacing {} gives about {expected_nodes:.0} nodes, too few for supports of {} nodes; use a smaller spacing",
+                fill.spacing, approximation.support
+            ),
+        );
+    }
+    if expected_nodes > 5e7 {
+        return c.err("nodes.spacing", format!("spacing {} gives about {expected_nodes:.1e} nodes (over 5e7); this machine cannot hold the system", fill.spacing));
+    }
+    let material = material(&c, &spec.material)?;
+    let exact = match &spec.exact {
+        Some(e) => {
+            let kind = exact(&c, e)?;
+            if let Err(pe) = crate::exact::from_kind(&kind, material) {
+                return c.err(format!("exact.{}", pe.parameter), pe.to_string());
+            }
+            Some(kind)
+        }
+        None => None,
+    };
+    let exact_word = |field: &str, w: &str| -> Result<Value, ProblemError> {
+        if w != "exact" {
+            return c.err(field, format!("expected [x, y] or \"exact\", got \"{w}\""));
+        }
+        if exact.is_none() {
+            return c.err(field, "\"exact\" needs an [exact] table naming the solution");
+        }
+        Ok(Value::Exact)
+    };
+    let body_force = match &spec.body_force {
+        None => Value::Constant([0.0, 0.0]),
+        Some(VectorOrExact::Vector(v)) => {
+            c.finite("body_force", v)?;
+            Value::Constant(*v)
+        }
+        Some(VectorOrExact::Word(w)) => exact_word("body_force", w)?,
+    };
+    if matches!(exact, Some(ExactKind::Manufactured)) && body_force != Value::Exact {
+        return c.err("body_force", "the manufactured solution needs its own body force: set body_force = \"exact\"");
+    }
+    let conditions = conditions(&c, &spec.boundary, &domain, &exact_word)?;
+    let solver = solver(&c, &spec.solver)?;
+    let outputs = outputs(&c, &spec.output, exact.is_some())?;
+    Ok(Problem {
+        name,
+        source: path.to_path_buf(),
+        domain,
+        fill,
+        approximation,
+        material,
+        body_force,
+        conditions,
+        solver,
+        outputs,
+        exact,
+    })
+}
+
+fn domain(c: &Ctx, spec: &DomainSpec) -> Result<Domain, ProblemError> {
+    if spec.region.is_empty() {
+        return c.err("domain.region", "at least one region is needed");
+    }
+    let mut parts: Vec<String> = Vec::new();
+    let mut part_id = |name: &str| match parts.iter().position(|p| p == name) {
+        Some(i) => i,
+        None => {
+            parts.push(name.to_string());
+            parts.len() - 1
+        }
+    };
+    let mut regions = Vec::new();
+    for (k, r) in spec.region.iter().enumerate() {
+        let f = |s: &str| format!("domain.region[{k}].{s}");
+        let op = match &r.op {
+            None => CsgOp::Union,
+            Some(o) => c.word(&f("op"), o, &[("union", CsgOp::Union), ("subtract", CsgOp::Subtract), ("intersect", CsgOp::Intersect)])?,
+        };
+        if k == 0 && op != CsgOp::Union {
+            return c.err(f("op"), "the first region must add material (op = \"union\" or no op)");
+        }
+        let not_for = |field: &str, present: bool, shape: &str| -> Result<(), ProblemError> {
+            if present {
+                c.err(f(field), format!("not used by a {shape}; remove it"))
+            } else {
+                Ok(())
+            }
+        };
+        let (primitive, edge_parts) = match r.shape.as_str() {
+            "rectangle" => {
+                not_for("center", r.center.is_some(), "rectangle")?;
+                not_for("radius", r.radius.is_some(), "rectangle")?;
+                not_for("vertices", r.vertices.is_some(), "rectangle")?;
+                not_for("name", r.name.is_some(), "rectangle (use names = { left = \"...\" })")?;
+                not_for("edge_names", r.edge_names.is_some(), "rectangle (use names)")?;
+                let min = c.need(&f("min"), r.min, "a rectangle needs min = [x, y]")?;
+                let max = c.need(&f("max"), r.max, "a rectangle needs max = [x, y]")?;
+                c.finite(&f("min"), &min)?;
+                c.finite(&f("max"), &max)?;
+                if !(max[0] > min[0] && max[1] > min[1]) {
+                    return c.err(f("max"), format!("must exceed min in both coordinates (min = {min:?}, max = {max:?})"));
+                }
+                let d = RectangleNames::default();
+                let n = r.names.as_ref().unwrap_or(&d);
+                let ids = [("bottom", &n.bottom), ("right", &n.right), ("top", &n.top), ("left", &n.left)]
+                    .iter()
+                    .map(|(def, given)| part_id(given.as_deref().unwrap_or(def)))
+                    .collect();
+                (Primitive::Rectangle { min, max }, ids)
+            }
+            "disc" => {
+                not_for("min", r.min.is_some(), "disc")?;
+                not_for("max", r.max.is_some(), "disc")?;
+                not_for("vertices", r.vertices.is_some(), "disc")?;
+                not_for("names", r.names.is_some(), "disc (use name)")?;
+                not_for("edge_names", r.edge_names.is_some(), "disc (use name)")?;
+                let center = c.need(&f("center"), r.center, "a disc needs center = [x, y]")?;
+                c.finite(&f("center"), &center)?;
+                let radius = c.positive(&f("radius"), c.need(&f("radius"), r.radius, "a disc needs radius")?)?;
+                let name = r.name.clone().unwrap_or_else(|| if op == CsgOp::Subtract { "hole".into() } else { "rim".into() });
+                (Primitive::Disc { center, radius }, vec![part_id(&name)])
+            }
+            "polygon" => {
+                not_for("min", r.min.is_some(), "polygon")?;
+                not_for("max", r.max.is_some(), "polygon")?;
+                not_for("center", r.center.is_some(), "polygon")?;
+                not_for("radius", r.radius.is_some(), "polygon")?;
+                not_for("names", r.names.is_some(), "polygon (use edge_names)")?;
+                not_for("name", r.name.is_some(), "polygon (use edge_names)")?;
+                let mut v = r.vertices.clone().unwrap_or_default();
+                if v.len() < 3 {
+                    return c.err(f("vertices"), format!("a polygon needs at least 3 vertices, got {}", v.len()));
+                }
+                for p in &v {
+                    c.finite(&f("vertices"), p)?;
+                }
+                let mut names: Vec<String> = match &r.edge_names {
+                    Some(n) if n.len() != v.len() => {
+                        return c.err(f("edge_names"), format!("{} names for {} edges (edge k joins vertex k to k+1)", n.len(), v.len()))
+                    }
+                    Some(n) => n.clone(),
+                    None => (0..v.len()).map(|i| format!("edge{i}")).collect(),
+                };
+                let area2: f64 = (0..v.len()).map(|i| {
+                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                    a[0] * b[1] - b[0] * a[1]
+                }).sum();
+                if area2.abs() <= 1e-14 * polygon_scale(&v).powi(2) {
+                    return c.err(f("vertices"), "the polygon has zero area");
+                }
+                if let Some((i, j)) = self_intersection(&v) {
+                    return c.err(f("vertices"), format!("edges {i} and {j} cross: the polygon must be simple"));
+                }
+                if area2 < 0.0 {
+                    // Clockwise: reverse, keeping each edge's name with the same geometric edge.
+                    v.reverse();
+                    let n = names.len();
+                    names = (0..n).map(|k| names[(2 * n - 2 - k) % n].clone()).collect();
+                }
+                let ids = names.iter().map(|s| part_id(s)).collect();
+                (Primitive::Polygon { vertices: v }, ids)
+            }
+            other => return c.err(f("shape"), format!("unknown shape \"{other}\" (expected \"rectangle\", \"disc\" or \"polygon\")")),
+        };
+        regions.push(Region { primitive, op, edge_parts });
+    }
+    Ok(Domain { regions, parts })
+}
+
+fn polygon_scale(v: &[[f64; 2]]) -> f64 {
+    v.iter().map(|p| p[0].abs().max(p[1].abs())).fold(0.0, f64::max).max(1e-300)
+}
+
+/// First pair of non-adjacent polygon edges that intersect.
+fn self_intersection(v: &[[f64; 2]]) -> Option<(usize, usize)> {
+    let n = v.len();
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    for i in 0..n {
+        for j in i + 1..n {
+            if j == i + 1 || (i == 0 && j == n - 1) {
+                continue;
+            }
+            let (a, b, p, q) = (v[i], v[(i + 1) % n], v[j], v[(j + 1) % n]);
+            let (d1, d2) = (cross(a, b, p), cross(a, b, q));
+            let (d3, d4) = (cross(p, q, a), cross(p, q, b));
+            if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
+fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Result<FillParams, ProblemError> {
+    let single_rectangle = domain.regions.len() == 1 && matches!(domain.regions[0].primitive, Primitive::Rectangle { .. });
+    let kind = match &s.fill {
+        None if single_rectangle => FillKind::Grid,
+        None => FillKind::Scattered,
+        Some(w) => c.word("nodes.fill", w, &[("grid", FillKind::Grid), ("scattered", FillKind::Scattered)])?,
+    };
+    let spacing = match (s.spacing, s.count) {
+        (Some(_), Some(_)) => return c.err("nodes", "give either spacing or count, not both"),
+        (None, None) => return c.err("nodes", "missing: give spacing = <m> or count = <nodes>"),
+        (Some(h), None) => c.positive("nodes.spacing", h)?,
+        (None, Some(n)) => {
+            if n < 4 {
+                return c.err("nodes.count", format!("must be at least 4, got {n}"));
+            }
+            (area * packing(kind) / n as f64).sqrt()
+        }
+    };
+    let size = domain.scale();
+    if spacing > size / 2.0 {
+        return c.err("nodes.spacing", format!("spacing {spacing} is more than half the domain size {size:.3e}"));
+    }
+    Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: s.relax.unwrap_or(0) })
+}
+
+fn approximation(c: &Ctx, s: &ApproximationSpec) -> Result<Approximation, ProblemError> {
+    let kind = s.basis.as_deref().unwrap_or("monomials");
+    let poly = |deg: Option<u32>| -> Result<u32, ProblemError> {
+        let d = deg.unwrap_or(2);
+        if !(1..=6).contains(&d) {
+            return c.err("approximation.degree", format!("must be 1..6 (second derivatives need at least 2), got {d}"));
+        }
+        Ok(d)
+    };
+    let basis = match kind {
+        "monomials" => Basis::Monomials { degree: poly(s.degree)? },
+        "tensor" => Basis::Tensor { degree: poly(s.degree)? },
+        "gaussian" | "mq" | "imq" => {
+            if s.degree.is_some() {
+                return c.err("approximation.degree", "RBF bases have no degree; remove it");
+            }
+            let rbf = match kind {
+                "gaussian" => RbfKind::Gaussian,
+                "mq" => RbfKind::Mq,
+                _ => RbfKind::Imq,
+            };
+            let shape = c.positive("approximation.shape", c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?)?;
+            Basis::Rbf { rbf, shape }
+        }
+        other => {
+            return c.err("approximation.basis", format!("unknown basis \"{other}\" (expected \"monomials\", \"tensor\", \"gaussian\", \"mq\" or \"imq\")"))
+        }
+    };
+    if s.shape.is_some() && !matches!(basis, Basis::Rbf { .. }) {
+        return c.err("approximation.shape", "only RBF bases take a shape parameter");
+    }
+    let weight = match s.weight.as_deref().unwrap_or("gaussian") {
+        "none" => {
+            if s.sigma.is_some() {
+                return c.err("approximation.sigma", "weight = \"none\" takes no sigma");
+            }
+            Weight::None
+        }
+        "gaussian" => Weight::Gaussian { sigma: c.positive("approximation.sigma", s.sigma.unwrap_or(1.0))? },
+        other => return c.err("approximation.weight", format!("unknown weight \"{other}\" (expected \"gaussian\" or \"none\")")),
+    };
+    let m = basis.size(usize::MAX);
+    let support = match (s.support, basis) {
+        (Some(n), _) => n,
+        (None, Basis::Rbf { .. }) => 9,
+        (None, _) => DEFAULT_SUPPORT.max(m + m / 2),
+    };
+    if support < 2 {
+        return c.err("approximation.support", format!("must be at least 2, got {support}"));
+    }
+    if !matches!(basis, Basis::Rbf { .. }) && support < m {
+        return c.err(
+            "approximation.support",
+            format!("{support} nodes cannot determine the {m} coefficients of the basis ({}); use support >= {m} (about {} recommended)", basis.describe(), 2 * m),
+        );
+    }
+    Ok(Approximation { basis, weight, support })
+}
+
+fn material(c: &Ctx, s: &MaterialSpec) -> Result<Material, ProblemError> {
+    let plane = c.word("material.plane", &s.plane, &[("stress", PlaneModel::Stress), ("strain", PlaneModel::Strain)])?;
+    let elastic = match (s.young, s.nu, s.lambda, s.mu) {
+        (Some(e), Some(nu), None, None) => {
+            c.positive("material.E", e)?;
+            if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+                return c.err("material.nu", format!("Poisson's ratio must lie in (-1, 0.5), got {nu}"));
+            }
+            YoungPoisson { young: e, poisson: nu }
+        }
+        (None, None, Some(l), Some(m)) => {
+            c.positive("material.mu", m)?;
+            if !(l.is_finite() && l + 2.0 * m / 3.0 > 0.0) {
+                return c.err("material.lambda", format!("the bulk modulus lambda + 2 mu / 3 must be positive, got lambda = {l}"));
+            }
+            YoungPoisson::from_lame_3d(l, m)
+        }
+        _ => return c.err("material", "give exactly one pair: E and nu, or lambda and mu"),
+    };
+    Ok(Material { elastic, plane })
+}
+
+fn exact(c: &Ctx, s: &ExactSpec) -> Result<ExactKind, ProblemError> {
+    let allowed: &[&str] = match s.kind.as_str() {
+        "cantilever" => &["load", "length", "depth"],
+        "kirsch" => &["tension", "radius"],
+        "lame" => &["pressure", "inner", "outer"],
+        "manufactured" => &[],
+        other => return c.err("exact.kind", format!("unknown solution \"{other}\" (expected \"cantilever\", \"kirsch\", \"lame\" or \"manufactured\")")),
+    };
+    let given = [
+        ("load", s.load),
+        ("length", s.length),
+        ("depth", s.depth),
+        ("tension", s.tension),
+        ("radius", s.radius),
+        ("pressure", s.pressure),
+        ("inner", s.inner),
+        ("outer", s.outer),
+    ];
+    for (k, v) in given {
+        if v.is_some() && !allowed.contains(&k) {
+            return c.err(format!("exact.{k}"), format!("not a parameter of the {} solution (it takes: {})", s.kind, allowed.join(", ")));
+        }
+    }
+    let get = |k: &str| -> Result<f64, ProblemError> {
+        let v = given.iter().find(|(n, _)| *n == k).and_then(|(_, v)| *v);
+        let v = c.need(&format!("exact.{k}"), v, &format!("the {} solution needs {k}", s.kind))?;
+        if k == "load" || k == "tension" || k == "pressure" {
+            c.finite(&format!("exact.{k}"), &[v])?;
+            Ok(v)
+        } else {
+            c.positive(&format!("exact.{k}"), v)
+        }
+    };
+    Ok(match s.kind.as_str() {
+        "cantilever" => ExactKind::Cantilever { load: get("load")?, length: get("length")?, depth: get("depth")? },
+        "kirsch" => ExactKind::Kirsch { tension: get("tension")?, radius: get("radius")? },
+        "lame" => {
+            let (inner, outer) = (get("inner")?, get("outer")?);
+            if outer <= inner {
+                return c.err("exact.outer", format!("must exceed inner ({outer} <= {inner})"));
+            }
+            ExactKind::Lame { pressure: get("pressure")?, inner, outer }
+        }
+        _ => ExactKind::Manufactured,
+    })
+}
+
+fn conditions(
+    c: &Ctx,
+    specs: &[BoundarySpec],
+    domain: &Domain,
+    exact_word: &dyn Fn(&str, &str) -> Result<Value, ProblemError>,
+) -> Result<Vec<BoundaryCondition>, ProblemError> {
+    let mut out: Vec<Option<BoundaryCondition>> = vec![None; domain.parts.len()];
+    let known = || domain.parts.iter().map(|p| format!("\"{p}\"")).collect::<Vec<_>>().join(", ");
+    for (k, b) in specs.iter().enumerate() {
+        let f = |s: &str| format!("boundary[{k}].{s}");
+        let Some(part) = domain.parts.iter().position(|p| *p == b.part) else {
+            return c.err(f("part"), format!("\"{}\" is not a boundary part of the domain (known: {})", b.part, known()));
+        };
+        if out[part].is_some() {
+            return c.err(f("part"), format!("\"{}\" already has a condition; give one [[boundary]] per part", b.part));
+        }
+        let comp = |field: &str, w: &Option<String>| -> Result<ComponentCondition, ProblemError> {
+            match w {
+                None => c.err(f(field), "a mixed condition names the condition of each component: x = \"displacement\" or \"traction\""),
+                Some(w) => c.word(&f(field), w, &[("displacement", ComponentCondition::Displacement), ("traction", ComponentCondition::Traction)]),
+            }
+        };
+        let components = match b.kind.as_str() {
+            "displacement" | "traction" => {
+                if b.x.is_some() || b.y.is_some() {
+                    return c.err(f("x"), format!("per-component conditions need kind = \"mixed\", not \"{}\"", b.kind));
+                }
+                let cc = if b.kind == "displacement" { ComponentCondition::Displacement } else { ComponentCondition::Traction };
+                [cc, cc]
+            }
+            "mixed" => [comp("x", &b.x)?, comp("y", &b.y)?],
+            other => return c.err(f("kind"), format!("unknown condition \"{other}\" (expected \"displacement\", \"traction\" or \"mixed\")")),
+        };
+        let value = match &b.value {
+            None => Value::Constant([0.0, 0.0]),
+            Some(VectorOrExact::Vector(v)) => {
+                c.finite(&f("value"), v)?;
+                Value::Constant(*v)
+            }
+            Some(VectorOrExact::Word(w)) => exact_word(&f("value"), w)?,
+        };
+        out[part] = Some(BoundaryCondition { components, value });
+    }
+    let mut conditions = Vec::new();
+    for (i, o) in out.into_iter().enumerate() {
+        match o {
+            Some(bc) => conditions.push(bc),
+            None => {
+                return c.err(
+                    "boundary",
+                    format!(
+                        "part \"{}\" has no condition; add [[boundary]] part = \"{}\" with kind = \"traction\" (free edge: value = [0, 0]) or another condition",
+                        domain.parts[i], domain.parts[i]
+                    ),
+                )
+            }
+        }
+    }
+    for comp in 0..2 {
+        if !conditions.iter().any(|bc| bc.components[comp] == ComponentCondition::Displacement) {
+            let axis = ["x", "y"][comp];
+            return c.err(
+                "boundary",
+                format!("no part prescribes the {axis} displacement: the solution is then fixed only up to a rigid motion; constrain it on at least one part"),
+            );
+        }
+    }
+    Ok(conditions)
+}
+
+fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemError> {
+    let equilibrate = s.equilibrate.unwrap_or(true);
+    let kind = s.kind.as_deref().unwrap_or("lu");
+    let iterative_only = [("preconditioner", s.preconditioner.is_some()), ("drop", s.drop.is_some()), ("fill", s.fill.is_some()), ("tolerance", s.tolerance.is_some()), ("max_iterations", s.max_iterations.is_some())];
+    let kind = match kind {
+        "lu" => {
+            if let Some((k, _)) = iterative_only.iter().find(|(_, p)| *p) {
+                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\"");
+            }
+            SolverKind::Lu
+        }
+        "bicgstab" => {
+            let SolverKind::Bicgstab { preconditioner: def_p, tolerance: def_t, max_iterations: def_m } = SolverKind::default_bicgstab() else {
+                unreachable!("default_bicgstab is a BiCGSTAB configuration")
+            };
+            let (def_drop, def_fill) = match def_p {
+                Preconditioner::Ilut { drop, fill } => (drop, fill),
+                _ => (1e-5, 20),
+            };
+            let pname = s.preconditioner.as_deref().unwrap_or("ilut");
+            let preconditioner = match pname {
+                "ilut" => {
+                    let drop = s.drop.unwrap_or(def_drop);
+                    if !(drop.is_finite() && drop >= 0.0) {
+                        return c.err("solver.drop", format!("must be >= 0, got {drop}"));
+                    }
+                    let fill = s.fill.unwrap_or(def_fill);
+                    if fill == 0 {
+                        return c.err("solver.fill", "must be at least 1");
+                    }
+                    Preconditioner::Ilut { drop, fill }
+                }
+                "ilu0" | "jacobi" => {
+                    if s.drop.is_some() || s.fill.is_some() {
+                        return c.err("solver.drop", format!("drop and fill belong to preconditioner = \"ilut\", not \"{pname}\""));
+                    }
+                    if pname == "ilu0" {
+                        Preconditioner::Ilu0
+                    } else {
+                        Preconditioner::Jacobi
+                    }
+                }
+                other => return c.err("solver.preconditioner", format!("unknown preconditioner \"{other}\" (expected \"ilut\", \"ilu0\" or \"jacobi\")")),
+            };
+            let tolerance = s.tolerance.unwrap_or(def_t);
+            if !(tolerance > 0.0 && tolerance < 1.0) {
+                return c.err("solver.tolerance", format!("must lie in (0, 1), got {tolerance}"));
+            }
+            let max_iterations = s.max_iterations.unwrap_or(def_m);
+            if max_iterations == 0 {
+                return c.err("solver.max_iterations", "must be at least 1");
+            }
+            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }
+        }
+        other => return c.err("solver.kind", format!("unknown solver \"{other}\" (expected \"lu\" or \"bicgstab\")")),
+    };
+    Ok(SolverParams { kind, equilibrate })
+}
+
+fn outputs(c: &Ctx, s: &OutputSpec, has_exact: bool) -> Result<Outputs, ProblemError> {
+    let default: Vec<String> = ["displacement", "stress", "von_mises"].iter().map(|s| s.to_string()).chain(has_exact.then(|| "error".to_string())).collect();
+    let fields = s.fields.clone().unwrap_or(default);
+    let mut o = Outputs::default();
+    for (k, f) in fields.iter().enumerate() {
+        let slot = match f.as_str() {
+            "displacement" => &mut o.displacement,
+            "strain" => &mut o.strain,
+            "stress" => &mut o.stress,
+            "von_mises" => &mut o.von_mises,
+            "error" => &mut o.error,
+            other => {
+                return c.err(format!("output.fields[{k}]"), format!("unknown field \"{other}\" (expected displacement, strain, stress, von_mises, error)"))
+            }
+        };
+        *slot = true;
+    }
+    if o.error && !has_exact {
+        return c.err("output.fields", "\"error\" needs an [exact] solution to compare with");
+    }
+    // The displacement is the solution itself: always written.
+    o.displacement = true;
+    Ok(o)
+}

@@ -1,0 +1,295 @@
+//! One run of one scene, stage by stage (no printing; stages are reported to a
+//! [`Progress`] observer):
+//! nodes -> supports -> shapes (only the operators each node needs) -> assembly ->
+//! solve -> post-processing (gradients, strain, stress, von Mises, errors).
+
+use crate::domain::{self, neighbors::Supports, NodeSet};
+use crate::elasticity::conditions::{resolve, ComponentEquation};
+use crate::elasticity::dofs::DofMap;
+use crate::elasticity::rows::{Entries, RowWriter};
+use crate::elasticity::stress;
+use crate::exact::{self, ExactSolution};
+use crate::linalg::{self, SolveError, SolveReport, Triplets};
+use crate::mlsm::{compute_shapes, OpSet, ShapeError, Shapes};
+use crate::post::{relative_errors, ErrorNorms};
+use crate::problem::{Problem, Value};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Stages of a run, in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Node generation.
+    Nodes,
+    /// Support search.
+    Supports,
+    /// Shape functions.
+    Shapes,
+    /// Matrix assembly.
+    Assembly,
+    /// Linear solve.
+    Solve,
+    /// Stresses and errors.
+    Post,
+}
+
+impl Stage {
+    /// Name as used in `summary.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Nodes => "nodes",
+            Stage::Supports => "supports",
+            Stage::Shapes => "shapes",
+            Stage::Assembly => "assembly",
+            Stage::Solve => "solve",
+            Stage::Post => "post",
+        }
+    }
+}
+
+/// Observer of stage starts and ends (the CLI shows progress with it).
+pub trait Progress: Sync {
+    /// A stage begins.
+    fn start(&self, stage: Stage);
+    /// A stage ended after `seconds`, with a short note (sizes).
+    fn finish(&self, stage: Stage, seconds: f64, note: &str);
+}
+
+/// A progress observer that does nothing.
+pub struct Silent;
+
+impl Progress for Silent {
+    fn start(&self, _: Stage) {}
+    fn finish(&self, _: Stage, _: f64, _: &str) {}
+}
+
+/// Why a run failed after validation.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Too few nodes for the support size.
+    #[error("the node set has {nodes} nodes, fewer than the support size {support}; use a smaller nodes.spacing")]
+    TooFewNodes { nodes: usize, support: usize },
+    /// A local least-squares problem is rank deficient.
+    #[error(transparent)]
+    Shape(#[from] ShapeError),
+    /// The linear solver failed.
+    #[error("linear solve failed: {0}")]
+    Solve(#[from] SolveError),
+    /// A non-finite coefficient in a row.
+    #[error("non-finite coefficient in the equations of node {node} at ({x:.6e}, {y:.6e})")]
+    NotFinite { node: usize, x: f64, y: f64 },
+}
+
+/// Wall-clock seconds per stage.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timings {
+    /// Node generation.
+    pub nodes: f64,
+    /// Support search.
+    pub supports: f64,
+    /// Shape functions.
+    pub shapes: f64,
+    /// Assembly.
+    pub assembly: f64,
+    /// Linear solve (including factorisation / preconditioner).
+    pub solve: f64,
+    /// Post-processing.
+    pub post: f64,
+    /// Writing files (filled by the caller).
+    pub output: f64,
+}
+
+/// Everything a run computed.
+pub struct Solution {
+    /// Nodes.
+    pub nodes: NodeSet,
+    /// Equations of each boundary node (x and y).
+    pub boundary_equations: Vec<[ComponentEquation; 2]>,
+    /// Nodal displacements.
+    pub displacement: Vec<[f64; 2]>,
+    /// Displacement gradients, when post-processing needed them.
+    pub gradient: Option<Vec<[[f64; 2]; 2]>>,
+    /// Stress `[sxx, syy, sxy]`, `sigma_zz`, von Mises, when gradients exist.
+    pub stress: Option<(Vec<[f64; 3]>, Vec<f64>, Vec<f64>)>,
+    /// Exact displacement and stress at the nodes, when an exact solution is known.
+    pub exact: Option<(Vec<[f64; 2]>, Vec<[f64; 3]>)>,
+    /// Error norms, when an exact solution is known.
+    pub errors: Option<ErrorNorms>,
+    /// Number of unknowns.
+    pub unknowns: usize,
+    /// Nonzeros of the assembled matrix.
+    pub nonzeros: usize,
+    /// Operators computed, with the number of nodes each was computed at.
+    pub operators_computed: Vec<(String, usize)>,
+    /// Solver report.
+    pub solver: SolveReport,
+    /// Stage timings.
+    pub timings: Timings,
+}
+
+fn timed<T>(progress: &dyn Progress, stage: Stage, slot: &mut f64, f: impl FnOnce() -> Result<(T, String), RunError>) -> Result<T, RunError> {
+    progress.start(stage);
+    let t0 = Instant::now();
+    let (v, note) = f()?;
+    *slot = t0.elapsed().as_secs_f64();
+    progress.finish(stage, *slot, &note);
+    Ok(v)
+}
+
+/// The exact solution of a problem, if it names one.
+pub fn exact_solution(problem: &Problem) -> Option<Box<dyn ExactSolution>> {
+    problem.exact.as_ref().map(|k| exact::from_kind(k, problem.material).expect("validated exact solution parameters"))
+}
+
+/// Run every stage of `problem`.
+pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, RunError> {
+    let mut t = Timings::default();
+    let exact = exact_solution(problem);
+    let exact = exact.as_deref();
+    let n_support = problem.approximation.support;
+
+    let nodes = timed(progress, Stage::Nodes, &mut t.nodes, || {
+        let nodes = domain::generate(&problem.domain, &problem.fill);
+        if nodes.len() < n_support {
+            return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
+        }
+        let note = format!("{} nodes ({} on the boundary)", nodes.len(), nodes.boundary.len());
+        Ok((nodes, note))
+    })?;
+    let n = nodes.len();
+
+    let supports = timed(progress, Stage::Supports, &mut t.supports, || {
+        Ok((Supports::nearest(&nodes.positions, n_support), format!("{n_support} nearest")))
+    })?;
+
+    let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
+    let gradient_needed = problem.outputs.needs_gradient();
+    let needs: Vec<OpSet> = (0..n)
+        .map(|i| {
+            let mut ops = if gradient_needed { OpSet::D1 } else { OpSet::EMPTY };
+            if i < nodes.boundary.len() {
+                if boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. })) {
+                    ops |= OpSet::D1;
+                }
+            } else {
+                ops |= OpSet::D2;
+            }
+            ops
+        })
+        .collect();
+
+    let shapes = timed(progress, Stage::Shapes, &mut t.shapes, || {
+        let s = compute_shapes(&nodes.positions, &supports, &problem.approximation, &needs)?;
+        let note = format!("{} shape functions", s.count());
+        Ok((s, note))
+    })?;
+    let operators_computed = crate::mlsm::Op::ALL
+        .iter()
+        .filter(|op| shapes.operators().contains(**op))
+        .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
+        .collect();
+
+    let dofs = DofMap::new(n);
+    let (matrix, rhs) = timed(progress, Stage::Assembly, &mut t.assembly, || {
+        let (triplets, rhs) = assemble(problem, &nodes, &supports, &shapes, &boundary_equations, exact, dofs)?;
+        let m = linalg::assemble(&triplets)?;
+        let note = format!("{} unknowns, {} nonzeros", dofs.len(), m.compute_nnz());
+        Ok(((m, rhs), note))
+    })?;
+    let nonzeros = matrix.compute_nnz();
+
+    let (x, report) = timed(progress, Stage::Solve, &mut t.solve, || {
+        let (x, report) = linalg::solve(&matrix, &rhs, &problem.solver)?;
+        let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
+        Ok(((x, report), note))
+    })?;
+    drop(matrix);
+
+    let (displacement, gradient, stress, exact_fields, errors) = timed(progress, Stage::Post, &mut t.post, || {
+        let displacement: Vec<[f64; 2]> = (0..n).map(|i| dofs.displacement(&x, i)).collect();
+        let gradient = gradient_needed.then(|| stress::gradients(&dofs, &supports, &shapes, &x, n));
+        let stress = gradient.as_ref().map(|g| stress::stresses(&problem.material, g));
+        let exact_fields = exact.map(|e| {
+            let u: Vec<[f64; 2]> = nodes.positions.par_iter().map(|p| e.displacement(*p)).collect();
+            let s: Vec<[f64; 3]> = nodes.positions.par_iter().map(|p| e.stress(*p)).collect();
+            (u, s)
+        });
+        let errors = exact_fields.as_ref().map(|(ue, se)| {
+            let (e_inf_u, rel_l2_u) = relative_errors(&displacement, ue);
+            let sig = stress.as_ref().map(|(s, _, _)| relative_errors(s, se));
+            ErrorNorms { e_inf_u, e_inf_sigma: sig.map(|s| s.0), rel_l2_u, rel_l2_sigma: sig.map(|s| s.1) }
+        });
+        let note = match &errors {
+            Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
+            None => String::new(),
+        };
+        Ok(((displacement, gradient, stress, exact_fields, errors), note))
+    })?;
+
+    Ok(Solution {
+        nodes,
+        boundary_equations,
+        displacement,
+        gradient,
+        stress,
+        exact: exact_fields,
+        errors,
+        unknowns: dofs.len(),
+        nonzeros,
+        operators_computed,
+        solver: report,
+        timings: t,
+    })
+}
+
+/// Rows of every node, in parallel; returns the triplets and the right-hand side.
+fn assemble(
+    problem: &Problem,
+    nodes: &NodeSet,
+    supports: &Supports,
+    shapes: &Shapes,
+    boundary_equations: &[[ComponentEquation; 2]],
+    exact: Option<&dyn ExactSolution>,
+    dofs: DofMap,
+) -> Result<(Triplets, Vec<f64>), RunError> {
+    let writer = RowWriter { dofs, lame: problem.material.lame(), supports, shapes };
+    let per_node: Vec<(Entries, [f64; 2])> = (0..nodes.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut e = Entries::with_capacity(4 * supports.size());
+            let rhs = if i < nodes.boundary.len() {
+                let mut r = [0.0; 2];
+                for (c, eq) in boundary_equations[i].iter().enumerate() {
+                    r[c] = match *eq {
+                        ComponentEquation::Displacement { value } => writer.displacement(i, c, value, &mut e),
+                        ComponentEquation::Traction { normal, value } => writer.traction(i, c, normal, value, &mut e),
+                    };
+                }
+                r
+            } else {
+                let f = match problem.body_force {
+                    Value::Constant(f) => f,
+                    Value::Exact => exact.expect("validated").body_force(nodes.positions[i]),
+                };
+                writer.navier(i, f, &mut e)
+            };
+            (e, rhs)
+        })
+        .collect();
+    let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();
+    let mut triplets = Triplets::with_capacity(dofs.len(), total);
+    let mut rhs = vec![0.0; dofs.len()];
+    for (i, (entries, r)) in per_node.into_iter().enumerate() {
+        if entries.iter().any(|e| !e.2.is_finite()) || r.iter().any(|v| !v.is_finite()) {
+            let p = nodes.positions[i];
+            return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
+        }
+        for (row, col, v) in entries {
+            triplets.push(row, col, v);
+        }
+        rhs[dofs.dof(i, 0)] = r[0];
+        rhs[dofs.dof(i, 1)] = r[1];
+    }
+    Ok((triplets, rhs))
+}
