@@ -116,6 +116,8 @@ pub struct Solution {
     pub exact: Option<(Vec<[f64; 2]>, Vec<[f64; 3]>)>,
     /// Error norms, when an exact solution is known.
     pub errors: Option<ErrorNorms>,
+    /// Number of ghost nodes.
+    pub ghost_nodes: usize,
     /// Number of unknowns.
     pub unknowns: usize,
     /// Nonzeros of the assembled matrix.
@@ -159,20 +161,37 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
     })?;
     let n = nodes.len();
 
+    let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
+    let has_traction = |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
+    // Ghost nodes: positions n.., one per traction boundary node, at distance h along its normal.
+    let ghost_of: Vec<usize> = if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| has_traction(i)).collect() } else { Vec::new() };
+    let mut positions = nodes.positions.clone();
+    positions.extend(ghost_of.iter().map(|&i| {
+        let (p, nrm) = (nodes.positions[i], nodes.normal(i));
+        [p[0] + nodes.spacing * nrm[0], p[1] + nodes.spacing * nrm[1]]
+    }));
+    let n_all = positions.len();
+    let mut ghost = vec![usize::MAX; n];
+    for (k, &i) in ghost_of.iter().enumerate() {
+        ghost[i] = n + k;
+    }
+
     let supports = timed(progress, Stage::Supports, &mut t.supports, || {
-        Ok((Supports::nearest(&nodes.positions, n_support), format!("{n_support} nearest")))
+        let note = format!("{n_support} nearest, {} ghost nodes", ghost_of.len());
+        Ok((Supports::nearest(&positions, n_support), note))
     })?;
 
-    let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
     let gradient_needed = problem.outputs.needs_gradient();
-    let needs: Vec<OpSet> = (0..n)
+    let needs: Vec<OpSet> = (0..n_all)
         .map(|i| {
+            if i >= n {
+                return OpSet::EMPTY;
+            }
             let mut ops = if gradient_needed { OpSet::D1 } else { OpSet::EMPTY };
-            if i < nodes.boundary.len() {
-                if boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. })) {
-                    ops |= OpSet::D1;
-                }
-            } else {
+            if has_traction(i) {
+                ops |= OpSet::D1;
+            }
+            if i >= nodes.boundary.len() || ghost[i] != usize::MAX {
                 ops |= OpSet::D2;
             }
             ops
@@ -180,7 +199,7 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
         .collect();
 
     let shapes = timed(progress, Stage::Shapes, &mut t.shapes, || {
-        let s = compute_shapes(&nodes.positions, &supports, &problem.approximation, &needs)?;
+        let s = compute_shapes(&positions, &supports, &problem.approximation, &needs)?;
         let note = format!("{} shape functions", s.count());
         Ok((s, note))
     })?;
@@ -190,9 +209,10 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
         .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
         .collect();
 
-    let dofs = DofMap::new(n);
+    let dofs = DofMap::new(n_all);
     let (matrix, rhs) = timed(progress, Stage::Assembly, &mut t.assembly, || {
-        let (triplets, rhs) = assemble(problem, &nodes, &supports, &shapes, &boundary_equations, exact, dofs)?;
+        let system = System { problem, nodes: &nodes, supports: &supports, shapes: &shapes, equations: &boundary_equations, ghost: &ghost, exact, dofs };
+        let (triplets, rhs) = system.assemble()?;
         let m = linalg::assemble(&triplets)?;
         let note = format!("{} unknowns, {} nonzeros", dofs.len(), m.compute_nnz());
         Ok(((m, rhs), note))
@@ -235,6 +255,7 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
         stress,
         exact: exact_fields,
         errors,
+        ghost_nodes: ghost_of.len(),
         unknowns: dofs.len(),
         nonzeros,
         operators_computed,
@@ -243,53 +264,78 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
     })
 }
 
-/// Rows of every node, in parallel; returns the triplets and the right-hand side.
-fn assemble(
-    problem: &Problem,
-    nodes: &NodeSet,
-    supports: &Supports,
-    shapes: &Shapes,
-    boundary_equations: &[[ComponentEquation; 2]],
-    exact: Option<&dyn ExactSolution>,
-    dofs: DofMap,
-) -> Result<(Triplets, Vec<f64>), RunError> {
-    let writer = RowWriter { dofs, lame: problem.material.lame(), supports, shapes };
-    let per_node: Vec<(Entries, [f64; 2])> = (0..nodes.len())
-        .into_par_iter()
-        .map(|i| {
-            let mut e = Entries::with_capacity(4 * supports.size());
-            let rhs = if i < nodes.boundary.len() {
-                let mut r = [0.0; 2];
-                for (c, eq) in boundary_equations[i].iter().enumerate() {
-                    r[c] = match *eq {
-                        ComponentEquation::Displacement { value } => writer.displacement(i, c, value, &mut e),
-                        ComponentEquation::Traction { normal, value } => writer.traction(i, c, normal, value, &mut e),
-                    };
+/// Everything the equation rows of one discretisation need.
+pub struct System<'a> {
+    /// The scene.
+    pub problem: &'a Problem,
+    /// Nodes of the solid (ghosts are not in it).
+    pub nodes: &'a NodeSet,
+    /// Supports over nodes and ghosts.
+    pub supports: &'a Supports,
+    /// Shape functions over nodes and ghosts.
+    pub shapes: &'a Shapes,
+    /// Boundary equations of the boundary nodes.
+    pub equations: &'a [[ComponentEquation; 2]],
+    /// Ghost node of each node (`usize::MAX`: none).
+    pub ghost: &'a [usize],
+    /// Exact solution for boundary values and body force.
+    pub exact: Option<&'a dyn ExactSolution>,
+    /// Unknown layout over nodes and ghosts.
+    pub dofs: DofMap,
+}
+
+impl System<'_> {
+    /// Rows of every node, in parallel; returns the triplets and the right-hand side.
+    ///
+    /// Interior nodes carry the Navier rows; boundary nodes their boundary rows and,
+    /// when they have a ghost, also the Navier rows, written in the ghost's rows.
+    pub fn assemble(&self) -> Result<(Triplets, Vec<f64>), RunError> {
+        let (nodes, dofs) = (self.nodes, self.dofs);
+        let writer = RowWriter { dofs, lame: self.problem.material.lame(), supports: self.supports, shapes: self.shapes };
+        let body_force = |i: usize| match self.problem.body_force {
+            Value::Constant(f) => f,
+            Value::Exact => self.exact.expect("validated").body_force(nodes.positions[i]),
+        };
+        let per_node: Vec<(Entries, Vec<(usize, f64)>)> = (0..nodes.len())
+            .into_par_iter()
+            .map(|i| {
+                let mut e = Entries::with_capacity(8 * self.supports.size());
+                let mut rhs = Vec::with_capacity(4);
+                if i < nodes.boundary.len() {
+                    for (c, eq) in self.equations[i].iter().enumerate() {
+                        let r = match *eq {
+                            ComponentEquation::Displacement { value } => writer.displacement(i, c, value, &mut e),
+                            ComponentEquation::Traction { normal, value } => writer.traction(i, c, normal, value, &mut e),
+                        };
+                        rhs.push((dofs.dof(i, c), r));
+                    }
+                    let g = self.ghost[i];
+                    if g != usize::MAX {
+                        let r = writer.navier(i, g, body_force(i), &mut e);
+                        rhs.extend([(dofs.dof(g, 0), r[0]), (dofs.dof(g, 1), r[1])]);
+                    }
+                } else {
+                    let r = writer.navier(i, i, body_force(i), &mut e);
+                    rhs.extend([(dofs.dof(i, 0), r[0]), (dofs.dof(i, 1), r[1])]);
                 }
-                r
-            } else {
-                let f = match problem.body_force {
-                    Value::Constant(f) => f,
-                    Value::Exact => exact.expect("validated").body_force(nodes.positions[i]),
-                };
-                writer.navier(i, f, &mut e)
-            };
-            (e, rhs)
-        })
-        .collect();
-    let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();
-    let mut triplets = Triplets::with_capacity(dofs.len(), total);
-    let mut rhs = vec![0.0; dofs.len()];
-    for (i, (entries, r)) in per_node.into_iter().enumerate() {
-        if entries.iter().any(|e| !e.2.is_finite()) || r.iter().any(|v| !v.is_finite()) {
-            let p = nodes.positions[i];
-            return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
+                (e, rhs)
+            })
+            .collect();
+        let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();
+        let mut triplets = Triplets::with_capacity(dofs.len(), total);
+        let mut rhs = vec![0.0; dofs.len()];
+        for (i, (entries, r)) in per_node.into_iter().enumerate() {
+            if entries.iter().any(|e| !e.2.is_finite()) || r.iter().any(|v| !v.1.is_finite()) {
+                let p = nodes.positions[i];
+                return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
+            }
+            for (row, col, v) in entries {
+                triplets.push(row, col, v);
+            }
+            for (row, v) in r {
+                rhs[row] = v;
+            }
         }
-        for (row, col, v) in entries {
-            triplets.push(row, col, v);
-        }
-        rhs[dofs.dof(i, 0)] = r[0];
-        rhs[dofs.dof(i, 1)] = r[1];
+        Ok((triplets, rhs))
     }
-    Ok((triplets, rhs))
 }

@@ -5,7 +5,7 @@
 //! vanishes there (`|d| <= tol`). Edges are classified on a fine parameter sample
 //! (step `h / 8`); every change of class is located by bisection to `1e-13` of the
 //! edge length, so the corners where two primitives meet are found to round-off
-//! and both edges produce the same corner point. Points closer than `1e-6 h` are
+//! and both edges produce the same corner point. Points closer than `1e-3 h` are
 //! merged into one node that remembers every part it touches, with the normal of
 //! each ([`BoundarySample::touches`]).
 //!
@@ -42,7 +42,7 @@ impl BoundarySample {
 }
 
 /// Parameter intervals `[s0, s1]` of `curve` that lie on the solid's boundary.
-fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -> Vec<(f64, f64)> {
+pub fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -> Vec<(f64, f64)> {
     let len = c.curve.length();
     let on = |s: f64| domain.signed_distance(c.curve.at(s).0).abs() <= tol;
     let samples = ((len / (h / 8.0)).ceil() as usize).max(16);
@@ -77,6 +77,10 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
     if let Some(s0) = start {
         intervals.push((s0, len));
     }
+    // A curve that only touches the solid (a tangent point, where the bisection
+    // leaves an interval of length ~sqrt(tol r)) or a sliver shorter than h/4
+    // cannot carry nodes of its own: its ends are corners found by other curves.
+    intervals.retain(|(a, b)| b - a > 0.25 * h);
     // A closed curve whose first and last intervals meet at s = 0 is one interval.
     if c.curve.is_closed() && intervals.len() > 1 && intervals[0].0 == 0.0 && intervals.last().unwrap().1 == len {
         let last = intervals.pop().unwrap();
@@ -87,7 +91,7 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
 
 /// Sample the boundary of `domain` at spacing about `h` (see module docs).
 pub fn discretise_boundary(domain: &Domain, h: f64) -> Vec<BoundarySample> {
-    let tol = 1e-9 * domain.scale();
+    let tol = (1e-9 * domain.scale()).min(1e-6 * h);
     let mut raw: Vec<BoundarySample> = Vec::new();
     for c in domain.boundary_curves() {
         let len = c.curve.length();
@@ -97,12 +101,14 @@ pub fn discretise_boundary(domain: &Domain, h: f64) -> Vec<BoundarySample> {
             let count = if whole_closed { segments } else { segments + 1 };
             for k in 0..count {
                 let s = s0 + (s1 - s0) * k as f64 / segments as f64;
-                let (p, n) = c.curve.at(s.rem_euclid(len));
+                let s = if c.curve.is_closed() { s.rem_euclid(len) } else { s };
+                let (p, n) = c.curve.at(s);
                 raw.push(BoundarySample { position: p, touches: vec![(c.part, n)] });
             }
         }
     }
-    merge_coincident(raw, 1e-6 * h)
+    // Corners found by two curves agree to about `tol`; anything closer than h/1000 is one node.
+    merge_coincident(raw, 1e-3 * h)
 }
 
 /// Merge samples closer than `eps` (corners produced by two edges).

@@ -31,11 +31,12 @@ pub struct RowWriter<'a> {
 }
 
 impl RowWriter<'_> {
-    /// Navier rows (x and y) of interior node `i` with body force `f`; returns the right-hand sides.
-    pub fn navier(&self, i: usize, f: [f64; 2], out: &mut Entries) -> [f64; 2] {
+    /// Navier rows (x and y) at node `i` with body force `f`, written in the rows of
+    /// node `row_node` (`i` itself, or its ghost); returns the right-hand sides.
+    pub fn navier(&self, i: usize, row_node: usize, f: [f64; 2], out: &mut Entries) -> [f64; 2] {
         let Lame { lambda, mu } = self.lame;
         let (xx, xy, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dxy), self.shapes.get(i, Op::Dyy));
-        let (rx, ry) = (self.dofs.dof(i, 0), self.dofs.dof(i, 1));
+        let (rx, ry) = (self.dofs.dof(row_node, 0), self.dofs.dof(row_node, 1));
         for (k, &j) in self.supports.of(i).iter().enumerate() {
             let (uj, vj) = (self.dofs.dof(j as usize, 0), self.dofs.dof(j as usize, 1));
             out.push((rx, uj, (lambda + 2.0 * mu) * xx[k] + mu * yy[k]));

@@ -51,7 +51,9 @@ pub enum Status {
 /// residual, whatever the status.
 #[derive(Clone, Debug)]
 pub struct BicgstabOutcome {
+    /// Last iterate (zeros if no iteration ran).
     pub x: Vec<f64>,
+    /// How the run ended.
     pub status: Status,
     /// Total BiCGSTAB iterations over all restarts.
     pub iterations: usize,

@@ -43,7 +43,7 @@ pub const LU_RESIDUAL_LIMIT: f64 = 1e-6;
 
 /// Preconditioner `M ≈ A` for BiCGSTAB, applied on the right
 /// (`A M⁻¹ y = b`, `x = M⁻¹ y`).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Preconditioner {
     /// `M = diag(A)`; see [`precond::Jacobi`].
     Jacobi,
@@ -55,7 +55,12 @@ pub enum Preconditioner {
     /// dropping rules. `drop` is τ (relative to the row 2-norm), `fill` is the
     /// number of entries kept per row in each of L and U *beyond* the count of
     /// the corresponding part of the original row.
-    Ilut { drop: f64, fill: usize },
+    Ilut {
+        /// Drop tolerance τ, relative to the row 2-norm (`≥ 0`).
+        drop: f64,
+        /// Extra entries per row kept in each of L and U (`p`).
+        fill: usize,
+    },
 }
 
 impl Preconditioner {
@@ -79,7 +84,7 @@ impl Preconditioner {
 }
 
 /// Which solver [`solve`] uses.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum SolverKind {
     /// Sparse direct LU with partial pivoting (`faer::sparse` supernodal/
     /// simplicial LU, COLAMD column ordering).
@@ -87,8 +92,13 @@ pub enum SolverKind {
     /// Right-preconditioned BiCGSTAB (van der Vorst 1992). Converged means the
     /// true relative residual of the original system is `≤ tolerance`.
     Bicgstab {
+        /// Right preconditioner.
         preconditioner: Preconditioner,
+        /// Target TRUE relative residual `‖b − A x‖₂/‖b‖₂` of the original
+        /// system (`> 0`).
         tolerance: f64,
+        /// Iteration budget, summed over verification restarts (one iteration
+        /// = 2 preconditioner applications + 2 products with `A`).
         max_iterations: usize,
     },
 }
@@ -119,7 +129,7 @@ impl SolverKind {
 }
 
 /// Parameters of [`solve`].
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SolverParams {
     /// Solver and its settings.
     pub kind: SolverKind,
@@ -145,12 +155,19 @@ pub struct SolveReport {
     pub method: String,
     /// Krylov iterations (BiCGSTAB, summed over restarts); 1 for LU.
     pub iterations: usize,
-    /// True `‖b − A x‖₂ / ‖b‖₂` on the original (unscaled) system.
+    /// True `‖b − A x‖₂ / ‖b‖₂` of the system actually solved: the
+    /// row-equilibrated `D A x = D b` when equilibration is on (row scaling does
+    /// not change `x`, and this measure does not depend on the units of each
+    /// equation), else the original one. Convergence and singularity checks use it.
     pub relative_residual: f64,
-    /// Equilibration + factorisation / preconditioner construction [s].
+    /// The same on the original, unscaled system (for information: rows of very
+    /// different scales, e.g. Navier rows `~ E/h^2` next to displacement rows `~ 1`,
+    /// make it reflect the largest rows only).
+    pub original_relative_residual: f64,
+    /// Equilibration + factorisation / preconditioner construction, in seconds.
     pub setup_seconds: f64,
     /// Triangular solves or Krylov iterations, including the true-residual
-    /// checks [s].
+    /// checks, in seconds.
     pub solve_seconds: f64,
     /// Whether row equilibration was applied.
     pub equilibrated: bool,
@@ -170,23 +187,38 @@ pub enum SolveError {
         "matrix entry ({row}, {col}) is not finite ({value}); \
          check the node coordinates, support sizes and material constants that produced this row"
     )]
-    NotFinite { row: usize, col: usize, value: f64 },
+    NotFinite {
+        /// Row of the offending entry.
+        row: usize,
+        /// Column of the offending entry.
+        col: usize,
+        /// The NaN or ±inf found there.
+        value: f64,
+    },
     /// The matrix (or the preconditioner built from it) is singular: LU
     /// failure, zero pivot in an incomplete factorisation, all-zero row, or a
     /// non-finite / inaccurate solution.
     #[error("the system matrix is singular or numerically singular: {detail}")]
-    Singular { detail: String },
+    Singular {
+        /// What was detected, with numbers and what to check.
+        detail: String,
+    },
     /// BiCGSTAB did not reach the tolerance; `relative_residual` is the TRUE
-    /// relative residual of the original system at the returned iterate.
+    /// relative residual of the solved (equilibrated) system at the last iterate.
     #[error(
         "{method} did not converge in {iterations} iterations: true relative residual \
          {relative_residual:.1e} (tolerance {tolerance:e}); try lu, a stronger preconditioner \
          (ilut with smaller drop / larger fill) or more iterations"
     )]
     NoConvergence {
+        /// Iterations performed (the budget, unless the restart limit was hit
+        /// first).
         iterations: usize,
+        /// True `‖b − A x‖₂/‖b‖₂` of the solved system at the last iterate.
         relative_residual: f64,
+        /// e.g. `BiCGSTAB+ILU(0)`.
         method: String,
+        /// The requested tolerance.
         tolerance: f64,
     },
     /// Inconsistent sizes (non-square matrix, wrong right-hand-side length,
@@ -194,7 +226,10 @@ pub enum SolveError {
     /// right-hand side, non-positive tolerance) or a problem too large for the
     /// solver (index overflow / out of memory in faer).
     #[error("dimension error: {detail}")]
-    Dimension { detail: String },
+    Dimension {
+        /// What was inconsistent or invalid.
+        detail: String,
+    },
 }
 
 /// True relative residual `‖b − A x‖₂ / ‖b‖₂` (plain 2-norms, computed by a
@@ -234,10 +269,19 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 ///    `D = diag(1 / max_j |a_ij|)` ([`scaling::equilibrate_rows`]); `x` is
 ///    unchanged by row scaling.
 /// 3. Runs [`lu::SparseLu`] or [`bicgstab::solve_bicgstab`].
-/// 4. Recomputes the true residual on the **original** `A`, `b`
-///    ([`relative_residual`]) and reports it. For LU a non-finite solution or a
-///    residual above [`LU_RESIDUAL_LIMIT`] is [`SolveError::Singular`]; for
-///    BiCGSTAB a residual above the tolerance is [`SolveError::NoConvergence`].
+/// 4. Recomputes the true residual of the solved (equilibrated, if asked)
+///    system ([`relative_residual`]) and reports it, with the residual of the
+///    original system beside it. For LU a non-finite solution or a
+///    residual above [`LU_RESIDUAL_LIMIT`] or a condition estimate above
+///    [`lu::CONDITION_LIMIT`] is [`SolveError::Singular`]; for BiCGSTAB a
+///    residual above the tolerance is [`SolveError::NoConvergence`] and a
+///    NaN/inf iterate is [`SolveError::Singular`].
+///
+/// Only LU can *prove* trouble: BiCGSTAB on a singular but consistent system
+/// (e.g. pure traction with self-equilibrated loads) may converge to one of
+/// the infinitely many solutions, rigid-body component included.
+///
+/// An empty system (`n = 0`) returns an empty solution.
 pub fn solve(
     a: &SparseMatrix,
     b: &[f64],
@@ -251,7 +295,10 @@ pub fn solve(
     }
     if b.len() != n {
         return Err(SolveError::Dimension {
-            detail: format!("right-hand side has length {}, matrix has {n} rows", b.len()),
+            detail: format!(
+                "right-hand side has length {}, matrix has {n} rows",
+                b.len()
+            ),
         });
     }
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
@@ -267,6 +314,22 @@ pub fn solve(
         }
     }
 
+    let method = params.kind.label();
+    if n == 0 {
+        let report = SolveReport {
+            method,
+            iterations: 0,
+            relative_residual: 0.0,
+            original_relative_residual: 0.0,
+            setup_seconds: 0.0,
+            solve_seconds: 0.0,
+            equilibrated: params.equilibrate,
+            preconditioner_nonzeros: None,
+            restarts: 0,
+        };
+        return Ok((Vec::new(), report));
+    }
+
     let t_setup = Instant::now();
     // Validates finiteness / zero rows in both cases.
     let row_max = scaling::row_max_abs(a)?;
@@ -278,7 +341,6 @@ pub fn solve(
     } else {
         (a, std::borrow::Cow::Borrowed(b))
     };
-    let method = params.kind.label();
 
     match params.kind {
         SolverKind::Lu => {
@@ -286,8 +348,9 @@ pub fn solve(
             let setup_seconds = t_setup.elapsed().as_secs_f64();
             let t_solve = Instant::now();
             let x = lu.solve(&b_work);
-            let relres = relative_residual(a, &x, b);
-            lu::check_solution(a_work, &x, &b_work, relres)?;
+            let relres = relative_residual(a_work, &x, &b_work);
+            lu::check_solution(&lu, a_work, &x, &b_work, relres)?;
+            let original_relative_residual = relative_residual(a, &x, b);
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             Ok((
                 x,
@@ -295,6 +358,7 @@ pub fn solve(
                     method,
                     iterations: 1,
                     relative_residual: relres,
+                    original_relative_residual,
                     setup_seconds,
                     solve_seconds,
                     equilibrated: params.equilibrate,
@@ -311,16 +375,13 @@ pub fn solve(
             let pc = precond::BuiltPreconditioner::build(a_work, preconditioner)?;
             let setup_seconds = t_setup.elapsed().as_secs_f64();
             let t_solve = Instant::now();
-            let out = bicgstab::solve_bicgstab(
-                a_work,
-                &b_work,
-                &pc,
-                tolerance,
-                max_iterations,
-                |x| relative_residual(a, x, b),
-            );
+            let out =
+                bicgstab::solve_bicgstab(a_work, &b_work, &pc, tolerance, max_iterations, |x| {
+                    relative_residual(a, x, b)
+                });
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             let name = format!("BiCGSTAB+{}", preconditioner.display_name());
+            let original_relative_residual = relative_residual(a, &out.x, b);
             match out.status {
                 bicgstab::Status::Converged => Ok((
                     out.x,
@@ -328,6 +389,7 @@ pub fn solve(
                         method,
                         iterations: out.iterations,
                         relative_residual: out.relative_residual,
+                        original_relative_residual,
                         setup_seconds,
                         solve_seconds,
                         equilibrated: params.equilibrate,

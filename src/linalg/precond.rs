@@ -63,19 +63,25 @@ impl Jacobi {
 /// for i = 1..n:
 ///     w = a_i*;  τ_i = τ ‖a_i*‖₂
 ///     for k < i with w_k ≠ 0, in increasing k:
-///         w_k ← w_k / u_kk
-///         if |w_k| < τ_i: w_k ← 0 (drop) ; else w ← w − w_k u_k*   (j > k)
-///     drop every off-diagonal w_j with |w_j| < τ_i
-///     L row i ← the  nnz(L-part of a_i*) + p  largest |w_j|, j < i
-///     U row i ← w_i and the nnz(U-part of a_i*) + p  largest |w_j|, j > i
+///         if |w_k| < τ_i: w_k ← 0 (drop)
+///         else: w_k ← w_k / u_kk;  w_j ← w_j − w_k u_kj  (j > k)
+///     drop every off-diagonal entry whose size (below) is < τ_i
+///     L row i ← the  nnz(L-part of a_i*) + p  largest entries, j < i
+///     U row i ← w_i and the  nnz(U-part of a_i*) + p  largest entries, j > i
 /// ```
 ///
-/// So `fill = p` counts entries allowed **beyond** the original row's count
-/// in each triangle (the "p largest" rule offset by the original pattern, as
-/// in MATLAB `ilu(…,'crout')`/ITSOL variants), and `τ` is relative to the
-/// row 2-norm. With `τ = 0`, `p ≥ n` nothing but exact zeros is dropped and
-/// `L U = A` (Gaussian elimination without pivoting). No pivot
-/// modification: a zero or non-finite `u_ii` is an error.
+/// * `fill = p` counts entries allowed **beyond** the original row's count
+///   in each triangle (the "p largest" rule offset by the original pattern,
+///   so ILUT never stores less than the pattern of `A` when nothing is small).
+/// * Size of an L entry is `|l_ik|·|u_kk|` (the working-row entry *before*
+///   division by the pivot); of a U entry `|u_ij|`. Saad compares `|l_ik|`
+///   itself, which mixes the scales of rows `i` and `k`; our measure makes
+///   the dropping invariant under row scaling (`ILUT(DA) = D·ILUT(A)`
+///   structurally), and the two coincide for an equilibrated matrix with
+///   `|u_kk| ≈ 1`.
+/// * With `τ = 0`, `p ≥ n` only exact zeros are dropped and `L U = A`
+///   (Gaussian elimination without pivoting).
+/// * No pivot modification: a zero or non-finite `u_ii` is an error.
 #[derive(Clone, Debug)]
 pub struct Ilut {
     n: usize,
@@ -107,7 +113,12 @@ fn to_csr(a: &SparseMatrix) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
     let mut next = ptr.clone();
     let (mut idx, mut val) = (vec![0usize; nnz], vec![0.0f64; nnz]);
     for j in 0..a.ncols() {
-        for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+        for (&i, &v) in a
+            .symbolic()
+            .row_idx_of_col_raw(j)
+            .iter()
+            .zip(a.val_of_col(j))
+        {
             idx[next[i]] = j;
             val[next[i]] = v;
             next[i] += 1;
@@ -116,14 +127,14 @@ fn to_csr(a: &SparseMatrix) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
     (ptr, idx, val)
 }
 
-/// Keep the `limit` entries of `set` with largest `|w_j|` (order unspecified).
-fn keep_largest(set: &mut Vec<usize>, w: &[f64], limit: usize) {
+/// Keep the `limit` entries of `set` with largest `size(j)` (order unspecified).
+fn keep_largest(set: &mut Vec<usize>, limit: usize, size: impl Fn(usize) -> f64) {
     if set.len() > limit {
         if limit == 0 {
             set.clear();
             return;
         }
-        set.select_nth_unstable_by(limit - 1, |&a, &b| w[b].abs().total_cmp(&w[a].abs()));
+        set.select_nth_unstable_by(limit - 1, |&a, &b| size(b).total_cmp(&size(a)));
         set.truncate(limit);
     }
 }
@@ -158,7 +169,10 @@ impl Ilut {
         let (mut lower, mut upper) = (Vec::new(), Vec::new());
 
         for i in 0..n {
-            let (cols, vals) = (&a_idx[a_ptr[i]..a_ptr[i + 1]], &a_val[a_ptr[i]..a_ptr[i + 1]]);
+            let (cols, vals) = (
+                &a_idx[a_ptr[i]..a_ptr[i + 1]],
+                &a_val[a_ptr[i]..a_ptr[i + 1]],
+            );
             let tau = drop * vals.iter().map(|v| v * v).sum::<f64>().sqrt();
             lower.clear();
             upper.clear();
@@ -179,10 +193,11 @@ impl Ilut {
             // Elimination in increasing k; fill-in from row k lands at j > k,
             // so the heap never needs an index smaller than the one popped.
             while let Some(Reverse(k)) = heap.pop() {
-                let wk = w[k] * f.inv_diag[k];
-                if wk == 0.0 || wk.abs() < tau {
+                if w[k] == 0.0 || w[k].abs() < tau {
+                    w[k] = 0.0;
                     continue;
                 }
+                let wk = w[k] * f.inv_diag[k];
                 w[k] = wk;
                 lower.push(k);
                 for p in f.u_ptr[k]..f.u_ptr[k + 1] {
@@ -199,10 +214,12 @@ impl Ilut {
                     w[j] -= wk * f.u_val[p];
                 }
             }
-            // `upper` may contain i itself if fill hit the diagonal; remove it.
-            upper.retain(|&j| j != i && w[j] != 0.0 && w[j].abs() >= tau);
-            keep_largest(&mut lower, &w, nl0 + fill);
-            keep_largest(&mut upper, &w, nu0 + fill);
+            // τ-rule for U (L was filtered during elimination); the diagonal
+            // i is never in `upper` because it was pre-marked.
+            upper.retain(|&j| w[j] != 0.0 && w[j].abs() >= tau);
+            let inv_diag = &f.inv_diag;
+            keep_largest(&mut lower, nl0 + fill, |j| (w[j] / inv_diag[j]).abs());
+            keep_largest(&mut upper, nu0 + fill, |j| w[j].abs());
 
             let piv = w[i];
             if piv == 0.0 || !piv.is_finite() {
@@ -254,10 +271,12 @@ impl Ilut {
 /// `faer::matrix_free::bicgstab`.
 #[derive(Debug)]
 pub enum BuiltPreconditioner {
+    /// See [`Jacobi`].
     Jacobi(Jacobi),
     /// `faer_precond::Ilu0`: `L U = A` on the pattern of `A`
     /// (Saad, Alg. 10.4); requires every diagonal entry to be stored.
     Ilu0(Box<Ilu0<usize, f64>>),
+    /// See [`Ilut`].
     Ilut(Ilut),
 }
 
@@ -297,9 +316,7 @@ impl BuiltPreconditioner {
         match self {
             BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
             // faer-precond's L includes its unit diagonal; count it once (as U's).
-            BuiltPreconditioner::Ilu0(p) => {
-                p.symbolic().l_nnz() + p.symbolic().u_nnz() - p.dim()
-            }
+            BuiltPreconditioner::Ilu0(p) => p.symbolic().l_nnz() + p.symbolic().u_nnz() - p.dim(),
             BuiltPreconditioner::Ilut(p) => p.nonzeros(),
         }
     }
@@ -336,11 +353,23 @@ impl LinOp<f64> for BuiltPreconditioner {
     fn ncols(&self) -> usize {
         self.dim()
     }
-    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+    fn apply(
+        &self,
+        mut out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        par: Par,
+        stack: &mut MemStack,
+    ) {
         out.copy_from(rhs);
         self.apply_in_place(out, par, stack);
     }
-    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
+    fn conj_apply(
+        &self,
+        out: MatMut<'_, f64>,
+        rhs: MatRef<'_, f64>,
+        par: Par,
+        stack: &mut MemStack,
+    ) {
         self.apply(out, rhs, par, stack);
     }
 }
@@ -392,7 +421,11 @@ mod tests {
                     t.push(i, j, v);
                 }
             }
-            t.push(i, i, (row_sum + 1.0) * if rng.random::<bool>() { 1.0 } else { -1.0 });
+            t.push(
+                i,
+                i,
+                (row_sum + 1.0) * if rng.random::<bool>() { 1.0 } else { -1.0 },
+            );
         }
         assemble(&t).unwrap()
     }
@@ -411,7 +444,10 @@ mod tests {
         // Exact LU of a diagonally dominant (κ ≈ 10) 60×60 matrix: residual is
         // O(n ε) ≈ 1e-14; 1e-12 leaves margin but would catch any dropped entry
         // (a single dropped fill entry gives ≳ 1e-4).
-        assert!(r < 1e-12, "one ILUT(0, n) application left residual {r:.2e}");
+        assert!(
+            r < 1e-12,
+            "one ILUT(0, n) application left residual {r:.2e}"
+        );
     }
 
     #[test]

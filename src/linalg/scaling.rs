@@ -65,9 +65,10 @@ pub fn equilibrate_rows(a: &SparseMatrix) -> Result<(SparseMatrix, Vec<f64>), So
 pub fn equilibrate_rows_with(a: &SparseMatrix, row_max: &[f64]) -> (SparseMatrix, Vec<f64>) {
     let d: Vec<f64> = row_max.iter().map(|m| 1.0 / m).collect();
     let mut s = a.clone();
-    for j in 0..s.ncols() {
-        let rows: Vec<usize> = s.symbolic().row_idx_of_col_raw(j).to_vec();
-        for (v, i) in s.val_of_col_mut(j).iter_mut().zip(rows) {
+    let (sym, val) = s.parts_mut();
+    for j in 0..sym.ncols() {
+        let rows = sym.row_idx_of_col_raw(j);
+        for (v, &i) in val[sym.col_range(j)].iter_mut().zip(rows) {
             *v *= d[i];
         }
     }
@@ -98,7 +99,12 @@ mod tests {
         assert!((d[0] - 0.25e-12).abs() < 1e-27);
         let mut row_max = [0.0f64; 3];
         for j in 0..3 {
-            for (&i, &v) in s.symbolic().row_idx_of_col_raw(j).iter().zip(s.val_of_col(j)) {
+            for (&i, &v) in s
+                .symbolic()
+                .row_idx_of_col_raw(j)
+                .iter()
+                .zip(s.val_of_col(j))
+            {
                 row_max[i] = row_max[i].max(v.abs());
             }
         }

@@ -48,7 +48,10 @@ impl Triplets {
     /// merging per-thread accumulators). Dimensions must agree
     /// (debug-asserted; [`assemble`] re-checks the indices).
     pub fn append(&mut self, other: &mut Triplets) {
-        debug_assert_eq!(self.n, other.n, "appending triplets of a different dimension");
+        debug_assert_eq!(
+            self.n, other.n,
+            "appending triplets of a different dimension"
+        );
         self.entries.append(&mut other.entries);
     }
 
@@ -149,7 +152,11 @@ mod tests {
         t.push(0, 0, 1.0);
         t.entries.push(Triplet::new(2, 1, f64::NAN));
         match assemble(&t) {
-            Err(SolveError::NotFinite { row: 2, col: 1, value }) => assert!(value.is_nan()),
+            Err(SolveError::NotFinite {
+                row: 2,
+                col: 1,
+                value,
+            }) => assert!(value.is_nan()),
             other => panic!("expected NotFinite at (2, 1), got {other:?}"),
         }
         let msg = assemble(&t).unwrap_err().to_string();

@@ -116,6 +116,8 @@ pub struct ApproximationSpec {
     pub sigma: Option<f64>,
     /// Support size n.
     pub support: Option<usize>,
+    /// Ghost nodes outside traction boundaries.
+    pub ghost_nodes: Option<bool>,
 }
 
 /// `[material]`.

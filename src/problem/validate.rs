@@ -13,6 +13,9 @@ use std::path::Path;
 /// least-squares fit over-determined by a factor 2 on scattered nodes.
 pub const DEFAULT_SUPPORT: usize = 12;
 
+/// Ghost nodes outside traction boundaries unless the scene says otherwise.
+pub const DEFAULT_GHOST_NODES: bool = true;
+
 /// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
 /// `nodes.count` into a spacing (the scattered fill packs about 1.1 nodes per h^2).
 fn packing(kind: FillKind) -> f64 {
@@ -150,7 +153,13 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     if matches!(exact, Some(ExactKind::Manufactured)) && body_force != Value::Exact {
         return c.err("body_force", "the manufactured solution needs its own body force: set body_force = \"exact\"");
     }
-    let conditions = conditions(&c, &spec.boundary, &domain, &exact_word)?;
+    let mut present = vec![false; domain.parts.len()];
+    for b in crate::domain::boundary::discretise_boundary(&domain, fill.spacing) {
+        for (part, _) in b.touches {
+            present[part] = true;
+        }
+    }
+    let conditions = conditions(&c, &spec.boundary, &domain, &present, &exact_word)?;
     let solver = solver(&c, &spec.solver)?;
     let outputs = outputs(&c, &spec.output, exact.is_some())?;
     Ok(Problem {
@@ -383,7 +392,7 @@ fn approximation(c: &Ctx, s: &ApproximationSpec) -> Result<Approximation, Proble
             format!("{support} nodes cannot determine the {m} coefficients of the basis ({}); use support >= {m} (about {} recommended)", basis.describe(), 2 * m),
         );
     }
-    Ok(Approximation { basis, weight, support })
+    Ok(Approximation { basis, weight, support, ghost_nodes: s.ghost_nodes.unwrap_or(DEFAULT_GHOST_NODES) })
 }
 
 fn material(c: &Ctx, s: &MaterialSpec) -> Result<Material, ProblemError> {
@@ -459,6 +468,7 @@ fn conditions(
     c: &Ctx,
     specs: &[BoundarySpec],
     domain: &Domain,
+    present: &[bool],
     exact_word: &dyn Fn(&str, &str) -> Result<Value, ProblemError>,
 ) -> Result<Vec<BoundaryCondition>, ProblemError> {
     let mut out: Vec<Option<BoundaryCondition>> = vec![None; domain.parts.len()];
@@ -468,6 +478,9 @@ fn conditions(
         let Some(part) = domain.parts.iter().position(|p| *p == b.part) else {
             return c.err(f("part"), format!("\"{}\" is not a boundary part of the domain (known: {})", b.part, known()));
         };
+        if !present[part] {
+            return c.err(f("part"), format!("\"{}\" does not reach the boundary of the solid (it lies inside or outside the other regions); remove this condition", b.part));
+        }
         if out[part].is_some() {
             return c.err(f("part"), format!("\"{}\" already has a condition; give one [[boundary]] per part", b.part));
         }
@@ -502,6 +515,8 @@ fn conditions(
     for (i, o) in out.into_iter().enumerate() {
         match o {
             Some(bc) => conditions.push(bc),
+            // A part with no boundary nodes (e.g. an edge cut away by a subtraction) needs no condition.
+            None if !present[i] => conditions.push(BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Constant([0.0, 0.0]) }),
             None => {
                 return c.err(
                     "boundary",
@@ -514,7 +529,7 @@ fn conditions(
         }
     }
     for comp in 0..2 {
-        if !conditions.iter().any(|bc| bc.components[comp] == ComponentCondition::Displacement) {
+        if !conditions.iter().zip(present).any(|(bc, &here)| here && bc.components[comp] == ComponentCondition::Displacement) {
             let axis = ["x", "y"][comp];
             return c.err(
                 "boundary",
