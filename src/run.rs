@@ -164,7 +164,11 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
     let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
     let has_traction = |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
     // Ghost nodes: positions n.., one per traction boundary node, at distance h along its normal.
-    let ghost_of: Vec<usize> = if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| has_traction(i)).collect() } else { Vec::new() };
+    // Ghost nodes only where both equations are tractions: on mixed (symmetry) nodes
+    // an extra Navier row made scattered-node runs unstable (measured on kirsch.toml:
+    // e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
+    let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
+    let ghost_of: Vec<usize> = if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
     let mut positions = nodes.positions.clone();
     positions.extend(ghost_of.iter().map(|&i| {
         let (p, nrm) = (nodes.positions[i], nodes.normal(i));

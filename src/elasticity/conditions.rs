@@ -43,8 +43,7 @@ pub fn resolve(sample: &BoundarySample, conditions: &[BoundaryCondition], exact:
         }
         let mut n = [0.0; 2];
         let mut t = 0.0;
-        let first_only = std::env::var("MLSM_CORNER").as_deref() == Ok("first");
-        for &(part, normal) in sample.touches.iter().take(if first_only { 1 } else { usize::MAX }) {
+        for &(part, normal) in &sample.touches {
             let bc = &conditions[part];
             n[0] += normal[0];
             n[1] += normal[1];

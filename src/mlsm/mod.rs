@@ -23,7 +23,7 @@ pub struct Approximation {
     /// Support size `n` (the node itself included).
     pub support: usize,
     /// Ghost nodes: one fictitious node at distance `h` outside every boundary node
-    /// with a traction equation, so that such a node carries both its boundary
-    /// equations and the Navier equation (fictitious-point method).
+    /// whose two equations are tractions, so that such a node carries both its
+    /// traction equations and the Navier equation (fictitious-point method).
     pub ghost_nodes: bool,
 }

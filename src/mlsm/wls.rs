@@ -46,10 +46,7 @@ pub fn shape_functions(
     let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
     let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
     let s = dist.iter().cloned().fold(0.0, f64::max);
-    let h_p = match std::env::var("MLSM_HP").as_deref() {
-        Ok("radius") => s * (std::f64::consts::PI / n as f64).sqrt(),
-        _ => dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min),
-    };
+    let h_p = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
     let z: Vec<[f64; 2]> = rel.iter().map(|d| [d[0] / s, d[1] / s]).collect();
     let sw: Vec<f64> = dist.iter().map(|&r| weight.sqrt_weight(r, h_p)).collect();
     let local = LocalBasis::new(basis, &z, h_p / s);
