@@ -9,9 +9,31 @@ use crate::linalg::{Preconditioner, SolverKind, SolverParams};
 use crate::mlsm::{Approximation, Basis, RbfKind, Weight};
 use std::path::Path;
 
-/// Default support size: 12 nearest nodes for degree-2 monomials (m = 6) keeps the
-/// least-squares fit over-determined by a factor 2 on scattered nodes.
-pub const DEFAULT_SUPPORT: usize = 12;
+/// Default support size for a basis of `m` functions.
+///
+/// Scattered fills: `2 m` (12 for degree-2 monomials), a least-squares fit
+/// over-determined by a factor 2. Grid fills: the smallest complete ring of lattice
+/// neighbours (9, 13, 21, 25, 29, 37, 45, 49, ...) with at least `1.4 m` nodes, because
+/// the `n` nearest of a lattice node are ambiguous when the n-th distance is shared
+/// by several nodes; an arbitrary pick makes stencils asymmetric (measured on
+/// manufactured_traction.toml: order 1.3-1.6 with 12 nodes, 1.9-2.0 with 9).
+pub fn default_support(m: usize, fill: FillKind) -> usize {
+    match fill {
+        FillKind::Scattered => 2 * m,
+        FillKind::Grid => {
+            // Count lattice points within radius^2 = r2 for increasing r2.
+            let mut r2 = 1;
+            loop {
+                let k = (r2 as f64).sqrt() as i64;
+                let count = (-k..=k).flat_map(|i| (-k..=k).map(move |j| i * i + j * j)).filter(|&d| d <= r2).count();
+                if count as f64 >= 1.4 * m as f64 {
+                    return count;
+                }
+                r2 += 1;
+            }
+        }
+    }
+}
 
 /// Ghost nodes outside traction boundaries unless the scene says otherwise.
 pub const DEFAULT_GHOST_NODES: bool = true;
@@ -107,8 +129,8 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     if !(hi[0] > lo[0] && hi[1] > lo[1]) || area <= 0.0 {
         return c.err("domain.region", "the regions leave no material (empty intersection or everything subtracted)");
     }
-    let approximation = approximation(&c, &spec.approximation)?;
     let fill = nodes(&c, &spec.nodes, &domain, area)?;
+    let approximation = approximation(&c, &spec.approximation, fill.kind)?;
     let expected_nodes = area / fill.spacing.powi(2) * packing(fill.kind);
     if expected_nodes < 2.0 * approximation.support as f64 {
         return c.err(
@@ -336,7 +358,7 @@ fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Result<FillParam
     Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: s.relax.unwrap_or(0) })
 }
 
-fn approximation(c: &Ctx, s: &ApproximationSpec) -> Result<Approximation, ProblemError> {
+fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind) -> Result<Approximation, ProblemError> {
     let kind = s.basis.as_deref().unwrap_or("monomials");
     let poly = |deg: Option<u32>| -> Result<u32, ProblemError> {
         let d = deg.unwrap_or(2);
@@ -381,7 +403,7 @@ fn approximation(c: &Ctx, s: &ApproximationSpec) -> Result<Approximation, Proble
     let support = match (s.support, basis) {
         (Some(n), _) => n,
         (None, Basis::Rbf { .. }) => 9,
-        (None, _) => DEFAULT_SUPPORT.max(m + m / 2),
+        (None, _) => default_support(m, fill),
     };
     if support < 2 {
         return c.err("approximation.support", format!("must be at least 2, got {support}"));
