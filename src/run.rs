@@ -292,7 +292,8 @@ impl System<'_> {
     /// Rows of every node, in parallel; returns the triplets and the right-hand side.
     ///
     /// Interior nodes carry the Navier rows; boundary nodes their boundary rows and,
-    /// when they have a ghost, also the Navier rows, written in the ghost's rows.
+    /// when they have a ghost, also the Navier rows (then the node's own rows hold
+    /// the Navier equation and the ghost's rows the tractions).
     pub fn assemble(&self) -> Result<(Triplets, Vec<f64>), RunError> {
         let (nodes, dofs) = (self.nodes, self.dofs);
         let writer = RowWriter { dofs, lame: self.problem.material.lame(), supports: self.supports, shapes: self.shapes };
@@ -306,17 +307,22 @@ impl System<'_> {
                 let mut e = Entries::with_capacity(8 * self.supports.size());
                 let mut rhs = Vec::with_capacity(4);
                 if i < nodes.boundary.len() {
+                    // With a ghost, the node's own rows take the Navier equation and the
+                    // ghost's rows the tractions: both then have a large diagonal entry
+                    // (the centre weight of a first derivative on a symmetric stencil is
+                    // ~0), which incomplete factorisations without pivoting need.
+                    let g = self.ghost[i];
+                    let bc_rows = if g != usize::MAX { g } else { i };
                     for (c, eq) in self.equations[i].iter().enumerate() {
                         let r = match *eq {
                             ComponentEquation::Displacement { value } => writer.displacement(i, c, value, &mut e),
-                            ComponentEquation::Traction { normal, value } => writer.traction(i, c, normal, value, &mut e),
+                            ComponentEquation::Traction { normal, value } => writer.traction(i, bc_rows, c, normal, value, &mut e),
                         };
-                        rhs.push((dofs.dof(i, c), r));
+                        rhs.push((dofs.dof(bc_rows, c), r));
                     }
-                    let g = self.ghost[i];
                     if g != usize::MAX {
-                        let r = writer.navier(i, g, body_force(i), &mut e);
-                        rhs.extend([(dofs.dof(g, 0), r[0]), (dofs.dof(g, 1), r[1])]);
+                        let r = writer.navier(i, i, body_force(i), &mut e);
+                        rhs.extend([(dofs.dof(i, 0), r[0]), (dofs.dof(i, 1), r[1])]);
                     }
                 } else {
                     let r = writer.navier(i, i, body_force(i), &mut e);

@@ -47,11 +47,12 @@ impl RowWriter<'_> {
         [-f[0], -f[1]]
     }
 
-    /// Traction row of component `c` at node `i`: `(sigma(u) n)_c = t`; returns the right-hand side.
-    pub fn traction(&self, i: usize, c: usize, n: [f64; 2], t: f64, out: &mut Entries) -> f64 {
+    /// Traction row of component `c` at node `i`, `(sigma(u) n)_c = t`, written in row `c`
+    /// of node `row_node` (`i` itself, or its ghost); returns the right-hand side.
+    pub fn traction(&self, i: usize, row_node: usize, c: usize, n: [f64; 2], t: f64, out: &mut Entries) -> f64 {
         let Lame { lambda, mu } = self.lame;
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
-        let r = self.dofs.dof(i, c);
+        let r = self.dofs.dof(row_node, c);
         for (k, &j) in self.supports.of(i).iter().enumerate() {
             let (uj, vj) = (self.dofs.dof(j as usize, 0), self.dofs.dof(j as usize, 1));
             let (cu, cv) = if c == 0 {

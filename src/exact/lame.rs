@@ -190,7 +190,7 @@ mod tests {
     #[test]
     fn inner_wall_carries_the_pressure_and_outer_wall_is_free() {
         for plane in [PlaneModel::Strain, PlaneModel::Stress] {
-            let cyl = Lame {
+            let cyl = LameCylinder {
                 material: Material {
                     plane,
                     ..LameCylinder::reference().material

@@ -62,7 +62,7 @@ fn cases() -> Vec<Case> {
             step: 1e-3,
         });
         out.push(Case {
-            solution: Box::new(Lame {
+            solution: Box::new(LameCylinder {
                 material: steel,
                 ..LameCylinder::reference()
             }),

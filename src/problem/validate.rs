@@ -355,15 +355,19 @@ fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Result<FillParam
     if spacing > size / 2.0 {
         return c.err("nodes.spacing", format!("spacing {spacing} is more than half the domain size {size:.3e}"));
     }
-    Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: s.relax.unwrap_or(0) })
+    let relax = s.relax.unwrap_or(0);
+    if relax > 1000 {
+        return c.err("nodes.relax", format!("{relax} sweeps; the fill settles within tens (seed 002 uses about 10); at most 1000"));
+    }
+    Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
 }
 
 fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind) -> Result<Approximation, ProblemError> {
     let kind = s.basis.as_deref().unwrap_or("monomials");
     let poly = |deg: Option<u32>| -> Result<u32, ProblemError> {
         let d = deg.unwrap_or(2);
-        if !(1..=6).contains(&d) {
-            return c.err("approximation.degree", format!("must be 1..6 (second derivatives need at least 2), got {d}"));
+        if !(2..=6).contains(&d) {
+            return c.err("approximation.degree", format!("must be 2..6 (the Navier equations need second derivatives), got {d}"));
         }
         Ok(d)
     };

@@ -1,0 +1,484 @@
+//! End-to-end tests of the `mlsm` binary: a small solve with its outputs, `check` on
+//! every shipped scene, a two-level convergence study, exit codes and messages for
+//! invalid scenes (exit 2) and solver failures (exit 3), and that a failing run
+//! leaves earlier results alone.
+//!
+//! Every test works in its own temporary directory and runs the binary with that
+//! directory as its current directory and an explicit `--out` inside it, so
+//! nothing is written into the repository.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use tempfile::TempDir;
+
+/// A small valid scene: problems/manufactured_dirichlet.toml at spacing 0.05
+/// (441 grid nodes). Every invalid scene below is this text with one thing wrong.
+const TEMPLATE: &str = r#"# Derived from problems/manufactured_dirichlet.toml (spacing 0.025 -> 0.05).
+name = "manufactured_dirichlet"
+body_force = "exact"
+
+[[domain.region]]
+shape = "rectangle"
+min = [0.0, 0.0]
+max = [1.0, 1.0]
+
+[nodes]
+spacing = 0.05
+fill = "grid"
+
+[approximation]
+basis = "monomials"
+degree = 2
+support = 9
+
+[material]
+E = 1.0
+nu = 0.3
+plane = "strain"
+
+[exact]
+kind = "manufactured"
+
+[[boundary]]
+part = "left"
+kind = "displacement"
+value = "exact"
+
+[[boundary]]
+part = "right"
+kind = "displacement"
+value = "exact"
+
+[[boundary]]
+part = "bottom"
+kind = "displacement"
+value = "exact"
+
+[[boundary]]
+part = "top"
+kind = "displacement"
+value = "exact"
+"#;
+
+/// The rectangle region of [`TEMPLATE`], to swap for another shape.
+const RECTANGLE: &str = "shape = \"rectangle\"\nmin = [0.0, 0.0]\nmax = [1.0, 1.0]\n";
+
+/// Run `mlsm` with `args` in `dir`.
+fn mlsm(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mlsm"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("cannot start the mlsm binary")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn describe(o: &Output) -> String {
+    format!(
+        "exit {:?}\n--- stdout\n{}--- stderr\n{}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout),
+        stderr(o)
+    )
+}
+
+/// `text` with every occurrence of each `from` replaced by its `to`; each `from`
+/// must occur, so that a case cannot silently become the valid template.
+fn edit(text: &str, edits: &[(&str, &str)]) -> String {
+    let mut s = text.to_string();
+    for (from, to) in edits {
+        assert!(s.contains(from), "edit target {from:?} not found in\n{s}");
+        s = s.replace(from, to);
+    }
+    s
+}
+
+/// [`TEMPLATE`] with some edits.
+fn scene(edits: &[(&str, &str)]) -> String {
+    edit(TEMPLATE, edits)
+}
+
+/// [`TEMPLATE`] with an appended table.
+fn scene_plus(extra: &str) -> String {
+    format!("{TEMPLATE}\n{extra}")
+}
+
+/// [`TEMPLATE`] without [exact] (and so without the exact body force and boundary
+/// values): a valid scene whose solution is zero.
+fn no_exact() -> String {
+    scene(&[
+        ("body_force = \"exact\"\n", ""),
+        ("[exact]\nkind = \"manufactured\"\n", ""),
+        ("value = \"exact\"", "value = [0.0, 0.0]"),
+    ])
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn read_json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{} is not JSON: {e}", path.display()))
+}
+
+fn num(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} is not a number: {}", v[key]))
+}
+
+fn count(v: &Value, key: &str) -> u64 {
+    v[key]
+        .as_u64()
+        .unwrap_or_else(|| panic!("{key} is not a count: {}", v[key]))
+}
+
+#[test]
+fn template_is_valid() {
+    // The invalid scenes are one edit away from this one: it must pass on its own.
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "scene.toml", TEMPLATE);
+    let o = mlsm(tmp.path(), &["check", "scene.toml"]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    write(tmp.path(), "zero.toml", &no_exact());
+    let o = mlsm(tmp.path(), &["check", "zero.toml"]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+}
+
+#[test]
+fn run_writes_solution_and_summary() {
+    let tmp = TempDir::new().unwrap();
+    let shipped = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/manufactured_dirichlet.toml"),
+    )
+    .unwrap();
+    write(
+        tmp.path(),
+        "scene.toml",
+        &edit(&shipped, &[("spacing = 0.025", "spacing = 0.05")]),
+    );
+    let res = tmp.path().join("res");
+    let o = mlsm(
+        tmp.path(),
+        &[
+            "--quiet",
+            "run",
+            "scene.toml",
+            "--out",
+            res.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    assert!(res.join("solution.vtu").is_file(), "no solution.vtu");
+    let vtu = std::fs::read_to_string(res.join("solution.vtu")).unwrap();
+    assert!(
+        vtu.contains("VTKFile") && vtu.contains("displacement"),
+        "solution.vtu lacks the displacement field"
+    );
+
+    let s = read_json(&res.join("summary.json"));
+    let nodes = count(&s, "nodes");
+    let boundary = count(&s, "boundary_nodes");
+    let ghosts = count(&s, "ghost_nodes");
+    assert!(nodes > 0);
+    assert!(boundary > 0 && boundary < nodes);
+    // Two displacement components per node and per ghost node.
+    assert_eq!(count(&s, "unknowns"), 2 * nodes + 2 * ghosts);
+    // Ghost nodes sit only outside all-traction boundary nodes: none here.
+    assert_eq!(ghosts, 0);
+    assert!(count(&s, "nonzeros") > 0);
+    assert!(s["seed"].is_u64(), "seed missing: {s}");
+
+    let timings = s["timings_s"].as_object().expect("timings_s");
+    let stages = [
+        "nodes", "supports", "shapes", "assembly", "solve", "post", "output", "total",
+    ];
+    let mut keys: Vec<&str> = timings.keys().map(|k| k.as_str()).collect();
+    keys.sort_unstable();
+    let mut expected = stages.to_vec();
+    expected.sort_unstable();
+    assert_eq!(keys, expected, "timings_s keys");
+    for k in stages {
+        let t = num(&s["timings_s"], k);
+        assert!(t.is_finite() && t >= 0.0, "timings_s.{k} = {t}");
+    }
+
+    assert!(
+        num(&s["solver"], "relative_residual") < 1e-10,
+        "solver: {}",
+        s["solver"]
+    );
+    let e = num(&s["errors"], "e_inf_u");
+    assert!(e < 1e-2, "e_inf_u = {e}");
+
+    // Every part prescribes displacement and the outputs (displacement, stress,
+    // von_mises, error) need the gradient: first derivatives at every node for the
+    // post-processing, second derivatives only at the interior nodes (Navier rows),
+    // no interpolation operator.
+    let ops = s["operators_computed"]
+        .as_object()
+        .expect("operators_computed");
+    let mut got: Vec<(String, u64)> = ops
+        .iter()
+        .map(|(k, v)| (k.clone(), v.as_u64().unwrap()))
+        .collect();
+    let interior = nodes - boundary;
+    let mut want: Vec<(String, u64)> = [
+        ("d/dx", nodes),
+        ("d/dy", nodes),
+        ("d2/dx2", interior),
+        ("d2/dxdy", interior),
+        ("d2/dy2", interior),
+    ]
+    .iter()
+    .map(|(k, n)| (k.to_string(), *n))
+    .collect();
+    got.sort();
+    want.sort();
+    assert_eq!(got, want, "operators_computed");
+}
+
+#[test]
+fn check_accepts_every_shipped_scene() {
+    let tmp = TempDir::new().unwrap();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    scenes.sort();
+    assert!(!scenes.is_empty(), "no scenes in {}", dir.display());
+    let mut failed = Vec::new();
+    for p in &scenes {
+        let o = mlsm(tmp.path(), &["check", p.to_str().unwrap()]);
+        if o.status.code() != Some(0) {
+            failed.push(format!("{}: {}", p.display(), describe(&o)));
+        }
+    }
+    assert!(failed.is_empty(), "check failed on:\n{}", failed.join("\n"));
+    // check writes nothing.
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
+
+#[test]
+fn convergence_two_levels() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "scene.toml", TEMPLATE);
+    let res = tmp.path().join("conv");
+    let o = mlsm(
+        tmp.path(),
+        &[
+            "--quiet",
+            "convergence",
+            "scene.toml",
+            "--levels",
+            "1",
+            "--out",
+            res.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let csv = std::fs::read_to_string(res.join("convergence.csv")).expect("convergence.csv");
+    let lines: Vec<&str> = csv.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 3, "header + 2 rows expected:\n{csv}");
+    assert!(lines[0].contains("e_inf_u"), "header: {}", lines[0]);
+    let t = read_json(&res.join("convergence.json"));
+    assert_eq!(t["levels"].as_array().map(|l| l.len()), Some(2), "{t}");
+    // Degree-2 monomials reproduce quadratics, so the discrete second derivatives of
+    // the Navier rows are consistent, and on the symmetric 9-node grid stencils used
+    // here the displacement error is expected to fall as h^2 (order 2; measured
+    // about 2.08). With only two coarse levels (h = 0.05 and 0.025) the slope is
+    // not yet asymptotic, hence the band [1.5, 2.5] around 2.
+    let p = num(&t, "fitted_order_e_inf_u");
+    assert!((1.5..=2.5).contains(&p), "fitted order {p}: {t}");
+}
+
+#[test]
+fn convergence_without_exact_is_rejected() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "zero.toml", &no_exact());
+    let res = tmp.path().join("conv");
+    let o = mlsm(
+        tmp.path(),
+        &[
+            "convergence",
+            "zero.toml",
+            "--levels",
+            "1",
+            "--out",
+            res.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("zero.toml") && err.contains("[exact]"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!res.exists());
+}
+
+#[test]
+fn invalid_scenes_exit_2_naming_the_field() {
+    // (case, scene text (None: no file at all), substrings stderr must contain besides
+    // the file name). The first substring is the field as printed in
+    // "<file>: <field>: <reason>".
+    let cases: Vec<(&str, Option<String>, &[&str])> = vec![
+        ("unknown top-level key", Some(scene(&[("body_force = \"exact\"\n", "body_force = \"exact\"\ncolour = \"red\"\n")])), &["colour", "unknown field"]),
+        ("unknown key in [approximation]", Some(scene(&[("support = 9", "suport = 9")])), &["approximation.suport", "unknown field"]),
+        ("wrong type", Some(scene(&[("spacing = 0.05", "spacing = \"fine\"")])), &["nodes.spacing"]),
+        ("TOML syntax error", Some(scene(&[("[material]", "[material")])), &["(syntax)", "line "]),
+        ("missing [material]", Some(scene(&[("[material]\nE = 1.0\nnu = 0.3\nplane = \"strain\"\n", "")])), &["(top level)", "material"]),
+        ("nu = 0.5", Some(scene(&[("nu = 0.3", "nu = 0.5")])), &["material.nu"]),
+        ("nu = -1.2", Some(scene(&[("nu = 0.3", "nu = -1.2")])), &["material.nu"]),
+        ("E = -1", Some(scene(&[("E = 1.0", "E = -1.0")])), &["material.E"]),
+        ("E/nu and lambda/mu", Some(scene(&[("nu = 0.3", "nu = 0.3\nlambda = 1.0\nmu = 1.0")])), &["material", "lambda"]),
+        ("plane = 3d", Some(scene(&[("plane = \"strain\"", "plane = \"3d\"")])), &["material.plane", "3d"]),
+        ("spacing = 0", Some(scene(&[("spacing = 0.05", "spacing = 0.0")])), &["nodes.spacing"]),
+        ("spacing < 0", Some(scene(&[("spacing = 0.05", "spacing = -0.05")])), &["nodes.spacing"]),
+        ("spacing and count", Some(scene(&[("spacing = 0.05", "spacing = 0.05\ncount = 400")])), &["nodes", "count"]),
+        ("rectangle max <= min", Some(scene(&[("max = [1.0, 1.0]", "max = [1.0, 0.0]")])), &["domain.region[0].max"]),
+        ("disc radius 0", Some(scene(&[(RECTANGLE, "shape = \"disc\"\ncenter = [0.5, 0.5]\nradius = 0.0\n")])), &["domain.region[0].radius"]),
+        ("polygon with 2 vertices", Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0]]\n")])), &["domain.region[0].vertices", "3 vertices"]),
+        (
+            "self-intersecting polygon",
+            Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0], [0.2, 1.0], [0.8, 1.0]]\n")])),
+            &["domain.region[0].vertices", "cross"],
+        ),
+        ("first region subtracts", Some(scene(&[(RECTANGLE, &format!("{RECTANGLE}op = \"subtract\"\n"))])), &["domain.region[0].op"]),
+        ("unknown boundary part", Some(scene(&[("part = \"top\"", "part = \"roof\"")])), &["boundary[3].part", "roof", "\"left\"", "\"top\""]),
+        ("part without condition", Some(scene(&[("[[boundary]]\npart = \"top\"\nkind = \"displacement\"\nvalue = \"exact\"\n", "")])), &["boundary", "\"top\""]),
+        ("duplicate condition", Some(scene_plus("[[boundary]]\npart = \"left\"\nkind = \"traction\"\n")), &["boundary[4].part", "already"]),
+        ("mixed without x", Some(scene(&[("part = \"left\"\nkind = \"displacement\"", "part = \"left\"\nkind = \"mixed\"\ny = \"displacement\"")])), &["boundary[0].x"]),
+        ("value = exact without [exact]", Some(scene(&[("body_force = \"exact\"\n", ""), ("[exact]\nkind = \"manufactured\"\n", "")])), &["boundary[0].value", "[exact]"]),
+        ("body_force = exact without [exact]", Some(scene(&[("[exact]\nkind = \"manufactured\"\n", "")])), &["body_force", "[exact]"]),
+        ("support < basis size", Some(scene(&[("support = 9", "support = 5")])), &["approximation.support", "6"]),
+        ("degree 0", Some(scene(&[("degree = 2", "degree = 0")])), &["approximation.degree"]),
+        // Degree 1 has no second derivatives: the Navier rows would vanish (this used
+        // to pass validation and end in a singular matrix, exit 3).
+        ("degree 1", Some(scene(&[("degree = 2", "degree = 1")])), &["approximation.degree"]),
+        ("tensor degree 1", Some(scene(&[("basis = \"monomials\"\ndegree = 2", "basis = \"tensor\"\ndegree = 1")])), &["approximation.degree"]),
+        ("wrong type for a count", Some(scene(&[("spacing = 0.05", "count = -400")])), &["nodes.count"]),
+        ("polygon edge_names count", Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]\nedge_names = [\"a\", \"b\"]\n")])), &["domain.region[0].edge_names"]),
+        ("regions leave no material", Some(scene(&[(RECTANGLE, &format!("{RECTANGLE}\n[[domain.region]]\nshape = \"rectangle\"\nop = \"subtract\"\nmin = [-1.0, -1.0]\nmax = [2.0, 2.0]\n"))])), &["domain.region", "no material"]),
+        ("NaN boundary value", Some(scene(&[("value = \"exact\"", "value = [nan, 0.0]")])), &["boundary[0].value", "finite"]),
+        ("unknown solver", Some(scene_plus("[solver]\nkind = \"cg\"\n")), &["solver.kind", "cg"]),
+        ("unknown preconditioner", Some(scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"amg\"\n")), &["solver.preconditioner", "amg"]),
+        ("tolerance = 0", Some(scene_plus("[solver]\nkind = \"bicgstab\"\ntolerance = 0.0\n")), &["solver.tolerance"]),
+        ("unknown exact kind", Some(scene(&[("kind = \"manufactured\"", "kind = \"hertz\"")])), &["exact.kind", "hertz"]),
+        ("cantilever without load", Some(scene(&[("kind = \"manufactured\"", "kind = \"cantilever\"\nlength = 1.0\ndepth = 1.0")])), &["exact.load"]),
+        ("unknown output field", Some(scene_plus("[output]\nfields = [\"displacement\", \"temperature\"]\n")), &["output.fields[1]", "temperature"]),
+        ("error output without [exact]", Some(format!("{}\n[output]\nfields = [\"displacement\", \"error\"]\n", no_exact())), &["output.fields", "[exact]"]),
+        ("pure traction", Some(scene(&[("kind = \"displacement\"", "kind = \"traction\"")])), &["boundary", "rigid motion"]),
+        ("too few nodes", Some(scene(&[("spacing = 0.05", "spacing = 0.4")])), &["nodes.spacing", "too few"]),
+        ("unknown fill", Some(scene(&[("fill = \"grid\"", "fill = \"hex\"")])), &["nodes.fill", "hex"]),
+        ("unknown boundary kind", Some(scene(&[("part = \"left\"\nkind = \"displacement\"", "part = \"left\"\nkind = \"clamped\"")])), &["boundary[0].kind", "clamped"]),
+        ("nonexistent scene file", None, &["(file)"]),
+    ];
+    assert!(cases.len() >= 20);
+    let mut failures = Vec::new();
+    for (name, text, expect) in &cases {
+        let tmp = TempDir::new().unwrap();
+        let file = match text {
+            Some(t) => {
+                write(tmp.path(), "bad.toml", t);
+                "bad.toml"
+            }
+            None => "missing.toml",
+        };
+        let res = tmp.path().join("res");
+        let o = mlsm(tmp.path(), &["run", file, "--out", res.to_str().unwrap()]);
+        let err = stderr(&o);
+        let mut problems = Vec::new();
+        if o.status.code() != Some(2) {
+            problems.push(format!("exit code {:?}, expected 2", o.status.code()));
+        }
+        // "<file>: <field>: <reason>".
+        let head = format!("{file}: {}: ", expect[0]);
+        if !err.contains(&head) {
+            problems.push(format!("stderr lacks {head:?}"));
+        }
+        for s in &expect[1..] {
+            if !err.contains(s) {
+                problems.push(format!("stderr lacks {s:?}"));
+            }
+        }
+        if err.contains("panicked") {
+            problems.push("panicked".into());
+        }
+        if res.exists() {
+            problems.push("output folder created".into());
+        }
+        if !problems.is_empty() {
+            failures.push(format!(
+                "case {name:?}: {}\n{}",
+                problems.join("; "),
+                describe(&o)
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} invalid-scene cases failed:\n\n{}",
+        failures.len(),
+        cases.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn failed_run_leaves_earlier_results_alone() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "good.toml", TEMPLATE);
+    write(tmp.path(), "bad.toml", &scene(&[("nu = 0.3", "nu = 0.5")]));
+    let res = tmp.path().join("res");
+    let out = res.to_str().unwrap();
+    let o = mlsm(tmp.path(), &["--quiet", "run", "good.toml", "--out", out]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let summary = std::fs::read(res.join("summary.json")).unwrap();
+    let vtu = std::fs::read(res.join("solution.vtu")).unwrap();
+    let o = mlsm(tmp.path(), &["--quiet", "run", "bad.toml", "--out", out]);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    assert_eq!(
+        std::fs::read(res.join("summary.json")).unwrap(),
+        summary,
+        "summary.json changed"
+    );
+    assert_eq!(
+        std::fs::read(res.join("solution.vtu")).unwrap(),
+        vtu,
+        "solution.vtu changed"
+    );
+}
+
+#[test]
+fn solver_failure_exits_3() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "scene.toml", &scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"jacobi\"\nmax_iterations = 1\ntolerance = 1e-14\n"));
+    let res = tmp.path().join("res");
+    let o = mlsm(
+        tmp.path(),
+        &[
+            "--quiet",
+            "run",
+            "scene.toml",
+            "--out",
+            res.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(o.status.code(), Some(3), "{}", describe(&o));
+    let err = stderr(&o);
+    assert!(err.contains("residual"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!res.exists(), "output folder created by a failed solve");
+}

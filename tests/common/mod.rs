@@ -1,0 +1,79 @@
+//! Shared helpers: load a shipped scene with edits, so that every test starts from
+//! the same problem definitions as the CLI (problems/*.toml).
+#![allow(dead_code)]
+
+use mlsm::problem::Problem;
+use std::path::Path;
+
+/// Load `problems/<name>.toml`, apply `edits` (dotted key -> TOML value; `None`
+/// removes the key) and validate it.
+pub fn scene(name: &str, edits: &[(&str, Option<toml::Value>)]) -> Problem {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml"));
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut doc: toml::Table = toml::from_str(&text).unwrap();
+    for (key, value) in edits {
+        let parts: Vec<&str> = key.split('.').collect();
+        let mut table = &mut doc;
+        for p in &parts[..parts.len() - 1] {
+            table = table.entry(p.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new())).as_table_mut().unwrap();
+        }
+        match value {
+            Some(v) => {
+                table.insert(parts[parts.len() - 1].to_string(), v.clone());
+            }
+            None => {
+                table.remove(parts[parts.len() - 1]);
+            }
+        }
+    }
+    Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A float TOML value.
+pub fn f(v: f64) -> Option<toml::Value> {
+    Some(toml::Value::Float(v))
+}
+
+/// An integer TOML value.
+pub fn i(v: i64) -> Option<toml::Value> {
+    Some(toml::Value::Integer(v))
+}
+
+/// A string TOML value.
+pub fn s(v: &str) -> Option<toml::Value> {
+    Some(toml::Value::String(v.into()))
+}
+
+/// A boolean TOML value.
+pub fn b(v: bool) -> Option<toml::Value> {
+    Some(toml::Value::Boolean(v))
+}
+
+/// Solve a problem silently.
+pub fn solve(p: &Problem) -> mlsm::run::Solution {
+    mlsm::run::solve(p, &mlsm::run::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
+}
+
+/// Errors `(e_inf_u, e_inf_sigma)` of a solved problem with an exact solution.
+pub fn errors(p: &Problem) -> (usize, f64, f64) {
+    let s = solve(p);
+    let e = s.errors.expect("exact solution");
+    (s.nodes.len(), e.e_inf_u, e.e_inf_sigma.expect("stress errors"))
+}
+
+/// Observed order in the effective spacing `sqrt(1/N)` over a sequence of spacings.
+pub fn orders(name: &str, spacings: &[f64], extra: &[(&str, Option<toml::Value>)]) -> (f64, f64, Vec<(usize, f64, f64)>) {
+    let mut rows = Vec::new();
+    for &h in spacings {
+        let mut edits = extra.to_vec();
+        edits.push(("nodes.spacing", f(h)));
+        rows.push(errors(&scene(name, &edits)));
+    }
+    let hs: Vec<f64> = rows.iter().map(|r| (1.0 / r.0 as f64).sqrt()).collect();
+    let eu: Vec<f64> = rows.iter().map(|r| r.1).collect();
+    let es: Vec<f64> = rows.iter().map(|r| r.2).collect();
+    let pu = mlsm::post::observed_order(&hs, &eu).unwrap();
+    let ps = mlsm::post::observed_order(&hs, &es).unwrap();
+    eprintln!("{name}: {rows:?} -> order u {pu:.3}, sigma {ps:.3}");
+    (pu, ps, rows)
+}

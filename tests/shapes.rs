@@ -1,0 +1,103 @@
+//! Shape functions reproduce every polynomial up to the basis degree, for every
+//! operator, on scattered supports, at any length scale (property test).
+
+use mlsm::mlsm::basis::{monomial_exponents, Basis, RbfKind, Weight};
+use mlsm::mlsm::wls::shape_functions;
+use mlsm::mlsm::Op;
+use proptest::prelude::*;
+
+/// `d^(a+b)/dx^a dy^b` of `x^i y^j` at `p`.
+fn monomial_derivative(i: u32, j: u32, (a, b): (u32, u32), p: [f64; 2]) -> f64 {
+    if a > i || b > j {
+        return 0.0;
+    }
+    let fall = |n: u32, k: u32| (0..k).map(|t| (n - t) as f64).product::<f64>();
+    fall(i, a) * fall(j, b) * p[0].powi((i - a) as i32) * p[1].powi((j - b) as i32)
+}
+
+fn support(centre: [f64; 2], h: f64, offsets: &[(f64, f64)]) -> Vec<[f64; 2]> {
+    let mut pts = vec![centre];
+    pts.extend(offsets.iter().map(|(r, t)| [centre[0] + h * r * t.cos(), centre[1] + h * r * t.sin()]));
+    pts
+}
+
+fn check_reproduction(basis: Basis, weight: Weight, centre: [f64; 2], h: f64, offsets: &[(f64, f64)], coeffs: &[f64]) -> Result<(), TestCaseError> {
+    let pts = support(centre, h, offsets);
+    let n = pts.len();
+    let ops = Op::ALL;
+    let mut phi = vec![0.0; ops.len() * n];
+    shape_functions(&basis, &weight, centre, &pts, &ops, &mut phi).map_err(|e| TestCaseError::reject(format!("{e:?}")))?;
+    let exps = monomial_exponents(&basis);
+    // Polynomial in coordinates relative to the centre and scaled by h, so that the
+    // coefficients are O(1) at every length scale.
+    let poly = |p: [f64; 2], op: Op| -> f64 {
+        let z = [(p[0] - centre[0]) / h, (p[1] - centre[1]) / h];
+        let (a, b) = op.multi_index();
+        exps.iter().zip(coeffs).map(|(&(i, j), c)| c * monomial_derivative(i, j, (a, b), z)).sum::<f64>() / h.powi((a + b) as i32)
+    };
+    for (k, &op) in ops.iter().enumerate() {
+        let approx: f64 = (0..n).map(|j| phi[k * n + j] * poly(pts[j], Op::Value)).sum();
+        let exact = poly(centre, op);
+        // Each shape weight is ~ 1/h^order; round-off in the local QR (condition
+        // number <= ~1e4 for these supports) times the sum of |phi_j u_j| bounds the error.
+        let scale: f64 = (0..n).map(|j| (phi[k * n + j] * poly(pts[j], Op::Value)).abs()).sum::<f64>().max(1.0 / h.powi(op.order()));
+        prop_assert!((approx - exact).abs() <= 1e-9 * scale, "{basis:?} {op:?} h={h:e}: {approx} vs {exact} (scale {scale:e})");
+    }
+    Ok(())
+}
+
+/// Scattered offsets (radius in units of h, angle) of a support of `n - 1` neighbours:
+/// one neighbour per angular sector with jittered radius, so supports are never degenerate.
+fn offsets(n: usize) -> impl Strategy<Value = Vec<(f64, f64)>> {
+    prop::collection::vec((0.7f64..2.2, 0.0f64..0.8), n - 1).prop_map(move |v| {
+        let m = v.len() as f64;
+        v.into_iter().enumerate().map(|(k, (r, t))| (r * (1.0 + (k % 3) as f64 * 0.3), (k as f64 + t) * std::f64::consts::TAU / m)).collect()
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, .. ProptestConfig::default() })]
+
+    #[test]
+    fn monomials_degree_2_reproduce_quadratics(off in offsets(12), c in prop::collection::vec(-1.0f64..1.0, 6), e in -3i32..4, cx in -5.0f64..5.0) {
+        let h = 10f64.powi(e);
+        check_reproduction(Basis::Monomials { degree: 2 }, Weight::Gaussian { sigma: 1.0 }, [cx * h, 2.0 * h], h, &off, &c)?;
+    }
+
+    #[test]
+    fn monomials_degree_3_reproduce_cubics(off in offsets(20), c in prop::collection::vec(-1.0f64..1.0, 10), e in -3i32..4) {
+        let h = 10f64.powi(e);
+        check_reproduction(Basis::Monomials { degree: 3 }, Weight::Gaussian { sigma: 1.5 }, [h, -h], h, &off, &c)?;
+    }
+
+    #[test]
+    fn monomials_degree_4_reproduce_quartics(off in offsets(30), c in prop::collection::vec(-1.0f64..1.0, 15)) {
+        check_reproduction(Basis::Monomials { degree: 4 }, Weight::None, [0.3, 0.7], 0.01, &off, &c)?;
+    }
+
+    #[test]
+    fn tensor_degree_2_reproduces_biquadratics(off in offsets(16), c in prop::collection::vec(-1.0f64..1.0, 9), e in -2i32..3) {
+        let h = 10f64.powi(e);
+        check_reproduction(Basis::Tensor { degree: 2 }, Weight::Gaussian { sigma: 1.0 }, [0.0, 0.0], h, &off, &c)?;
+    }
+}
+
+#[test]
+fn square_rbf_interpolates() {
+    // With n = m the fit interpolates: the value shape at the centre is the unit vector.
+    let pts = support([1.0, 1.0], 0.1, &[(1.0, 0.1), (1.1, 1.3), (0.9, 2.5), (1.2, 3.3), (1.0, 4.4), (1.3, 5.5)]);
+    for rbf in [RbfKind::Gaussian, RbfKind::Mq, RbfKind::Imq] {
+        let mut phi = vec![0.0; pts.len()];
+        shape_functions(&Basis::Rbf { rbf, shape: 2.0 }, &Weight::None, [1.0, 1.0], &pts, &[Op::Value], &mut phi).unwrap();
+        assert!((phi[0] - 1.0).abs() < 1e-8, "{rbf:?}: {phi:?}");
+        assert!(phi[1..].iter().all(|v| v.abs() < 1e-8), "{rbf:?}: {phi:?}");
+    }
+}
+
+#[test]
+fn collinear_support_is_reported_not_nan() {
+    let pts: Vec<[f64; 2]> = (0..9).map(|k| [k as f64 * 0.1, 0.0]).collect();
+    let mut phi = vec![0.0; 9];
+    let r = shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, pts[0], &pts, &[Op::Dxx], &mut phi);
+    assert!(r.is_err());
+}

@@ -1,0 +1,77 @@
+//! The written solution.vtu reads back (vtkio) with the expected arrays and values,
+//! and summary.json agrees with the run.
+
+mod common;
+use common::*;
+use mlsm::cli::{Cli, Command};
+use mlsm::output::read_vtu;
+
+#[test]
+fn vtu_reads_back_with_expected_arrays() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = dir.path().join("kirsch.toml");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kirsch.toml")).unwrap().replace("spacing = 0.04", "spacing = 0.1");
+    std::fs::write(&scene_path, &text).unwrap();
+    let out = dir.path().join("res");
+    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()) } }).unwrap();
+
+    // The same run through the library, to compare values.
+    let p = mlsm::problem::Problem::from_file(&scene_path).unwrap();
+    let sol = solve(&p);
+    let vtu = read_vtu(&out.join("solution.vtu")).unwrap();
+    let n = sol.nodes.len();
+    assert_eq!(vtu.points.len(), n);
+    assert!(vtu.cells > n, "a triangulated surface has about 2 triangles per node, got {}", vtu.cells);
+    for (p, q) in vtu.points.iter().zip(&sol.nodes.positions) {
+        assert_eq!([p[0], p[1], p[2]], [q[0], q[1], 0.0]);
+    }
+    for name in ["displacement", "sigma_xx", "sigma_yy", "sigma_xy", "von_mises", "node_kind", "boundary_part", "normal", "exact_displacement", "error_displacement", "error_stress"] {
+        assert!(vtu.fields.contains_key(name), "missing array {name}; have {:?}", vtu.fields.keys().collect::<Vec<_>>());
+    }
+    assert!(!vtu.fields.contains_key("sigma_zz"), "plane stress writes no sigma_zz");
+    let (c, u) = &vtu.fields["displacement"];
+    assert_eq!(*c, 3);
+    for i in 0..n {
+        assert_eq!([u[3 * i], u[3 * i + 1], u[3 * i + 2]], [sol.displacement[i][0], sol.displacement[i][1], 0.0]);
+    }
+    let (s, _, vm) = sol.stress.as_ref().unwrap();
+    let sxx = &vtu.fields["sigma_xx"].1;
+    let vmf = &vtu.fields["von_mises"].1;
+    for i in 0..n {
+        assert_eq!(sxx[i], s[i][0]);
+        assert_eq!(vmf[i], vm[i]);
+        // Plane stress von Mises: sqrt(sxx^2 - sxx syy + syy^2 + 3 sxy^2).
+        let check = (s[i][0].powi(2) - s[i][0] * s[i][1] + s[i][1].powi(2) + 3.0 * s[i][2].powi(2)).sqrt();
+        assert!((vm[i] - check).abs() <= 1e-12 * check.max(1.0));
+    }
+    // Node kinds: interior 0, displacement 1, traction 2, mixed 3 (symmetry edges).
+    let kinds = &vtu.fields["node_kind"].1;
+    let nb = sol.nodes.boundary.len();
+    assert!(kinds[nb..].iter().all(|k| *k == 0.0));
+    assert!(kinds[..nb].iter().any(|k| *k == 3.0) && kinds[..nb].iter().any(|k| *k == 2.0));
+
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["nodes"], n);
+    assert_eq!(summary["unknowns"], sol.unknowns);
+    assert_eq!(summary["errors"]["e_inf_u"], sol.errors.unwrap().e_inf_u);
+    for stage in ["nodes", "supports", "shapes", "assembly", "solve", "post", "output", "total"] {
+        assert!(summary["timings_s"][stage].as_f64().unwrap() >= 0.0, "{stage}");
+    }
+}
+
+#[test]
+fn plane_strain_writes_sigma_zz_and_only_requested_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = dir.path().join("plate.toml");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/steel_plate.toml")).unwrap().replace("spacing = 0.01", "spacing = 0.05");
+    std::fs::write(&scene_path, format!("{text}\n[output]\nfields = [\"displacement\", \"stress\", \"strain\"]\n")).unwrap();
+    let out = dir.path().join("res");
+    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path, out: Some(out.clone()) } }).unwrap();
+    let vtu = read_vtu(&out.join("solution.vtu")).unwrap();
+    for name in ["sigma_zz", "eps_xx", "eps_yy", "eps_xy"] {
+        assert!(vtu.fields.contains_key(name), "missing {name}");
+    }
+    for name in ["von_mises", "error_displacement"] {
+        assert!(!vtu.fields.contains_key(name), "{name} was not requested");
+    }
+}
