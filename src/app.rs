@@ -81,8 +81,14 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             }
             Ok(())
         }
-        Command::Run { scene, out } => {
-            let p = Problem::from_file(scene)?;
+        Command::Run { scene, out, spacing } => {
+            let mut p = Problem::from_file(scene)?;
+            if let Some(h) = *spacing {
+                if !(h.is_finite() && h > 0.0 && h <= p.fill.spacing * 64.0) {
+                    return Err(AppError::Usage(format!("--spacing {h}: must be positive and at most 64 times the scene's spacing {}", p.fill.spacing)));
+                }
+                p = p.with_spacing(h);
+            }
             let dir = out.clone().unwrap_or_else(|| default_out(&p));
             if !cli.quiet {
                 eprintln!("{}: solving", p.name);

@@ -25,6 +25,9 @@ pub enum Command {
         /// Output folder (default: output/<scene name>).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Override the scene's node spacing (m), e.g. for timing studies.
+        #[arg(long)]
+        spacing: Option<f64>,
     },
     /// Validate a scene file without solving it.
     Check {

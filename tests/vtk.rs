@@ -13,7 +13,7 @@ fn vtu_reads_back_with_expected_arrays() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kirsch.toml")).unwrap().replace("spacing = 0.04", "spacing = 0.1");
     std::fs::write(&scene_path, &text).unwrap();
     let out = dir.path().join("res");
-    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()) } }).unwrap();
+    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None } }).unwrap();
 
     // The same run through the library, to compare values.
     let p = mlsm::problem::Problem::from_file(&scene_path).unwrap();
@@ -66,7 +66,7 @@ fn plane_strain_writes_sigma_zz_and_only_requested_fields() {
     let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/steel_plate.toml")).unwrap().replace("spacing = 0.01", "spacing = 0.05");
     std::fs::write(&scene_path, format!("{text}\n[output]\nfields = [\"displacement\", \"stress\", \"strain\"]\n")).unwrap();
     let out = dir.path().join("res");
-    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path, out: Some(out.clone()) } }).unwrap();
+    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path, out: Some(out.clone()), spacing: None } }).unwrap();
     let vtu = read_vtu(&out.join("solution.vtu")).unwrap();
     for name in ["sigma_zz", "eps_xx", "eps_yy", "eps_xy"] {
         assert!(vtu.fields.contains_key(name), "missing {name}");
