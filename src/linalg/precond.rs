@@ -81,7 +81,14 @@ impl Jacobi {
 ///   `|u_kk| ≈ 1`.
 /// * With `τ = 0`, `p ≥ n` only exact zeros are dropped and `L U = A`
 ///   (Gaussian elimination without pivoting).
-/// * No pivot modification: a zero or non-finite `u_ii` is an error.
+/// * No pivot modification: a numerically zero (`|u_ii| ≤`
+///   [`ILUT_PIVOT_RTOL`]`·‖a_i*‖₂`) or non-finite `u_ii`, or a non-finite
+///   `L`/`U` entry, is an error naming the first such row. Testing only for
+///   `u_ii == 0` is not enough: a row whose diagonal is a round-off zero
+///   (`|a_ii| ~ 1e-17 ‖a_i*‖`, e.g. a traction row whose centre weight
+///   cancels) gives a "pivot" of pure round-off, multipliers `~1e17` and then
+///   inf/NaN entries, and the factorisation used to fail (or return garbage)
+///   thousands of rows later with a meaningless `0`/`NaN` pivot.
 #[derive(Clone, Debug)]
 pub struct Ilut {
     n: usize,
@@ -95,6 +102,13 @@ pub struct Ilut {
     u_val: Vec<f64>,
     inv_diag: Vec<f64>,
 }
+
+/// Relative size below which an ILUT pivot counts as zero: `u_ii` is
+/// rejected when `|u_ii| ≤ ILUT_PIVOT_RTOL · ‖a_i*‖₂`. Such a pivot is
+/// dominated by round-off (or makes every later multiplier `≳ 1e12`, which
+/// amplifies the dropped entries far beyond the drop tolerance), so the
+/// incomplete factor is useless either way.
+pub const ILUT_PIVOT_RTOL: f64 = 1e-12;
 
 /// CSR copy `(row_ptr, col_idx, val)` of a CSC matrix (column indices sorted
 /// within each row).
@@ -173,7 +187,8 @@ impl Ilut {
                 &a_idx[a_ptr[i]..a_ptr[i + 1]],
                 &a_val[a_ptr[i]..a_ptr[i + 1]],
             );
-            let tau = drop * vals.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let row_norm = vals.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let tau = drop * row_norm;
             lower.clear();
             upper.clear();
             mark[i] = i;
@@ -222,11 +237,32 @@ impl Ilut {
             keep_largest(&mut upper, nu0 + fill, |j| w[j].abs());
 
             let piv = w[i];
-            if piv == 0.0 || !piv.is_finite() {
+            if !(piv.abs() > ILUT_PIVOT_RTOL * row_norm) || !piv.is_finite() {
+                let a_ii = cols.binary_search(&i).map_or(0.0, |p| vals[p]);
+                let cause = if a_ii.abs() <= ILUT_PIVOT_RTOL * row_norm {
+                    format!(
+                        "the row's own diagonal a_ii = {a_ii:.1e} is (numerically) zero, so \
+                         its pivot can only come from fill the drop/fill limits removed; \
+                         order the equations so that every row has a substantial diagonal, \
+                         or use lu"
+                    )
+                } else {
+                    format!("a_ii = {a_ii:.1e}; try a smaller drop / larger fill, ilu0, or lu")
+                };
                 return Err(SolveError::Singular {
                     detail: format!(
                         "ILUT(drop={drop:e}, fill={fill}) hit a zero or non-finite pivot \
-                         ({piv}) in row {i}; try a smaller drop / larger fill, ilu0, or lu"
+                         u_ii = {piv:.1e} in row {i} (‖a_i‖₂ = {row_norm:.1e}); {cause}"
+                    ),
+                });
+            }
+            if let Some(&j) = lower.iter().chain(&upper).find(|&&j| !w[j].is_finite()) {
+                return Err(SolveError::Singular {
+                    detail: format!(
+                        "ILUT(drop={drop:e}, fill={fill}) overflowed: entry ({i}, {j}) of the \
+                         factors is {}; earlier pivots are too small (element growth without \
+                         pivoting); try a smaller drop / larger fill, ilu0, or lu",
+                        w[j]
                     ),
                 });
             }
@@ -475,6 +511,53 @@ mod tests {
         p.solve_in_place(&mut x);
         let r = relative_residual(&a, &x, &b);
         assert!(r < 0.7, "residual after one ILUT application {r}");
+    }
+
+    /// Regression (steel plate with the traction equations in the boundary
+    /// nodes' own rows): a row whose diagonal is a round-off zero gets its
+    /// pivot only from fill, and the fill limit can drop exactly that fill.
+    /// ILUT used to accept the round-off "pivot" (here 1e-17), divide by it
+    /// and fail thousands of rows later with a meaningless `0`/`NaN` pivot
+    /// (or return inf entries). It must stop at the offending row instead.
+    #[test]
+    fn round_off_zero_pivot_is_reported_at_its_own_row() {
+        // Row 1 eliminates row 0 and gets fill -1 at columns 3, 4, 5, which
+        // outranks its own a_12 = 0.5 under the p-rule (fill = 1 keeps
+        // 1 + 1 U entries), so u_12 is dropped and row 2 (a_21 = 1,
+        // a_22 = 1e-17) receives nothing on its diagonal. Exact LU has
+        // u_22 = 1e-17 - 0.5 ≈ -0.5.
+        let mut t = Triplets::new(6);
+        for (i, j, v) in [
+            (0, 0, 1.0),
+            (0, 3, 1.0),
+            (0, 4, 1.0),
+            (0, 5, 1.0),
+            (1, 0, 1.0),
+            (1, 1, 1.0),
+            (1, 2, 0.5),
+            (2, 1, 1.0),
+            (2, 2, 1e-17),
+            (3, 3, 1.0),
+            (4, 4, 1.0),
+            (5, 5, 1.0),
+        ] {
+            t.push(i, j, v);
+        }
+        let a = assemble(&t).unwrap();
+        match Ilut::try_new(&a, 0.0, 1) {
+            Err(SolveError::Singular { detail }) => {
+                assert!(detail.contains("in row 2"), "{detail}");
+                assert!(detail.contains("diagonal"), "{detail}");
+            }
+            other => panic!("expected a Singular error at row 2, got {other:?}"),
+        }
+        // With room for u_12 the factorisation is the exact LU.
+        let p = Ilut::try_new(&a, 0.0, 3).unwrap();
+        assert!((1.0 / p.inv_diag[2] + 0.5).abs() < 1e-15);
+        let b = vec![1.0; 6];
+        let mut x = b.clone();
+        p.solve_in_place(&mut x);
+        assert!(relative_residual(&a, &x, &b) < 1e-14);
     }
 
     #[test]
