@@ -149,11 +149,18 @@ struct Summary<'a> {
     material: MaterialSummary,
     operators_computed: std::collections::BTreeMap<String, usize>,
     timings_s: TimingsSummary,
-    solver: &'a crate::linalg::SolveReport,
+    solver: SolverSummary<'a>,
     errors: Option<ErrorNorms>,
     outputs: crate::problem::Outputs,
     peak_memory_bytes: Option<u64>,
     threads: usize,
+}
+
+#[derive(Serialize)]
+struct SolverSummary<'a> {
+    kind: &'static str,
+    #[serde(flatten)]
+    report: &'a crate::linalg::SolveReport,
 }
 
 #[derive(Serialize)]
@@ -191,7 +198,13 @@ fn summary<'a>(p: &'a Problem, sol: &'a Solution, total: f64) -> Summary<'a> {
         material: MaterialSummary { young: p.material.elastic.young, poisson: p.material.elastic.poisson, plane: p.material.plane, lambda: lame.lambda, mu: lame.mu },
         operators_computed: sol.operators_computed.iter().cloned().collect(),
         timings_s: TimingsSummary { stages: sol.timings, total },
-        solver: &sol.solver,
+        solver: SolverSummary {
+            kind: match p.solver.kind {
+                crate::linalg::SolverKind::Lu => "lu",
+                crate::linalg::SolverKind::Bicgstab { .. } => "bicgstab",
+            },
+            report: &sol.solver,
+        },
         errors: sol.errors,
         outputs: p.outputs,
         peak_memory_bytes: output::peak_memory_bytes(),

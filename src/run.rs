@@ -168,12 +168,11 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
     // an extra Navier row made scattered-node runs unstable (measured on kirsch.toml:
     // e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
     let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
-    let ghost_of: Vec<usize> = if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
+    let candidates: Vec<usize> = if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
+    let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
+    let ghost_of: Vec<usize> = ghosts.iter().map(|g| g.0).collect();
     let mut positions = nodes.positions.clone();
-    positions.extend(ghost_of.iter().map(|&i| {
-        let (p, nrm) = (nodes.positions[i], nodes.normal(i));
-        [p[0] + nodes.spacing * nrm[0], p[1] + nodes.spacing * nrm[1]]
-    }));
+    positions.extend(ghosts.iter().map(|g| g.1));
     let n_all = positions.len();
     let mut ghost = vec![usize::MAX; n];
     for (k, &i) in ghost_of.iter().enumerate() {

@@ -7,6 +7,7 @@
 
 pub mod boundary;
 pub mod fill;
+pub mod ghost;
 pub mod neighbors;
 pub mod shape;
 

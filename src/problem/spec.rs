@@ -139,7 +139,7 @@ pub struct MaterialSpec {
 
 /// A 2-vector or the word `"exact"`.
 #[derive(Debug, Deserialize, Clone)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a vector [x, y] of two numbers or the word \"exact\"")]
 pub enum VectorOrExact {
     /// Constant value.
     Vector([f64; 2]),
