@@ -84,10 +84,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
         Command::Run { scene, out, spacing } => {
             let mut p = Problem::from_file(scene)?;
             if let Some(h) = *spacing {
-                if !(h.is_finite() && h > 0.0 && h <= p.fill.spacing * 64.0) {
-                    return Err(AppError::Usage(format!("--spacing {h}: must be positive and at most 64 times the scene's spacing {}", p.fill.spacing)));
-                }
-                p = p.with_spacing(h);
+                p = p.with_spacing(h)?;
             }
             let dir = out.clone().unwrap_or_else(|| default_out(&p));
             if !cli.quiet {
@@ -306,6 +303,8 @@ fn convergence(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet: b
     if levels > 8 {
         return Err(AppError::Usage(format!("--levels {levels}: at most 8 halvings (each multiplies the node count by 4)")));
     }
+    // Refuse an unaffordable finest level before solving the coarse ones.
+    p.with_spacing(p.fill.spacing / 2f64.powi(levels as i32))?;
     let area = p.domain.area_estimate(400);
     let mut rows: Vec<Level> = Vec::new();
     let mut hs = Vec::new();
@@ -317,7 +316,7 @@ fn convergence(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet: b
             eprintln!("level {k}: spacing {spacing:.4e}");
         }
         let t0 = Instant::now();
-        let sol = run::solve(&p.with_spacing(spacing), term)?;
+        let sol = run::solve(&p.with_spacing(spacing)?, term)?;
         let e = sol.errors.expect("exact solution present");
         // Effective spacing from the node count, so that scattered fills are compared fairly.
         let h = (area / sol.nodes.len() as f64).sqrt();

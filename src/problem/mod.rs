@@ -132,10 +132,27 @@ impl Problem {
         validate::validate(spec, path)
     }
 
-    /// The same problem at another node spacing (used by convergence studies).
-    pub fn with_spacing(&self, spacing: f64) -> Problem {
-        let mut p = self.clone();
-        p.fill.spacing = spacing;
-        p
+    /// The same problem at another node spacing (used by convergence studies and
+    /// `--spacing`); refused when the spacing is not positive or would give more than
+    /// [`validate::MAX_NODES`] or fewer than two supports' worth of nodes.
+    pub fn with_spacing(&self, spacing: f64) -> Result<Problem, ProblemError> {
+        let expected = self.domain.area_estimate(400) / spacing.powi(2) * validate::packing(self.fill.kind);
+        let reason = if !(spacing.is_finite() && spacing > 0.0) {
+            Some(format!("spacing must be a positive number, got {spacing}"))
+        } else if expected > validate::MAX_NODES {
+            Some(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES))
+        } else if expected < 2.0 * self.approximation.support as f64 {
+            Some(format!("spacing {spacing} gives about {expected:.0} nodes, too few for supports of {}", self.approximation.support))
+        } else {
+            None
+        };
+        match reason {
+            Some(reason) => Err(ProblemError { file: self.source.clone(), field: "nodes.spacing".into(), reason }),
+            None => {
+                let mut p = self.clone();
+                p.fill.spacing = spacing;
+                Ok(p)
+            }
+        }
     }
 }

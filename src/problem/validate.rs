@@ -35,12 +35,15 @@ pub fn default_support(m: usize, fill: FillKind) -> usize {
     }
 }
 
+/// Largest node count a run may ask for (a sparse LU of 1e8 unknowns does not fit in memory).
+pub const MAX_NODES: f64 = 5e7;
+
 /// Ghost nodes outside traction boundaries unless the scene says otherwise.
 pub const DEFAULT_GHOST_NODES: bool = true;
 
 /// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
 /// `nodes.count` into a spacing (the scattered fill packs about 1.1 nodes per h^2).
-fn packing(kind: FillKind) -> f64 {
+pub(crate) fn packing(kind: FillKind) -> f64 {
     match kind {
         FillKind::Grid => 1.0,
         FillKind::Scattered => 1.1,
@@ -141,7 +144,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
             ),
         );
     }
-    if expected_nodes > 5e7 {
+    if expected_nodes > MAX_NODES {
         return c.err("nodes.spacing", format!("spacing {} gives about {expected_nodes:.1e} nodes (over 5e7); this machine cannot hold the system", fill.spacing));
     }
     let material = material(&c, &spec.material)?;
