@@ -68,17 +68,21 @@ pub fn shape_functions(
     if !(ratio > rank_tolerance(basis)) {
         return Err(RankDeficient { ratio, basis_size: m });
     }
-    let q = qr.q();
-    let rt = r.transpose();
-    let mut l = nalgebra::DVector::<f64>::zeros(m);
-    for (k, &op) in ops.iter().enumerate() {
-        local.operator_at_centre(op, l.as_mut_slice());
+    // All operators at once: Y = R^-T L (m x k), then phi = W Q Y (n x k).
+    let k = ops.len();
+    let mut l = nalgebra::DMatrix::<f64>::zeros(m, k);
+    for (c, &op) in ops.iter().enumerate() {
+        local.operator_at_centre(op, &mut row);
         let scale = s.powi(-op.order());
-        // R^T y = l (forward substitution; R^T is lower triangular).
-        let y = rt.solve_lower_triangular(&l).expect("nonzero pivots checked above");
-        let phi = &q * y;
+        for a in 0..m {
+            l[(a, c)] = row[a] * scale;
+        }
+    }
+    let y = r.tr_solve_upper_triangular(&l).expect("nonzero pivots checked above");
+    let phi = qr.q() * y;
+    for c in 0..k {
         for j in 0..n {
-            out[k * n + j] = sw[j] * phi[j] * scale;
+            out[c * n + j] = sw[j] * phi[(j, c)];
         }
     }
     Ok(())
