@@ -10,7 +10,17 @@ fn main() {
         (Basis::Monomials { degree: 2 }, 12, vec![Op::Dx, Op::Dy, Op::Dxx, Op::Dxy, Op::Dyy]),
         (Basis::Tensor { degree: 2 }, 13, vec![Op::Dx, Op::Dy, Op::Dxx, Op::Dxy, Op::Dyy]),
     ] {
-        let pts: Vec<[f64; 2]> = (0..n).map(|k| if k == 0 { [0.0, 0.0] } else { let t = k as f64 * 2.4; let r = 1.0 + 0.1 * (k as f64).sqrt(); [r * t.cos(), r * t.sin()] }).collect();
+        let pts: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                if k == 0 {
+                    [0.0, 0.0]
+                } else {
+                    let t = k as f64 * 2.4;
+                    let r = 1.0 + 0.1 * (k as f64).sqrt();
+                    [r * t.cos(), r * t.sin()]
+                }
+            })
+            .collect();
         let mut out = vec![0.0; ops.len() * n];
         let reps = 200_000;
         let t0 = Instant::now();

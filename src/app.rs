@@ -77,7 +77,13 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             if !cli.quiet {
                 println!("{}: valid", scene.display());
                 println!("  boundary parts: {}", p.domain.parts.join(", "));
-                println!("  spacing {:.4e} ({:?} fill), support {}, {}", p.fill.spacing, p.fill.kind, p.approximation.support, p.approximation.basis.describe());
+                println!(
+                    "  spacing {:.4e} ({:?} fill), support {}, {}",
+                    p.fill.spacing,
+                    p.fill.kind,
+                    p.approximation.support,
+                    p.approximation.basis.describe()
+                );
             }
             Ok(())
         }
@@ -192,7 +198,13 @@ fn summary<'a>(p: &'a Problem, sol: &'a Solution, total: f64) -> Summary<'a> {
         seed: p.fill.seed,
         relax_iterations: p.fill.relax_iterations,
         approximation: p.approximation,
-        material: MaterialSummary { young: p.material.elastic.young, poisson: p.material.elastic.poisson, plane: p.material.plane, lambda: lame.lambda, mu: lame.mu },
+        material: MaterialSummary {
+            young: p.material.elastic.young,
+            poisson: p.material.elastic.poisson,
+            plane: p.material.plane,
+            lambda: lame.lambda,
+            mu: lame.mu,
+        },
         operators_computed: sol.operators_computed.iter().cloned().collect(),
         timings_s: TimingsSummary { stages: sol.timings, total },
         solver: SolverSummary {
@@ -351,7 +363,19 @@ fn convergence(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet: b
     let csv: Vec<Vec<f64>> = table
         .levels
         .iter()
-        .map(|l| vec![l.nodes as f64, l.h, l.spacing, l.e_inf_u, nan(l.e_inf_sigma), l.rel_l2_u, nan(l.order_e_inf_u), nan(l.order_e_inf_sigma), l.seconds])
+        .map(|l| {
+            vec![
+                l.nodes as f64,
+                l.h,
+                l.spacing,
+                l.e_inf_u,
+                nan(l.e_inf_sigma),
+                l.rel_l2_u,
+                nan(l.order_e_inf_u),
+                nan(l.order_e_inf_sigma),
+                l.seconds,
+            ]
+        })
         .collect();
     output::write_csv(
         &dir.join("convergence.csv"),

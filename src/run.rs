@@ -130,7 +130,12 @@ pub struct Solution {
     pub timings: Timings,
 }
 
-fn timed<T>(progress: &dyn Progress, stage: Stage, slot: &mut f64, f: impl FnOnce() -> Result<(T, String), RunError>) -> Result<T, RunError> {
+fn timed<T>(
+    progress: &dyn Progress,
+    stage: Stage,
+    slot: &mut f64,
+    f: impl FnOnce() -> Result<(T, String), RunError>,
+) -> Result<T, RunError> {
     progress.start(stage);
     let t0 = Instant::now();
     let (v, note) = f()?;
@@ -162,13 +167,15 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
     let n = nodes.len();
 
     let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
-    let has_traction = |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
+    let has_traction =
+        |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
     // Ghost nodes: positions n.., one per traction boundary node, at distance h along its normal.
     // Ghost nodes only where both equations are tractions: on mixed (symmetry) nodes
     // an extra Navier row made scattered-node runs unstable (measured on kirsch.toml:
     // e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
     let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
-    let candidates: Vec<usize> = if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
+    let candidates: Vec<usize> =
+        if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
     let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
     let ghost_of: Vec<usize> = ghosts.iter().map(|g| g.0).collect();
     let mut positions = nodes.positions.clone();
@@ -214,7 +221,16 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
 
     let dofs = DofMap::new(n_all);
     let (matrix, rhs) = timed(progress, Stage::Assembly, &mut t.assembly, || {
-        let system = System { problem, nodes: &nodes, supports: &supports, shapes: &shapes, equations: &boundary_equations, ghost: &ghost, exact, dofs };
+        let system = System {
+            problem,
+            nodes: &nodes,
+            supports: &supports,
+            shapes: &shapes,
+            equations: &boundary_equations,
+            ghost: &ghost,
+            exact,
+            dofs,
+        };
         let (triplets, rhs) = system.assemble()?;
         let m = linalg::assemble(&triplets)?;
         let note = format!("{} unknowns, {} nonzeros", dofs.len(), m.compute_nnz());

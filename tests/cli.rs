@@ -66,11 +66,7 @@ const RECTANGLE: &str = "shape = \"rectangle\"\nmin = [0.0, 0.0]\nmax = [1.0, 1.
 
 /// Run `mlsm` with `args` in `dir`.
 fn mlsm(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mlsm"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("cannot start the mlsm binary")
+    Command::new(env!("CARGO_BIN_EXE_mlsm")).args(args).current_dir(dir).output().expect("cannot start the mlsm binary")
 }
 
 fn stderr(o: &Output) -> String {
@@ -78,12 +74,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn describe(o: &Output) -> String {
-    format!(
-        "exit {:?}\n--- stdout\n{}--- stderr\n{}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stdout),
-        stderr(o)
-    )
+    format!("exit {:?}\n--- stdout\n{}--- stderr\n{}", o.status.code(), String::from_utf8_lossy(&o.stdout), stderr(o))
 }
 
 /// `text` with every occurrence of each `from` replaced by its `to`; each `from`
@@ -110,11 +101,7 @@ fn scene_plus(extra: &str) -> String {
 /// [`TEMPLATE`] without [exact] (and so without the exact body force and boundary
 /// values): a valid scene whose solution is zero.
 fn no_exact() -> String {
-    scene(&[
-        ("body_force = \"exact\"\n", ""),
-        ("[exact]\nkind = \"manufactured\"\n", ""),
-        ("value = \"exact\"", "value = [0.0, 0.0]"),
-    ])
+    scene(&[("body_force = \"exact\"\n", ""), ("[exact]\nkind = \"manufactured\"\n", ""), ("value = \"exact\"", "value = [0.0, 0.0]")])
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
@@ -124,21 +111,16 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 }
 
 fn read_json(path: &Path) -> Value {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{} is not JSON: {e}", path.display()))
 }
 
 fn num(v: &Value, key: &str) -> f64 {
-    v[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} is not a number: {}", v[key]))
+    v[key].as_f64().unwrap_or_else(|| panic!("{key} is not a number: {}", v[key]))
 }
 
 fn count(v: &Value, key: &str) -> u64 {
-    v[key]
-        .as_u64()
-        .unwrap_or_else(|| panic!("{key} is not a count: {}", v[key]))
+    v[key].as_u64().unwrap_or_else(|| panic!("{key} is not a count: {}", v[key]))
 }
 
 #[test]
@@ -156,33 +138,14 @@ fn template_is_valid() {
 #[test]
 fn run_writes_solution_and_summary() {
     let tmp = TempDir::new().unwrap();
-    let shipped = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/manufactured_dirichlet.toml"),
-    )
-    .unwrap();
-    write(
-        tmp.path(),
-        "scene.toml",
-        &edit(&shipped, &[("spacing = 0.025", "spacing = 0.05")]),
-    );
+    let shipped = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/manufactured_dirichlet.toml")).unwrap();
+    write(tmp.path(), "scene.toml", &edit(&shipped, &[("spacing = 0.025", "spacing = 0.05")]));
     let res = tmp.path().join("res");
-    let o = mlsm(
-        tmp.path(),
-        &[
-            "--quiet",
-            "run",
-            "scene.toml",
-            "--out",
-            res.to_str().unwrap(),
-        ],
-    );
+    let o = mlsm(tmp.path(), &["--quiet", "run", "scene.toml", "--out", res.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
     assert!(res.join("solution.vtu").is_file(), "no solution.vtu");
     let vtu = std::fs::read_to_string(res.join("solution.vtu")).unwrap();
-    assert!(
-        vtu.contains("VTKFile") && vtu.contains("displacement"),
-        "solution.vtu lacks the displacement field"
-    );
+    assert!(vtu.contains("VTKFile") && vtu.contains("displacement"), "solution.vtu lacks the displacement field");
 
     let s = read_json(&res.join("summary.json"));
     let nodes = count(&s, "nodes");
@@ -198,9 +161,7 @@ fn run_writes_solution_and_summary() {
     assert!(s["seed"].is_u64(), "seed missing: {s}");
 
     let timings = s["timings_s"].as_object().expect("timings_s");
-    let stages = [
-        "nodes", "supports", "shapes", "assembly", "solve", "post", "output", "total",
-    ];
+    let stages = ["nodes", "supports", "shapes", "assembly", "solve", "post", "output", "total"];
     let mut keys: Vec<&str> = timings.keys().map(|k| k.as_str()).collect();
     keys.sort_unstable();
     let mut expected = stages.to_vec();
@@ -211,11 +172,7 @@ fn run_writes_solution_and_summary() {
         assert!(t.is_finite() && t >= 0.0, "timings_s.{k} = {t}");
     }
 
-    assert!(
-        num(&s["solver"], "relative_residual") < 1e-10,
-        "solver: {}",
-        s["solver"]
-    );
+    assert!(num(&s["solver"], "relative_residual") < 1e-10, "solver: {}", s["solver"]);
     let e = num(&s["errors"], "e_inf_u");
     assert!(e < 1e-2, "e_inf_u = {e}");
 
@@ -223,24 +180,14 @@ fn run_writes_solution_and_summary() {
     // von_mises, error) need the gradient: first derivatives at every node for the
     // post-processing, second derivatives only at the interior nodes (Navier rows),
     // no interpolation operator.
-    let ops = s["operators_computed"]
-        .as_object()
-        .expect("operators_computed");
-    let mut got: Vec<(String, u64)> = ops
-        .iter()
-        .map(|(k, v)| (k.clone(), v.as_u64().unwrap()))
-        .collect();
+    let ops = s["operators_computed"].as_object().expect("operators_computed");
+    let mut got: Vec<(String, u64)> = ops.iter().map(|(k, v)| (k.clone(), v.as_u64().unwrap())).collect();
     let interior = nodes - boundary;
-    let mut want: Vec<(String, u64)> = [
-        ("d/dx", nodes),
-        ("d/dy", nodes),
-        ("d2/dx2", interior),
-        ("d2/dxdy", interior),
-        ("d2/dy2", interior),
-    ]
-    .iter()
-    .map(|(k, n)| (k.to_string(), *n))
-    .collect();
+    let mut want: Vec<(String, u64)> =
+        [("d/dx", nodes), ("d/dy", nodes), ("d2/dx2", interior), ("d2/dxdy", interior), ("d2/dy2", interior)]
+            .iter()
+            .map(|(k, n)| (k.to_string(), *n))
+            .collect();
     got.sort();
     want.sort();
     assert_eq!(got, want, "operators_computed");
@@ -250,11 +197,8 @@ fn run_writes_solution_and_summary() {
 fn check_accepts_every_shipped_scene() {
     let tmp = TempDir::new().unwrap();
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
+    let mut scenes: Vec<PathBuf> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|x| x == "toml")).collect();
     scenes.sort();
     assert!(!scenes.is_empty(), "no scenes in {}", dir.display());
     let mut failed = Vec::new();
@@ -274,18 +218,7 @@ fn convergence_two_levels() {
     let tmp = TempDir::new().unwrap();
     write(tmp.path(), "scene.toml", TEMPLATE);
     let res = tmp.path().join("conv");
-    let o = mlsm(
-        tmp.path(),
-        &[
-            "--quiet",
-            "convergence",
-            "scene.toml",
-            "--levels",
-            "1",
-            "--out",
-            res.to_str().unwrap(),
-        ],
-    );
+    let o = mlsm(tmp.path(), &["--quiet", "convergence", "scene.toml", "--levels", "1", "--out", res.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
     let csv = std::fs::read_to_string(res.join("convergence.csv")).expect("convergence.csv");
     let lines: Vec<&str> = csv.lines().filter(|l| !l.trim().is_empty()).collect();
@@ -307,23 +240,10 @@ fn convergence_without_exact_is_rejected() {
     let tmp = TempDir::new().unwrap();
     write(tmp.path(), "zero.toml", &no_exact());
     let res = tmp.path().join("conv");
-    let o = mlsm(
-        tmp.path(),
-        &[
-            "convergence",
-            "zero.toml",
-            "--levels",
-            "1",
-            "--out",
-            res.to_str().unwrap(),
-        ],
-    );
+    let o = mlsm(tmp.path(), &["convergence", "zero.toml", "--levels", "1", "--out", res.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
     let err = stderr(&o);
-    assert!(
-        err.contains("zero.toml") && err.contains("[exact]"),
-        "{err}"
-    );
+    assert!(err.contains("zero.toml") && err.contains("[exact]"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(!res.exists());
 }
@@ -334,7 +254,11 @@ fn invalid_scenes_exit_2_naming_the_field() {
     // the file name). The first substring is the field as printed in
     // "<file>: <field>: <reason>".
     let cases: Vec<(&str, Option<String>, &[&str])> = vec![
-        ("unknown top-level key", Some(scene(&[("body_force = \"exact\"\n", "body_force = \"exact\"\ncolour = \"red\"\n")])), &["colour", "unknown field"]),
+        (
+            "unknown top-level key",
+            Some(scene(&[("body_force = \"exact\"\n", "body_force = \"exact\"\ncolour = \"red\"\n")])),
+            &["colour", "unknown field"],
+        ),
         ("unknown key in [approximation]", Some(scene(&[("support = 9", "suport = 9")])), &["approximation.suport", "unknown field"]),
         ("wrong type", Some(scene(&[("spacing = 0.05", "spacing = \"fine\"")])), &["nodes.spacing"]),
         ("TOML syntax error", Some(scene(&[("[material]", "[material")])), &["(syntax)", "line "]),
@@ -348,41 +272,105 @@ fn invalid_scenes_exit_2_naming_the_field() {
         ("spacing < 0", Some(scene(&[("spacing = 0.05", "spacing = -0.05")])), &["nodes.spacing"]),
         ("spacing and count", Some(scene(&[("spacing = 0.05", "spacing = 0.05\ncount = 400")])), &["nodes", "count"]),
         ("rectangle max <= min", Some(scene(&[("max = [1.0, 1.0]", "max = [1.0, 0.0]")])), &["domain.region[0].max"]),
-        ("disc radius 0", Some(scene(&[(RECTANGLE, "shape = \"disc\"\ncenter = [0.5, 0.5]\nradius = 0.0\n")])), &["domain.region[0].radius"]),
-        ("polygon with 2 vertices", Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0]]\n")])), &["domain.region[0].vertices", "3 vertices"]),
+        (
+            "disc radius 0",
+            Some(scene(&[(RECTANGLE, "shape = \"disc\"\ncenter = [0.5, 0.5]\nradius = 0.0\n")])),
+            &["domain.region[0].radius"],
+        ),
+        (
+            "polygon with 2 vertices",
+            Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0]]\n")])),
+            &["domain.region[0].vertices", "3 vertices"],
+        ),
         (
             "self-intersecting polygon",
             Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0], [0.2, 1.0], [0.8, 1.0]]\n")])),
             &["domain.region[0].vertices", "cross"],
         ),
         ("first region subtracts", Some(scene(&[(RECTANGLE, &format!("{RECTANGLE}op = \"subtract\"\n"))])), &["domain.region[0].op"]),
-        ("unknown boundary part", Some(scene(&[("part = \"top\"", "part = \"roof\"")])), &["boundary[3].part", "roof", "\"left\"", "\"top\""]),
-        ("part without condition", Some(scene(&[("[[boundary]]\npart = \"top\"\nkind = \"displacement\"\nvalue = \"exact\"\n", "")])), &["boundary", "\"top\""]),
+        (
+            "unknown boundary part",
+            Some(scene(&[("part = \"top\"", "part = \"roof\"")])),
+            &["boundary[3].part", "roof", "\"left\"", "\"top\""],
+        ),
+        (
+            "part without condition",
+            Some(scene(&[("[[boundary]]\npart = \"top\"\nkind = \"displacement\"\nvalue = \"exact\"\n", "")])),
+            &["boundary", "\"top\""],
+        ),
         ("duplicate condition", Some(scene_plus("[[boundary]]\npart = \"left\"\nkind = \"traction\"\n")), &["boundary[4].part", "already"]),
-        ("mixed without x", Some(scene(&[("part = \"left\"\nkind = \"displacement\"", "part = \"left\"\nkind = \"mixed\"\ny = \"displacement\"")])), &["boundary[0].x"]),
-        ("value = exact without [exact]", Some(scene(&[("body_force = \"exact\"\n", ""), ("[exact]\nkind = \"manufactured\"\n", "")])), &["boundary[0].value", "[exact]"]),
+        (
+            "mixed without x",
+            Some(scene(&[("part = \"left\"\nkind = \"displacement\"", "part = \"left\"\nkind = \"mixed\"\ny = \"displacement\"")])),
+            &["boundary[0].x"],
+        ),
+        (
+            "value = exact without [exact]",
+            Some(scene(&[("body_force = \"exact\"\n", ""), ("[exact]\nkind = \"manufactured\"\n", "")])),
+            &["boundary[0].value", "[exact]"],
+        ),
         ("body_force = exact without [exact]", Some(scene(&[("[exact]\nkind = \"manufactured\"\n", "")])), &["body_force", "[exact]"]),
         ("support < basis size", Some(scene(&[("support = 9", "support = 5")])), &["approximation.support", "6"]),
         ("degree 0", Some(scene(&[("degree = 2", "degree = 0")])), &["approximation.degree"]),
         // Degree 1 has no second derivatives: the Navier rows would vanish (this used
         // to pass validation and end in a singular matrix, exit 3).
         ("degree 1", Some(scene(&[("degree = 2", "degree = 1")])), &["approximation.degree"]),
-        ("tensor degree 1", Some(scene(&[("basis = \"monomials\"\ndegree = 2", "basis = \"tensor\"\ndegree = 1")])), &["approximation.degree"]),
+        (
+            "tensor degree 1",
+            Some(scene(&[("basis = \"monomials\"\ndegree = 2", "basis = \"tensor\"\ndegree = 1")])),
+            &["approximation.degree"],
+        ),
         ("wrong type for a count", Some(scene(&[("spacing = 0.05", "count = -400")])), &["nodes.count"]),
-        ("polygon edge_names count", Some(scene(&[(RECTANGLE, "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]\nedge_names = [\"a\", \"b\"]\n")])), &["domain.region[0].edge_names"]),
-        ("regions leave no material", Some(scene(&[(RECTANGLE, &format!("{RECTANGLE}\n[[domain.region]]\nshape = \"rectangle\"\nop = \"subtract\"\nmin = [-1.0, -1.0]\nmax = [2.0, 2.0]\n"))])), &["domain.region", "no material"]),
+        (
+            "polygon edge_names count",
+            Some(scene(&[(
+                RECTANGLE,
+                "shape = \"polygon\"\nvertices = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]\nedge_names = [\"a\", \"b\"]\n",
+            )])),
+            &["domain.region[0].edge_names"],
+        ),
+        (
+            "regions leave no material",
+            Some(scene(&[(
+                RECTANGLE,
+                &format!(
+                    "{RECTANGLE}\n[[domain.region]]\nshape = \"rectangle\"\nop = \"subtract\"\nmin = [-1.0, -1.0]\nmax = [2.0, 2.0]\n"
+                ),
+            )])),
+            &["domain.region", "no material"],
+        ),
         ("NaN boundary value", Some(scene(&[("value = \"exact\"", "value = [nan, 0.0]")])), &["boundary[0].value", "finite"]),
         ("unknown solver", Some(scene_plus("[solver]\nkind = \"cg\"\n")), &["solver.kind", "cg"]),
-        ("unknown preconditioner", Some(scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"amg\"\n")), &["solver.preconditioner", "amg"]),
+        (
+            "unknown preconditioner",
+            Some(scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"amg\"\n")),
+            &["solver.preconditioner", "amg"],
+        ),
         ("tolerance = 0", Some(scene_plus("[solver]\nkind = \"bicgstab\"\ntolerance = 0.0\n")), &["solver.tolerance"]),
         ("unknown exact kind", Some(scene(&[("kind = \"manufactured\"", "kind = \"hertz\"")])), &["exact.kind", "hertz"]),
-        ("cantilever without load", Some(scene(&[("kind = \"manufactured\"", "kind = \"cantilever\"\nlength = 1.0\ndepth = 1.0")])), &["exact.load"]),
-        ("unknown output field", Some(scene_plus("[output]\nfields = [\"displacement\", \"temperature\"]\n")), &["output.fields[1]", "temperature"]),
-        ("error output without [exact]", Some(format!("{}\n[output]\nfields = [\"displacement\", \"error\"]\n", no_exact())), &["output.fields", "[exact]"]),
+        (
+            "cantilever without load",
+            Some(scene(&[("kind = \"manufactured\"", "kind = \"cantilever\"\nlength = 1.0\ndepth = 1.0")])),
+            &["exact.load"],
+        ),
+        (
+            "unknown output field",
+            Some(scene_plus("[output]\nfields = [\"displacement\", \"temperature\"]\n")),
+            &["output.fields[1]", "temperature"],
+        ),
+        (
+            "error output without [exact]",
+            Some(format!("{}\n[output]\nfields = [\"displacement\", \"error\"]\n", no_exact())),
+            &["output.fields", "[exact]"],
+        ),
         ("pure traction", Some(scene(&[("kind = \"displacement\"", "kind = \"traction\"")])), &["boundary", "rigid motion"]),
         ("too few nodes", Some(scene(&[("spacing = 0.05", "spacing = 0.4")])), &["nodes.spacing", "too few"]),
         ("unknown fill", Some(scene(&[("fill = \"grid\"", "fill = \"hex\"")])), &["nodes.fill", "hex"]),
-        ("unknown boundary kind", Some(scene(&[("part = \"left\"\nkind = \"displacement\"", "part = \"left\"\nkind = \"clamped\"")])), &["boundary[0].kind", "clamped"]),
+        (
+            "unknown boundary kind",
+            Some(scene(&[("part = \"left\"\nkind = \"displacement\"", "part = \"left\"\nkind = \"clamped\"")])),
+            &["boundary[0].kind", "clamped"],
+        ),
         ("nonexistent scene file", None, &["(file)"]),
     ];
     assert!(cases.len() >= 20);
@@ -420,20 +408,10 @@ fn invalid_scenes_exit_2_naming_the_field() {
             problems.push("output folder created".into());
         }
         if !problems.is_empty() {
-            failures.push(format!(
-                "case {name:?}: {}\n{}",
-                problems.join("; "),
-                describe(&o)
-            ));
+            failures.push(format!("case {name:?}: {}\n{}", problems.join("; "), describe(&o)));
         }
     }
-    assert!(
-        failures.is_empty(),
-        "{} of {} invalid-scene cases failed:\n\n{}",
-        failures.len(),
-        cases.len(),
-        failures.join("\n")
-    );
+    assert!(failures.is_empty(), "{} of {} invalid-scene cases failed:\n\n{}", failures.len(), cases.len(), failures.join("\n"));
 }
 
 #[test]
@@ -449,33 +427,20 @@ fn failed_run_leaves_earlier_results_alone() {
     let vtu = std::fs::read(res.join("solution.vtu")).unwrap();
     let o = mlsm(tmp.path(), &["--quiet", "run", "bad.toml", "--out", out]);
     assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
-    assert_eq!(
-        std::fs::read(res.join("summary.json")).unwrap(),
-        summary,
-        "summary.json changed"
-    );
-    assert_eq!(
-        std::fs::read(res.join("solution.vtu")).unwrap(),
-        vtu,
-        "solution.vtu changed"
-    );
+    assert_eq!(std::fs::read(res.join("summary.json")).unwrap(), summary, "summary.json changed");
+    assert_eq!(std::fs::read(res.join("solution.vtu")).unwrap(), vtu, "solution.vtu changed");
 }
 
 #[test]
 fn solver_failure_exits_3() {
     let tmp = TempDir::new().unwrap();
-    write(tmp.path(), "scene.toml", &scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"jacobi\"\nmax_iterations = 1\ntolerance = 1e-14\n"));
-    let res = tmp.path().join("res");
-    let o = mlsm(
+    write(
         tmp.path(),
-        &[
-            "--quiet",
-            "run",
-            "scene.toml",
-            "--out",
-            res.to_str().unwrap(),
-        ],
+        "scene.toml",
+        &scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"jacobi\"\nmax_iterations = 1\ntolerance = 1e-14\n"),
     );
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["--quiet", "run", "scene.toml", "--out", res.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(3), "{}", describe(&o));
     let err = stderr(&o);
     assert!(err.contains("residual"), "{err}");

@@ -42,7 +42,15 @@ fn cantilever_tensor_basis_order_two() {
 /// included, so the error is round-off (measured 7e-11 for u, 1.4e-10 for sigma).
 #[test]
 fn cantilever_cubic_basis_is_exact() {
-    let p = scene("cantilever", &[("approximation.basis", s("monomials")), ("approximation.degree", i(3)), ("approximation.support", None), ("nodes.spacing", f(0.25))]);
+    let p = scene(
+        "cantilever",
+        &[
+            ("approximation.basis", s("monomials")),
+            ("approximation.degree", i(3)),
+            ("approximation.support", None),
+            ("nodes.spacing", f(0.25)),
+        ],
+    );
     let (_, eu, es) = errors(&p);
     assert!(eu < 1e-8 && es < 1e-8, "e_inf(u) = {eu:e}, e_inf(sigma) = {es:e}");
 }
@@ -106,7 +114,8 @@ fn lu_and_bicgstab_agree() {
             ],
         ));
         let umax = lu.displacement.iter().flat_map(|u| u.iter().map(|v| v.abs())).fold(0.0, f64::max);
-        let diff = lu.displacement.iter().zip(&it.displacement).flat_map(|(x, y)| [(x[0] - y[0]).abs(), (x[1] - y[1]).abs()]).fold(0.0, f64::max);
+        let diff =
+            lu.displacement.iter().zip(&it.displacement).flat_map(|(x, y)| [(x[0] - y[0]).abs(), (x[1] - y[1]).abs()]).fold(0.0, f64::max);
         eprintln!("{name}: {} iterations, max |u_lu - u_it| / max |u| = {:e}", it.solver.iterations, diff / umax);
         assert!(diff <= 1e-8 * umax, "{name}: {diff:e} vs {umax:e}");
     }

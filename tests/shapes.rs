@@ -21,7 +21,14 @@ fn support(centre: [f64; 2], h: f64, offsets: &[(f64, f64)]) -> Vec<[f64; 2]> {
     pts
 }
 
-fn check_reproduction(basis: Basis, weight: Weight, centre: [f64; 2], h: f64, offsets: &[(f64, f64)], coeffs: &[f64]) -> Result<(), TestCaseError> {
+fn check_reproduction(
+    basis: Basis,
+    weight: Weight,
+    centre: [f64; 2],
+    h: f64,
+    offsets: &[(f64, f64)],
+    coeffs: &[f64],
+) -> Result<(), TestCaseError> {
     let pts = support(centre, h, offsets);
     let n = pts.len();
     let ops = Op::ALL;
@@ -51,7 +58,10 @@ fn check_reproduction(basis: Basis, weight: Weight, centre: [f64; 2], h: f64, of
 fn offsets(n: usize) -> impl Strategy<Value = Vec<(f64, f64)>> {
     prop::collection::vec((0.7f64..2.2, 0.0f64..0.8), n - 1).prop_map(move |v| {
         let m = v.len() as f64;
-        v.into_iter().enumerate().map(|(k, (r, t))| (r * (1.0 + (k % 3) as f64 * 0.3), (k as f64 + t) * std::f64::consts::TAU / m)).collect()
+        v.into_iter()
+            .enumerate()
+            .map(|(k, (r, t))| (r * (1.0 + (k % 3) as f64 * 0.3), (k as f64 + t) * std::f64::consts::TAU / m))
+            .collect()
     })
 }
 

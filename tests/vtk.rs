@@ -10,10 +10,13 @@ use mlsm::output::read_vtu;
 fn vtu_reads_back_with_expected_arrays() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = dir.path().join("kirsch.toml");
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kirsch.toml")).unwrap().replace("spacing = 0.04", "spacing = 0.1");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kirsch.toml"))
+        .unwrap()
+        .replace("spacing = 0.04", "spacing = 0.1");
     std::fs::write(&scene_path, &text).unwrap();
     let out = dir.path().join("res");
-    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None } }).unwrap();
+    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None } })
+        .unwrap();
 
     // The same run through the library, to compare values.
     let p = mlsm::problem::Problem::from_file(&scene_path).unwrap();
@@ -25,7 +28,19 @@ fn vtu_reads_back_with_expected_arrays() {
     for (p, q) in vtu.points.iter().zip(&sol.nodes.positions) {
         assert_eq!([p[0], p[1], p[2]], [q[0], q[1], 0.0]);
     }
-    for name in ["displacement", "sigma_xx", "sigma_yy", "sigma_xy", "von_mises", "node_kind", "boundary_part", "normal", "exact_displacement", "error_displacement", "error_stress"] {
+    for name in [
+        "displacement",
+        "sigma_xx",
+        "sigma_yy",
+        "sigma_xy",
+        "von_mises",
+        "node_kind",
+        "boundary_part",
+        "normal",
+        "exact_displacement",
+        "error_displacement",
+        "error_stress",
+    ] {
         assert!(vtu.fields.contains_key(name), "missing array {name}; have {:?}", vtu.fields.keys().collect::<Vec<_>>());
     }
     assert!(!vtu.fields.contains_key("sigma_zz"), "plane stress writes no sigma_zz");
@@ -63,7 +78,9 @@ fn vtu_reads_back_with_expected_arrays() {
 fn plane_strain_writes_sigma_zz_and_only_requested_fields() {
     let dir = tempfile::tempdir().unwrap();
     let scene_path = dir.path().join("plate.toml");
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/steel_plate.toml")).unwrap().replace("spacing = 0.01", "spacing = 0.05");
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/steel_plate.toml"))
+        .unwrap()
+        .replace("spacing = 0.01", "spacing = 0.05");
     std::fs::write(&scene_path, format!("{text}\n[output]\nfields = [\"displacement\", \"stress\", \"strain\"]\n")).unwrap();
     let out = dir.path().join("res");
     mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path, out: Some(out.clone()), spacing: None } }).unwrap();

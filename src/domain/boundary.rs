@@ -158,7 +158,11 @@ mod tests {
     fn quarter_plate() -> Domain {
         Domain {
             regions: vec![
-                Region { primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [4.0, 4.0] }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] },
+                Region {
+                    primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [4.0, 4.0] },
+                    op: CsgOp::Union,
+                    edge_parts: vec![0, 1, 2, 3],
+                },
                 Region { primitive: Primitive::Disc { center: [0.0, 0.0], radius: 1.0 }, op: CsgOp::Subtract, edge_parts: vec![4] },
             ],
             parts: ["bottom", "right", "top", "left", "hole"].iter().map(|s| s.to_string()).collect(),
@@ -168,7 +172,11 @@ mod tests {
     #[test]
     fn rectangle_corners_are_shared_and_bisected() {
         let d = Domain {
-            regions: vec![Region { primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [2.0, 1.0] }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] }],
+            regions: vec![Region {
+                primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [2.0, 1.0] },
+                op: CsgOp::Union,
+                edge_parts: vec![0, 1, 2, 3],
+            }],
             parts: ["bottom", "right", "top", "left"].iter().map(|s| s.to_string()).collect(),
         };
         let b = discretise_boundary(&d, 0.1);

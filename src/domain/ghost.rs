@@ -40,8 +40,8 @@ pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> V
             continue;
         }
         let own = &nodes.boundary[i].touches;
-        let concave = own.len() > 1
-            && own.iter().any(|(_, m)| domain.signed_distance([p[0] + 0.5 * h * m[0], p[1] + 0.5 * h * m[1]]) < 0.25 * h);
+        let concave =
+            own.len() > 1 && own.iter().any(|(_, m)| domain.signed_distance([p[0] + 0.5 * h * m[0], p[1] + 0.5 * h * m[1]]) < 0.25 * h);
         if concave {
             continue;
         }

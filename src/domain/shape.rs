@@ -129,9 +129,7 @@ impl Primitive {
     pub fn bounding_box(&self) -> (Point, Point) {
         match self {
             Primitive::Rectangle { min, max } => (*min, *max),
-            Primitive::Disc { center, radius } => {
-                ([center[0] - radius, center[1] - radius], [center[0] + radius, center[1] + radius])
-            }
+            Primitive::Disc { center, radius } => ([center[0] - radius, center[1] - radius], [center[0] + radius, center[1] + radius]),
             Primitive::Polygon { vertices } => {
                 let mut lo = [f64::INFINITY; 2];
                 let mut hi = [f64::NEG_INFINITY; 2];
@@ -298,7 +296,11 @@ mod tests {
     fn plate_with_hole() -> Domain {
         Domain {
             regions: vec![
-                Region { primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [4.0, 4.0] }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] },
+                Region {
+                    primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [4.0, 4.0] },
+                    op: CsgOp::Union,
+                    edge_parts: vec![0, 1, 2, 3],
+                },
                 Region { primitive: Primitive::Disc { center: [0.0, 0.0], radius: 1.0 }, op: CsgOp::Subtract, edge_parts: vec![4] },
             ],
             parts: ["bottom", "right", "top", "left", "hole"].iter().map(|s| s.to_string()).collect(),

@@ -23,7 +23,7 @@ pub enum ComponentEquation {
     Traction { normal: [f64; 2], value: f64 },
 }
 
-pub fn value_of(v: Value, exact: Option<&dyn ExactSolution>, f: impl Fn(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
+fn value_of(v: Value, exact: Option<&dyn ExactSolution>, f: impl Fn(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
     match v {
         Value::Constant(c) => c,
         Value::Exact => f(exact.expect("validated: exact values need an exact solution")),

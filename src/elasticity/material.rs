@@ -54,10 +54,7 @@ impl YoungPoisson {
     /// Build from 3D Lame parameters: `E = mu (3 lambda + 2 mu)/(lambda + mu)`,
     /// `nu = lambda / (2 (lambda + mu))`.
     pub fn from_lame_3d(lambda: f64, mu: f64) -> Self {
-        YoungPoisson {
-            young: mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu),
-            poisson: lambda / (2.0 * (lambda + mu)),
-        }
+        YoungPoisson { young: mu * (3.0 * lambda + 2.0 * mu) / (lambda + mu), poisson: lambda / (2.0 * (lambda + mu)) }
     }
 }
 
@@ -92,10 +89,7 @@ impl Material {
             PlaneModel::Stress => *self,
             PlaneModel::Strain => {
                 let YoungPoisson { young: e, poisson: nu } = self.elastic;
-                Material {
-                    elastic: YoungPoisson { young: e / (1.0 - nu * nu), poisson: nu / (1.0 - nu) },
-                    plane: PlaneModel::Stress,
-                }
+                Material { elastic: YoungPoisson { young: e / (1.0 - nu * nu), poisson: nu / (1.0 - nu) }, plane: PlaneModel::Stress }
             }
         }
     }
@@ -121,11 +115,7 @@ impl Lame {
     /// `g = [[u_x, u_y], [v_x, v_y]]` (Hooke's law in 2D).
     pub fn stress(&self, g: [[f64; 2]; 2]) -> [f64; 3] {
         let div = g[0][0] + g[1][1];
-        [
-            self.lambda * div + 2.0 * self.mu * g[0][0],
-            self.lambda * div + 2.0 * self.mu * g[1][1],
-            self.mu * (g[0][1] + g[1][0]),
-        ]
+        [self.lambda * div + 2.0 * self.mu * g[0][0], self.lambda * div + 2.0 * self.mu * g[1][1], self.mu * (g[0][1] + g[1][0])]
     }
 }
 

@@ -47,42 +47,21 @@ pub struct Cantilever {
 
 impl Cantilever {
     /// Checked constructor.
-    pub fn new(
-        load: f64,
-        length: f64,
-        depth: f64,
-        material: Material,
-    ) -> Result<Self, ParameterError> {
+    pub fn new(load: f64, length: f64, depth: f64, material: Material) -> Result<Self, ParameterError> {
         let check = Check("cantilever");
         check.finite("load", load)?;
         check.positive("length", length)?;
         check.positive("depth", depth)?;
         check.material(&material)?;
-        Ok(Cantilever {
-            load,
-            length,
-            depth,
-            material,
-        })
+        Ok(Cantilever { load, length, depth, material })
     }
 
     /// The published set-up: `L = 30`, `D = 5`, `E = 72.1e9`, `nu = 0.33`, `P = 1000`,
     /// plane stress; tip deflection `v(0, 0) = -1.2149e-5` (verification.md, section 1).
     pub fn reference() -> Self {
-        let elastic = YoungPoisson {
-            young: 72.1e9,
-            poisson: 0.33,
-        };
-        let material = Material {
-            elastic,
-            plane: PlaneModel::Stress,
-        };
-        Cantilever {
-            load: 1000.0,
-            length: 30.0,
-            depth: 5.0,
-            material,
-        }
+        let elastic = YoungPoisson { young: 72.1e9, poisson: 0.33 };
+        let material = Material { elastic, plane: PlaneModel::Stress };
+        Cantilever { load: 1000.0, length: 30.0, depth: 5.0, material }
     }
 
     /// Second moment of area `I = D^3 / 12`.
@@ -93,10 +72,7 @@ impl Cantilever {
     /// `(E, nu)` to use in the plane-stress formulas: the material itself in plane stress,
     /// `(E/(1 - nu^2), nu/(1 - nu))` in plane strain.
     pub fn formula_constants(&self) -> (f64, f64) {
-        let YoungPoisson {
-            young: e,
-            poisson: nu,
-        } = self.material.elastic;
+        let YoungPoisson { young: e, poisson: nu } = self.material.elastic;
         match self.material.plane {
             PlaneModel::Stress => (e, nu),
             PlaneModel::Strain => (e / (1.0 - nu * nu), nu / (1.0 - nu)),
@@ -122,13 +98,8 @@ impl ExactSolution for Cantilever {
     fn displacement(&self, [x, y]: [f64; 2]) -> [f64; 2] {
         let (_, nu) = self.formula_constants();
         let (l, d, c) = (self.length, self.depth, self.scale());
-        let u = c
-            * y
-            * (3.0 * d * d * (1.0 + nu) - 4.0 * (3.0 * l * l + (2.0 + nu) * y * y - 3.0 * x * x));
-        let v = -c
-            * (3.0 * d * d * (1.0 + nu) * (l - x)
-                + 4.0 * (l - x) * (l - x) * (2.0 * l + x)
-                + 12.0 * nu * x * y * y);
+        let u = c * y * (3.0 * d * d * (1.0 + nu) - 4.0 * (3.0 * l * l + (2.0 + nu) * y * y - 3.0 * x * x));
+        let v = -c * (3.0 * d * d * (1.0 + nu) * (l - x) + 4.0 * (l - x) * (l - x) * (2.0 * l + x) + 12.0 * nu * x * y * y);
         [u, v]
     }
 
@@ -137,14 +108,8 @@ impl ExactSolution for Cantilever {
         let (l, d, c) = (self.length, self.depth, self.scale());
         let shear = 3.0 * d * d * (1.0 + nu);
         [
-            [
-                24.0 * c * x * y,
-                c * (shear - 12.0 * l * l + 12.0 * x * x - 12.0 * (2.0 + nu) * y * y),
-            ],
-            [
-                c * (shear + 12.0 * l * l - 12.0 * x * x - 12.0 * nu * y * y),
-                -24.0 * c * nu * x * y,
-            ],
+            [24.0 * c * x * y, c * (shear - 12.0 * l * l + 12.0 * x * x - 12.0 * (2.0 + nu) * y * y)],
+            [c * (shear + 12.0 * l * l - 12.0 * x * x - 12.0 * nu * y * y), -24.0 * c * nu * x * y],
         ]
     }
 
@@ -171,10 +136,7 @@ mod tests {
         assert!((v + 1.2149e-5).abs() <= 0.5e-9, "tip v(0, 0) = {v:e}");
         // A loaded tip of a clamped beam moves far more than the clamped end.
         let clamp = beam.displacement([beam.length, 0.0]);
-        assert!(
-            clamp[0].abs() + clamp[1].abs() < 1e-3 * v.abs(),
-            "clamp moves {clamp:?}"
-        );
+        assert!(clamp[0].abs() + clamp[1].abs() < 1e-3 * v.abs(), "clamp moves {clamp:?}");
     }
 
     #[test]
@@ -192,10 +154,7 @@ mod tests {
             // Closed form against closed form: only round-off, relative to the peak
             // traction 3P/(2D) = 300 N/m^2.
             for c in 0..2 {
-                assert!(
-                    (t[c] - expected[c]).abs() <= 1e-12 * p / d,
-                    "t({y}) = {t:?}, expected {expected:?}"
-                );
+                assert!((t[c] - expected[c]).abs() <= 1e-12 * p / d, "t({y}) = {t:?}, expected {expected:?}");
             }
             let w = if k == 0 || k == n {
                 1.0
@@ -208,10 +167,7 @@ mod tests {
             resultant[1] += w * h / 3.0 * t[1];
         }
         assert!(resultant[0].abs() <= 1e-12 * p, "resultant {resultant:?}");
-        assert!(
-            (resultant[1] + p).abs() <= 1e-12 * p,
-            "resultant {resultant:?}"
-        );
+        assert!((resultant[1] + p).abs() <= 1e-12 * p, "resultant {resultant:?}");
     }
 
     #[test]
@@ -224,10 +180,7 @@ mod tests {
                 let t = beam.traction([x, y], n);
                 // sigma_xy(+-D/2) = P (D^2/4 - D^2/4)/(2I) is exactly zero in floating
                 // point for D = 5; allow round-off relative to the peak shear 3P/(2D).
-                assert!(
-                    t[0].abs() + t[1].abs() <= 1e-12 * beam.load / d,
-                    "t({x}, {y}) = {t:?}"
-                );
+                assert!(t[0].abs() + t[1].abs() <= 1e-12 * beam.load / d, "t({x}, {y}) = {t:?}");
             }
         }
     }
@@ -235,26 +188,12 @@ mod tests {
     #[test]
     fn plane_strain_uses_substituted_constants() {
         let stress = Cantilever::reference();
-        let strain = Cantilever {
-            material: Material {
-                plane: PlaneModel::Strain,
-                ..stress.material
-            },
-            ..stress
-        };
+        let strain = Cantilever { material: Material { plane: PlaneModel::Strain, ..stress.material }, ..stress };
         let (e, nu) = strain.formula_constants();
-        assert!(
-            (e - 72.1e9 / (1.0 - 0.33 * 0.33)).abs() <= 1e-6 && (nu - 0.33 / 0.67).abs() <= 1e-15
-        );
+        assert!((e - 72.1e9 / (1.0 - 0.33 * 0.33)).abs() <= 1e-6 && (nu - 0.33 / 0.67).abs() <= 1e-15);
         // Plane strain is stiffer (E' > E), so the tip moves less; the stresses are the same.
-        let (vs, ve) = (
-            stress.displacement([0.0, 0.0])[1],
-            strain.displacement([0.0, 0.0])[1],
-        );
-        assert!(
-            ve.abs() < vs.abs(),
-            "plane strain tip {ve:e} vs plane stress {vs:e}"
-        );
+        let (vs, ve) = (stress.displacement([0.0, 0.0])[1], strain.displacement([0.0, 0.0])[1]);
+        assert!(ve.abs() < vs.abs(), "plane strain tip {ve:e} vs plane stress {vs:e}");
         assert_eq!(stress.stress([3.0, 1.0]), strain.stress([3.0, 1.0]));
     }
 

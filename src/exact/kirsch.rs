@@ -44,20 +44,12 @@ impl Kirsch {
         check.finite("tension", tension)?;
         check.positive("radius", radius)?;
         check.material(&material)?;
-        Ok(Kirsch {
-            tension,
-            radius,
-            material,
-        })
+        Ok(Kirsch { tension, radius, material })
     }
 
     /// Polar stresses `[s_rr, s_tt, s_rt]` at radius `r` and angle `t`.
     pub fn polar_stress(&self, r: f64, t: f64) -> [f64; 3] {
-        let (tt, q2, q4) = (
-            self.tension,
-            (self.radius / r).powi(2),
-            (self.radius / r).powi(4),
-        );
+        let (tt, q2, q4) = (self.tension, (self.radius / r).powi(2), (self.radius / r).powi(4));
         let (c2, s2) = ((2.0 * t).cos(), (2.0 * t).sin());
         [
             tt / 2.0 * (1.0 - q2) + tt / 2.0 * (1.0 + 3.0 * q4 - 4.0 * q2) * c2,
@@ -85,10 +77,8 @@ impl ExactSolution for Kirsch {
         let (r, t) = (x.hypot(y), y.atan2(x));
         let (a, k, c) = (self.radius, kolosov(&self.material), self.scale());
         let (q1, q3) = (a / r, (a / r).powi(3));
-        let u = (r / a) * (k + 1.0) * t.cos() + 2.0 * q1 * ((1.0 + k) * t.cos() + (3.0 * t).cos())
-            - 2.0 * q3 * (3.0 * t).cos();
-        let v = (r / a) * (k - 3.0) * t.sin() + 2.0 * q1 * ((1.0 - k) * t.sin() + (3.0 * t).sin())
-            - 2.0 * q3 * (3.0 * t).sin();
+        let u = (r / a) * (k + 1.0) * t.cos() + 2.0 * q1 * ((1.0 + k) * t.cos() + (3.0 * t).cos()) - 2.0 * q3 * (3.0 * t).cos();
+        let v = (r / a) * (k - 3.0) * t.sin() + 2.0 * q1 * ((1.0 - k) * t.sin() + (3.0 * t).sin()) - 2.0 * q3 * (3.0 * t).sin();
         [c * u, c * v]
     }
 
@@ -98,34 +88,17 @@ impl ExactSolution for Kirsch {
         let (ct, st, c3, s3) = (t.cos(), t.sin(), (3.0 * t).cos(), (3.0 * t).sin());
         // Polar derivatives of u/c and v/c, term by term from the module formula.
         let (b, d) = (2.0 * a, 2.0 * a.powi(3));
-        let u_r =
-            (k + 1.0) / a * ct - b / (r * r) * ((1.0 + k) * ct + c3) + 3.0 * d / r.powi(4) * c3;
-        let u_t = -(k + 1.0) / a * r * st
-            + b / r * (-(1.0 + k) * st - 3.0 * s3)
-            + 3.0 * d / r.powi(3) * s3;
-        let v_r =
-            (k - 3.0) / a * st - b / (r * r) * ((1.0 - k) * st + s3) + 3.0 * d / r.powi(4) * s3;
-        let v_t =
-            (k - 3.0) / a * r * ct + b / r * ((1.0 - k) * ct + 3.0 * c3) - 3.0 * d / r.powi(3) * c3;
-        [
-            [c * (ct * u_r - st / r * u_t), c * (st * u_r + ct / r * u_t)],
-            [c * (ct * v_r - st / r * v_t), c * (st * v_r + ct / r * v_t)],
-        ]
+        let u_r = (k + 1.0) / a * ct - b / (r * r) * ((1.0 + k) * ct + c3) + 3.0 * d / r.powi(4) * c3;
+        let u_t = -(k + 1.0) / a * r * st + b / r * (-(1.0 + k) * st - 3.0 * s3) + 3.0 * d / r.powi(3) * s3;
+        let v_r = (k - 3.0) / a * st - b / (r * r) * ((1.0 - k) * st + s3) + 3.0 * d / r.powi(4) * s3;
+        let v_t = (k - 3.0) / a * r * ct + b / r * ((1.0 - k) * ct + 3.0 * c3) - 3.0 * d / r.powi(3) * c3;
+        [[c * (ct * u_r - st / r * u_t), c * (st * u_r + ct / r * u_t)], [c * (ct * v_r - st / r * v_t), c * (st * v_r + ct / r * v_t)]]
     }
 
     fn stress(&self, [x, y]: [f64; 2]) -> [f64; 3] {
         let (r, t) = (x.hypot(y), y.atan2(x));
-        let (tt, q2, q4) = (
-            self.tension,
-            (self.radius / r).powi(2),
-            (self.radius / r).powi(4),
-        );
-        let (c2, s2, c4, s4) = (
-            (2.0 * t).cos(),
-            (2.0 * t).sin(),
-            (4.0 * t).cos(),
-            (4.0 * t).sin(),
-        );
+        let (tt, q2, q4) = (self.tension, (self.radius / r).powi(2), (self.radius / r).powi(4));
+        let (c2, s2, c4, s4) = ((2.0 * t).cos(), (2.0 * t).sin(), (4.0 * t).cos(), (4.0 * t).sin());
         [
             tt * (1.0 - q2 * (1.5 * c2 + c4) + 1.5 * q4 * c4),
             tt * (-q2 * (0.5 * c2 - c4) - 1.5 * q4 * c4),
@@ -145,10 +118,7 @@ mod tests {
     use std::f64::consts::PI;
 
     fn plate(plane: PlaneModel) -> Kirsch {
-        let elastic = YoungPoisson {
-            young: 210e9,
-            poisson: 0.3,
-        };
+        let elastic = YoungPoisson { young: 210e9, poisson: 0.3 };
         Kirsch::new(100e6, 1.0, Material { elastic, plane }).unwrap()
     }
 
@@ -161,10 +131,7 @@ mod tests {
         let k = plate(PlaneModel::Strain);
         let t = k.tension;
         let [_, s_tt, _] = k.polar_stress(k.radius, PI / 2.0);
-        assert!(
-            (s_tt - 3.0 * t).abs() <= TOL * t,
-            "s_tt(a, pi/2) = {s_tt:e}"
-        );
+        assert!((s_tt - 3.0 * t).abs() <= TOL * t, "s_tt(a, pi/2) = {s_tt:e}");
         // The same value from the Cartesian formula (s_xx at the top of the hole) ...
         let s = k.stress([0.0, k.radius]);
         assert!((s[0] - 3.0 * t).abs() <= TOL * t, "s_xx(0, a) = {:e}", s[0]);
@@ -182,10 +149,7 @@ mod tests {
                 let e_r = [t.cos(), t.sin()];
                 let p = [k.radius * e_r[0], k.radius * e_r[1]];
                 let tr = k.traction(p, [-e_r[0], -e_r[1]]);
-                assert!(
-                    tr[0].abs() + tr[1].abs() <= TOL * k.tension,
-                    "traction {tr:?} at t = {t}"
-                );
+                assert!(tr[0].abs() + tr[1].abs() <= TOL * k.tension, "traction {tr:?} at t = {t}");
             }
         }
     }
@@ -203,10 +167,7 @@ mod tests {
             ];
             let cart = k.stress([r * c, r * s]);
             for i in 0..3 {
-                assert!(
-                    (rotated[i] - cart[i]).abs() <= TOL * k.tension,
-                    "{rotated:?} vs {cart:?}"
-                );
+                assert!((rotated[i] - cart[i]).abs() <= TOL * k.tension, "{rotated:?} vs {cart:?}");
             }
         }
     }
@@ -228,10 +189,7 @@ mod tests {
             }
         }
         let s = k.stress([1e4, 3e3]);
-        assert!(
-            (s[0] - t).abs() + s[1].abs() + s[2].abs() <= 1e-7 * t,
-            "{s:?}"
-        );
+        assert!((s[0] - t).abs() + s[1].abs() + s[2].abs() <= 1e-7 * t, "{s:?}");
     }
 
     #[test]
@@ -253,13 +211,7 @@ mod tests {
     fn constructor_rejects_nonphysical_parameters() {
         let m = plate(PlaneModel::Strain).material;
         assert_eq!(Kirsch::new(1.0, 0.0, m).unwrap_err().parameter, "radius");
-        let bad = Material {
-            elastic: YoungPoisson {
-                young: 1.0,
-                poisson: 0.5,
-            },
-            ..m
-        };
+        let bad = Material { elastic: YoungPoisson { young: 1.0, poisson: 0.5 }, ..m };
         assert_eq!(Kirsch::new(1.0, 1.0, bad).unwrap_err().parameter, "poisson");
     }
 }

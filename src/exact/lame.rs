@@ -39,48 +39,22 @@ pub struct LameCylinder {
 
 impl LameCylinder {
     /// Checked constructor.
-    pub fn new(
-        pressure: f64,
-        inner: f64,
-        outer: f64,
-        material: Material,
-    ) -> Result<Self, ParameterError> {
+    pub fn new(pressure: f64, inner: f64, outer: f64, material: Material) -> Result<Self, ParameterError> {
         let check = Check("lame");
         check.finite("pressure", pressure)?;
         check.positive("inner", inner)?;
-        check.require(
-            "outer",
-            outer,
-            outer.is_finite() && outer > inner,
-            "must exceed the inner radius",
-        )?;
+        check.require("outer", outer, outer.is_finite() && outer > inner, "must exceed the inner radius")?;
         check.material(&material)?;
-        Ok(LameCylinder {
-            pressure,
-            inner,
-            outer,
-            material,
-        })
+        Ok(LameCylinder { pressure, inner, outer, material })
     }
 
     /// The published set-up: `a = 0.01`, `b = 0.02`, `E = 210e9`, `nu = 0.3`,
     /// `p = 100e6`, plane strain; `u_r(a) = 9.08e-6`, `s_t(a) = 166.7e6`,
     /// `s_t(b) = 66.7e6` (verification.md, section 3).
     pub fn reference() -> Self {
-        let elastic = YoungPoisson {
-            young: 210e9,
-            poisson: 0.3,
-        };
-        let material = Material {
-            elastic,
-            plane: PlaneModel::Strain,
-        };
-        LameCylinder {
-            pressure: 100e6,
-            inner: 0.01,
-            outer: 0.02,
-            material,
-        }
+        let elastic = YoungPoisson { young: 210e9, poisson: 0.3 };
+        let material = Material { elastic, plane: PlaneModel::Strain };
+        LameCylinder { pressure: 100e6, inner: 0.01, outer: 0.02, material }
     }
 
     /// `K = p a^2 / (b^2 - a^2)`.
@@ -91,10 +65,7 @@ impl LameCylinder {
 
     /// Coefficients `(A, B)` of `u_r = A r + B / r`.
     fn coefficients(&self) -> (f64, f64) {
-        let YoungPoisson {
-            young: e,
-            poisson: nu,
-        } = self.material.elastic;
+        let YoungPoisson { young: e, poisson: nu } = self.material.elastic;
         let k = self.k();
         let a = match self.material.plane {
             PlaneModel::Strain => k * (1.0 + nu) * (1.0 - 2.0 * nu) / e,
@@ -146,11 +117,7 @@ impl ExactSolution for LameCylinder {
         let r = x.hypot(y);
         let (c, s) = (x / r, y / r);
         let (sr, st) = (self.radial_stress(r), self.hoop_stress(r));
-        [
-            sr * c * c + st * s * s,
-            sr * s * s + st * c * c,
-            (sr - st) * c * s,
-        ]
+        [sr * c * c + st * s * s, sr * s * s + st * c * c, (sr - st) * c * s]
     }
 
     fn body_force(&self, _p: [f64; 2]) -> [f64; 2] {
@@ -169,34 +136,17 @@ mod tests {
         // Each expected value is checked to half a unit in its last published digit.
         let ur = cyl.displacement([a, 0.0])[0];
         assert!((ur - 9.08e-6).abs() <= 0.005e-6, "u_r(a) = {ur:e}");
-        assert!(
-            (cyl.hoop_stress(a) - 166.7e6).abs() <= 0.05e6,
-            "s_t(a) = {:e}",
-            cyl.hoop_stress(a)
-        );
-        assert!(
-            (cyl.hoop_stress(b) - 66.7e6).abs() <= 0.05e6,
-            "s_t(b) = {:e}",
-            cyl.hoop_stress(b)
-        );
+        assert!((cyl.hoop_stress(a) - 166.7e6).abs() <= 0.05e6, "s_t(a) = {:e}", cyl.hoop_stress(a));
+        assert!((cyl.hoop_stress(b) - 66.7e6).abs() <= 0.05e6, "s_t(b) = {:e}", cyl.hoop_stress(b));
         // The same numbers through the Cartesian stress at (0, a): s_xx is the hoop stress.
         let s = cyl.stress([0.0, a]);
-        assert!(
-            (s[0] - 166.7e6).abs() <= 0.05e6 && (s[1] + p).abs() <= 1e-9 * p,
-            "{s:?}"
-        );
+        assert!((s[0] - 166.7e6).abs() <= 0.05e6 && (s[1] + p).abs() <= 1e-9 * p, "{s:?}");
     }
 
     #[test]
     fn inner_wall_carries_the_pressure_and_outer_wall_is_free() {
         for plane in [PlaneModel::Strain, PlaneModel::Stress] {
-            let cyl = LameCylinder {
-                material: Material {
-                    plane,
-                    ..LameCylinder::reference().material
-                },
-                ..LameCylinder::reference()
-            };
+            let cyl = LameCylinder { material: Material { plane, ..LameCylinder::reference().material }, ..LameCylinder::reference() };
             let p = cyl.pressure;
             // s_r(a) = K (1 - b^2/a^2) = -p: compressive radial stress at the pressurised wall.
             assert!((cyl.radial_stress(cyl.inner) + p).abs() <= 1e-12 * p);
@@ -207,10 +157,7 @@ mod tests {
                 // Inner wall: outward normal of the body is -e_r; the fluid pushes the
                 // material outwards, t = sigma n = -s_r(a) e_r = p e_r.
                 let ti = cyl.traction([cyl.inner * e_r[0], cyl.inner * e_r[1]], [-e_r[0], -e_r[1]]);
-                assert!(
-                    (ti[0] - p * e_r[0]).abs() + (ti[1] - p * e_r[1]).abs() <= 1e-9 * p,
-                    "{ti:?}"
-                );
+                assert!((ti[0] - p * e_r[0]).abs() + (ti[1] - p * e_r[1]).abs() <= 1e-9 * p, "{ti:?}");
                 let to = cyl.traction([cyl.outer * e_r[0], cyl.outer * e_r[1]], e_r);
                 assert!(to[0].abs() + to[1].abs() <= 1e-9 * p, "{to:?}");
             }
@@ -224,13 +171,9 @@ mod tests {
         cyl.material.plane = PlaneModel::Stress;
         let (a, b, p, e, nu) = (cyl.inner, cyl.outer, cyl.pressure, 210e9, 0.3);
         for r in [a, 0.015, b] {
-            let expected =
-                p * a * a * r / (e * (b * b - a * a)) * ((1.0 - nu) + (1.0 + nu) * b * b / (r * r));
+            let expected = p * a * a * r / (e * (b * b - a * a)) * ((1.0 - nu) + (1.0 + nu) * b * b / (r * r));
             let got = cyl.radial_displacement(r);
-            assert!(
-                (got - expected).abs() <= 1e-13 * expected,
-                "{got:e} vs {expected:e}"
-            );
+            assert!((got - expected).abs() <= 1e-13 * expected, "{got:e} vs {expected:e}");
         }
         // Plane stress is the more compliant model: the inner wall moves further.
         assert!(cyl.radial_displacement(a) > LameCylinder::reference().radial_displacement(a));
@@ -249,10 +192,7 @@ mod tests {
                 // lambda div u cancels B/r^2 terms of size ~ p/(E(1-2nu)) * lambda ~ 5000
                 // p eps in round-off at nu = 0.4999: 1e-9 p leaves a margin of ~1e3.
                 for i in 0..3 {
-                    assert!(
-                        (closed[i] - hooke[i]).abs() <= 1e-9 * cyl.pressure,
-                        "nu = {nu}: {closed:?} vs {hooke:?}"
-                    );
+                    assert!((closed[i] - hooke[i]).abs() <= 1e-9 * cyl.pressure, "nu = {nu}: {closed:?} vs {hooke:?}");
                 }
             }
         }
@@ -263,9 +203,6 @@ mod tests {
         let m = LameCylinder::reference().material;
         let err = LameCylinder::new(1e6, 0.02, 0.01, m).unwrap_err();
         assert_eq!(err.parameter, "outer");
-        assert!(
-            err.to_string().contains("must exceed the inner radius"),
-            "{err}"
-        );
+        assert!(err.to_string().contains("must exceed the inner radius"), "{err}");
     }
 }

@@ -36,21 +36,10 @@ impl Manufactured {
 
     /// Hessians `([[u_xx, u_xy], [u_xy, u_yy]], [[v_xx, v_xy], [v_xy, v_yy]])`.
     pub fn hessians(&self, [x, y]: [f64; 2]) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
-        let (sx, cx, sy, cy) = (
-            (PI * x).sin(),
-            (PI * x).cos(),
-            (PI * y).sin(),
-            (PI * y).cos(),
-        );
+        let (sx, cx, sy, cy) = ((PI * x).sin(), (PI * x).cos(), (PI * y).sin(), (PI * y).cos());
         let pi2 = PI * PI;
-        let hu = [
-            [-pi2 * sx * cy, -pi2 * cx * sy],
-            [-pi2 * cx * sy, -pi2 * sx * cy],
-        ];
-        let hv = [
-            [2.0 * y.powi(3), 6.0 * x * y * y],
-            [6.0 * x * y * y, 6.0 * x * x * y],
-        ];
+        let hu = [[-pi2 * sx * cy, -pi2 * cx * sy], [-pi2 * cx * sy, -pi2 * sx * cy]];
+        let hv = [[2.0 * y.powi(3), 6.0 * x * y * y], [6.0 * x * y * y, 6.0 * x * x * y]];
         (hu, hv)
     }
 }
@@ -69,16 +58,8 @@ impl ExactSolution for Manufactured {
     }
 
     fn gradient(&self, [x, y]: [f64; 2]) -> [[f64; 2]; 2] {
-        let (sx, cx, sy, cy) = (
-            (PI * x).sin(),
-            (PI * x).cos(),
-            (PI * y).sin(),
-            (PI * y).cos(),
-        );
-        [
-            [PI * cx * cy, -PI * sx * sy],
-            [2.0 * x * y.powi(3), 3.0 * x * x * y * y],
-        ]
+        let (sx, cx, sy, cy) = ((PI * x).sin(), (PI * x).cos(), (PI * y).sin(), (PI * y).cos());
+        [[PI * cx * cy, -PI * sx * sy], [2.0 * x * y.powi(3), 3.0 * x * x * y * y]]
     }
 
     fn stress(&self, p: [f64; 2]) -> [f64; 3] {
@@ -100,32 +81,16 @@ mod tests {
     fn body_force_written_out() {
         // An independent transcription of f = -((lambda + mu) grad div u + mu lap u) at one
         // point, to catch an index slip in navier_body_force.
-        let material = Material {
-            elastic: YoungPoisson {
-                young: 3.0,
-                poisson: 0.25,
-            },
-            plane: PlaneModel::Strain,
-        };
+        let material = Material { elastic: YoungPoisson { young: 3.0, poisson: 0.25 }, plane: PlaneModel::Strain };
         let m = Manufactured::new(material).unwrap();
         let (lambda, mu) = (1.2, 1.2); // E nu/((1+nu)(1-2nu)) = 0.75/0.625, E/(2(1+nu)) = 1.2
         let (x, y) = (0.3, 0.7);
-        let (sx, cx, sy, cy) = (
-            (PI * x).sin(),
-            (PI * x).cos(),
-            (PI * y).sin(),
-            (PI * y).cos(),
-        );
+        let (sx, cx, sy, cy) = ((PI * x).sin(), (PI * x).cos(), (PI * y).sin(), (PI * y).cos());
         let pi2 = PI * PI;
-        let fx =
-            -((lambda + mu) * (-pi2 * sx * cy + 6.0 * x * y * y) + mu * (-2.0 * pi2 * sx * cy));
-        let fy = -((lambda + mu) * (-pi2 * cx * sy + 6.0 * x * x * y)
-            + mu * (2.0 * y.powi(3) + 6.0 * x * x * y));
+        let fx = -((lambda + mu) * (-pi2 * sx * cy + 6.0 * x * y * y) + mu * (-2.0 * pi2 * sx * cy));
+        let fy = -((lambda + mu) * (-pi2 * cx * sy + 6.0 * x * x * y) + mu * (2.0 * y.powi(3) + 6.0 * x * x * y));
         let f = m.body_force([x, y]);
         // Same arithmetic in a different order: round-off on O(10) numbers.
-        assert!(
-            (f[0] - fx).abs() <= 1e-13 && (f[1] - fy).abs() <= 1e-13,
-            "{f:?} vs [{fx}, {fy}]"
-        );
+        assert!((f[0] - fx).abs() <= 1e-13 && (f[1] - fy).abs() <= 1e-13, "{f:?} vs [{fx}, {fy}]");
     }
 }

@@ -83,10 +83,7 @@ pub fn navier_body_force(lame: material::Lame, hu: [[f64; 2]; 2], hv: [[f64; 2];
     let material::Lame { lambda, mu } = lame;
     let grad_div = [hu[0][0] + hv[0][1], hu[0][1] + hv[1][1]];
     let lap = [hu[0][0] + hu[1][1], hv[0][0] + hv[1][1]];
-    [
-        -((lambda + mu) * grad_div[0] + mu * lap[0]),
-        -((lambda + mu) * grad_div[1] + mu * lap[1]),
-    ]
+    [-((lambda + mu) * grad_div[0] + mu * lap[0]), -((lambda + mu) * grad_div[1] + mu * lap[1])]
 }
 
 /// A parameter of an exact solution that cannot describe a physical problem.
@@ -104,11 +101,7 @@ pub struct ParameterError {
 
 impl fmt::Display for ParameterError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "exact solution {}: parameter {} = {} {}",
-            self.solution, self.parameter, self.value, self.requirement
-        )
+        write!(f, "exact solution {}: parameter {} = {} {}", self.solution, self.parameter, self.value, self.requirement)
     }
 }
 
@@ -122,17 +115,8 @@ impl Check {
         self.require(parameter, value, value.is_finite(), "must be finite")
     }
 
-    pub(crate) fn positive(
-        &self,
-        parameter: &'static str,
-        value: f64,
-    ) -> Result<(), ParameterError> {
-        self.require(
-            parameter,
-            value,
-            value.is_finite() && value > 0.0,
-            "must be positive and finite",
-        )
+    pub(crate) fn positive(&self, parameter: &'static str, value: f64) -> Result<(), ParameterError> {
+        self.require(parameter, value, value.is_finite() && value > 0.0, "must be positive and finite")
     }
 
     pub(crate) fn material(&self, material: &Material) -> Result<(), ParameterError> {
@@ -142,22 +126,11 @@ impl Check {
         self.require("poisson", nu, ok, "must lie in (-1, 0.5)")
     }
 
-    pub(crate) fn require(
-        &self,
-        parameter: &'static str,
-        value: f64,
-        ok: bool,
-        requirement: &'static str,
-    ) -> Result<(), ParameterError> {
+    pub(crate) fn require(&self, parameter: &'static str, value: f64, ok: bool, requirement: &'static str) -> Result<(), ParameterError> {
         if ok {
             Ok(())
         } else {
-            Err(ParameterError {
-                solution: self.0,
-                parameter,
-                value,
-                requirement,
-            })
+            Err(ParameterError { solution: self.0, parameter, value, requirement })
         }
     }
 }

@@ -26,18 +26,7 @@ pub struct Polynomial {
 
 impl Polynomial {
     /// Exponents `(i, j)` of the monomials `x^i y^j`, in coefficient order.
-    pub const MONOMIALS: [(u32, u32); 10] = [
-        (0, 0),
-        (1, 0),
-        (0, 1),
-        (2, 0),
-        (1, 1),
-        (0, 2),
-        (3, 0),
-        (2, 1),
-        (1, 2),
-        (0, 3),
-    ];
+    pub const MONOMIALS: [(u32, u32); 10] = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3)];
 
     /// Checked constructor for a general cubic field.
     pub fn new(ux: [f64; 10], uy: [f64; 10], material: Material) -> Result<Self, ParameterError> {
@@ -50,11 +39,7 @@ impl Polynomial {
     }
 
     /// A quadratic field: coefficients of `1, x, y, x^2, x y, y^2`.
-    pub fn quadratic(
-        ux: [f64; 6],
-        uy: [f64; 6],
-        material: Material,
-    ) -> Result<Self, ParameterError> {
+    pub fn quadratic(ux: [f64; 6], uy: [f64; 6], material: Material) -> Result<Self, ParameterError> {
         let pad = |c: [f64; 6]| {
             let mut full = [0.0; 10];
             full[..6].copy_from_slice(&c);
@@ -81,23 +66,14 @@ impl Polynomial {
             .iter()
             .zip(c)
             .filter(|((i, j), _)| *i >= a && *j >= b)
-            .map(|((i, j), ck)| {
-                ck * falling(*i, a)
-                    * falling(*j, b)
-                    * x.powi((i - a) as i32)
-                    * y.powi((j - b) as i32)
-            })
+            .map(|((i, j), ck)| ck * falling(*i, a) * falling(*j, b) * x.powi((i - a) as i32) * y.powi((j - b) as i32))
             .sum()
     }
 
     /// Hessians `([[u_xx, u_xy], [u_xy, u_yy]], [[v_xx, v_xy], [v_xy, v_yy]])`.
     pub fn hessians(&self, p: [f64; 2]) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
         let h = |c: &[f64; 10]| {
-            let (xx, xy, yy) = (
-                Self::derivative(c, 2, 0, p),
-                Self::derivative(c, 1, 1, p),
-                Self::derivative(c, 0, 2, p),
-            );
+            let (xx, xy, yy) = (Self::derivative(c, 2, 0, p), Self::derivative(c, 1, 1, p), Self::derivative(c, 0, 2, p));
             [[xx, xy], [xy, yy]]
         };
         (h(&self.ux), h(&self.uy))
@@ -114,10 +90,7 @@ impl ExactSolution for Polynomial {
     }
 
     fn displacement(&self, p: [f64; 2]) -> [f64; 2] {
-        [
-            Self::derivative(&self.ux, 0, 0, p),
-            Self::derivative(&self.uy, 0, 0, p),
-        ]
+        [Self::derivative(&self.ux, 0, 0, p), Self::derivative(&self.uy, 0, 0, p)]
     }
 
     fn gradient(&self, p: [f64; 2]) -> [[f64; 2]; 2] {
@@ -141,13 +114,7 @@ mod tests {
     use crate::elasticity::material::{PlaneModel, YoungPoisson};
 
     fn material() -> Material {
-        Material {
-            elastic: YoungPoisson {
-                young: 3.0,
-                poisson: 0.25,
-            },
-            plane: PlaneModel::Strain,
-        }
+        Material { elastic: YoungPoisson { young: 3.0, poisson: 0.25 }, plane: PlaneModel::Strain }
     }
 
     #[test]
@@ -159,28 +126,19 @@ mod tests {
         let poly = Polynomial::new(ux, [0.0; 10], material()).unwrap();
         let p = [3.0, -2.0];
         assert_eq!(poly.displacement(p)[0], 2.0 * 9.0 * -2.0 + 8.0 + 12.0);
-        assert_eq!(
-            poly.gradient(p)[0],
-            [4.0 * 3.0 * -2.0 + 4.0, 2.0 * 9.0 - 12.0]
-        );
+        assert_eq!(poly.gradient(p)[0], [4.0 * 3.0 * -2.0 + 4.0, 2.0 * 9.0 - 12.0]);
         assert_eq!(poly.hessians(p).0, [[-8.0, 12.0], [12.0, 12.0]]);
         assert_eq!(poly.degree(), 3);
     }
 
     #[test]
     fn degrees_and_body_force_of_low_order_fields() {
-        let lin = Polynomial::quadratic(
-            [1.0, 2.0, 3.0, 0.0, 0.0, 0.0],
-            [0.0, -1.0, 0.5, 0.0, 0.0, 0.0],
-            material(),
-        )
-        .unwrap();
+        let lin = Polynomial::quadratic([1.0, 2.0, 3.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.5, 0.0, 0.0, 0.0], material()).unwrap();
         assert_eq!(lin.degree(), 1);
         assert_eq!(lin.body_force([0.7, -0.2]), [0.0, 0.0]);
         // u = x^2: grad div u = (2, 0), lap u = (2, 0), so f = -(lambda + 2 mu)(2, 0);
         // lambda = mu = 1.2 for E = 3, nu = 1/4 in plane strain.
-        let quad =
-            Polynomial::quadratic([0.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0; 6], material()).unwrap();
+        let quad = Polynomial::quadratic([0.0, 0.0, 0.0, 1.0, 0.0, 0.0], [0.0; 6], material()).unwrap();
         assert_eq!(quad.degree(), 2);
         let f = quad.body_force([5.0, 9.0]);
         assert!((f[0] + 2.0 * 3.6).abs() <= 1e-14 && f[1] == 0.0, "{f:?}");

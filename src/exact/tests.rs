@@ -15,32 +15,17 @@ struct Case {
 }
 
 fn material(young: f64, poisson: f64, plane: PlaneModel) -> Material {
-    Material {
-        elastic: YoungPoisson { young, poisson },
-        plane,
-    }
+    Material { elastic: YoungPoisson { young, poisson }, plane }
 }
 
 fn cases() -> Vec<Case> {
     let mut out = Vec::new();
     for plane in [PlaneModel::Stress, PlaneModel::Strain] {
         let steel = material(210e9, 0.3, plane);
-        let beam = Cantilever {
-            material: material(72.1e9, 0.33, plane),
-            ..Cantilever::reference()
-        };
+        let beam = Cantilever { material: material(72.1e9, 0.33, plane), ..Cantilever::reference() };
         out.push(Case {
             solution: Box::new(beam),
-            points: vec![
-                [0.0, 0.0],
-                [0.0, 2.5],
-                [0.0, -2.5],
-                [7.5, 1.0],
-                [15.0, -1.7],
-                [22.1, 2.4],
-                [30.0, 2.5],
-                [30.0, -1.2],
-            ],
+            points: vec![[0.0, 0.0], [0.0, 2.5], [0.0, -2.5], [7.5, 1.0], [15.0, -1.7], [22.1, 2.4], [30.0, 2.5], [30.0, -1.2]],
             ell: beam.length,
             // Cubic field: the stencils below are exact for degree <= 5, so only round-off
             // matters and a coarse step keeps it small.
@@ -48,46 +33,19 @@ fn cases() -> Vec<Case> {
         });
         out.push(Case {
             solution: Box::new(Kirsch::new(100e6, 1.0, steel).unwrap()),
-            points: vec![
-                [1.0, 0.0],
-                [0.0, 1.0],
-                [0.6, 0.8],
-                [-1.3, 0.2],
-                [2.0, 1.5],
-                [4.0, 0.5],
-                [3.0, -4.0],
-                [5.0, 5.0],
-            ],
+            points: vec![[1.0, 0.0], [0.0, 1.0], [0.6, 0.8], [-1.3, 0.2], [2.0, 1.5], [4.0, 0.5], [3.0, -4.0], [5.0, 5.0]],
             ell: 1.0,
             step: 1e-3,
         });
         out.push(Case {
-            solution: Box::new(LameCylinder {
-                material: steel,
-                ..LameCylinder::reference()
-            }),
-            points: vec![
-                [0.01, 0.0],
-                [0.0, 0.01],
-                [0.0123, 0.0041],
-                [-0.011, 0.011],
-                [0.0, -0.02],
-                [0.0141, -0.0141],
-                [-0.019, 0.002],
-            ],
+            solution: Box::new(LameCylinder { material: steel, ..LameCylinder::reference() }),
+            points: vec![[0.01, 0.0], [0.0, 0.01], [0.0123, 0.0041], [-0.011, 0.011], [0.0, -0.02], [0.0141, -0.0141], [-0.019, 0.002]],
             ell: 0.01,
             step: 1e-5,
         });
         out.push(Case {
             solution: Box::new(Manufactured::new(steel).unwrap()),
-            points: vec![
-                [0.0, 0.0],
-                [0.25, 0.5],
-                [0.5, 0.5],
-                [0.9, 0.1],
-                [1.0, 1.0],
-                [0.33, 0.77],
-            ],
+            points: vec![[0.0, 0.0], [0.25, 0.5], [0.5, 0.5], [0.9, 0.1], [1.0, 1.0], [0.33, 0.77]],
             ell: 1.0,
             step: 1e-3,
         });
@@ -95,13 +53,7 @@ fn cases() -> Vec<Case> {
         let uy = [-0.2, 0.4, 0.1, -0.6, 0.3, 0.8, -0.5, 0.7, -0.4, 0.2];
         out.push(Case {
             solution: Box::new(Polynomial::new(ux, uy, steel).unwrap()),
-            points: vec![
-                [0.0, 0.0],
-                [1.0, -1.0],
-                [-0.5, 0.3],
-                [0.8, 0.9],
-                [-1.0, -0.2],
-            ],
+            points: vec![[0.0, 0.0], [1.0, -1.0], [-0.5, 0.3], [0.8, 0.9], [-1.0, -0.2]],
             ell: 1.0,
             step: 0.1,
         });
@@ -144,19 +96,12 @@ fn fd_residual(s: &dyn ExactSolution, lame: material::Lame, p: [f64; 2], h: f64)
 
 /// `max |u|` over the sample points: the displacement scale `U`.
 fn displacement_scale(case: &Case) -> f64 {
-    let norms = case
-        .points
-        .iter()
-        .map(|p| case.solution.displacement(*p).map(f64::abs));
+    let norms = case.points.iter().map(|p| case.solution.displacement(*p).map(f64::abs));
     norms.flat_map(|u| u.into_iter()).fold(0.0, f64::max)
 }
 
 fn label(case: &Case) -> String {
-    format!(
-        "{} ({:?})",
-        case.solution.name(),
-        case.solution.material().plane
-    )
+    format!("{} ({:?})", case.solution.name(), case.solution.material().plane)
 }
 
 #[test]
@@ -177,15 +122,8 @@ fn navier_residual_vanishes() {
             let r = fd_residual(s, lame, *p, case.step);
             worst = worst.max(r[0].abs().max(r[1].abs()) / scale);
         }
-        eprintln!(
-            "{}: max |Navier residual| / (mu U / ell^2) = {worst:.2e}",
-            label(&case)
-        );
-        assert!(
-            worst <= 1e-6,
-            "{}: Navier residual {worst:e} of mu U/ell^2",
-            label(&case)
-        );
+        eprintln!("{}: max |Navier residual| / (mu U / ell^2) = {worst:.2e}", label(&case));
+        assert!(worst <= 1e-6, "{}: Navier residual {worst:e} of mu U/ell^2", label(&case));
     }
 }
 
@@ -215,16 +153,9 @@ fn navier_residual_detects_the_wrong_plane_model() {
             .map(|p| fd_residual(s, other.lame(), *p, case.step).map(f64::abs))
             .fold(0.0_f64, |w, r| w.max(r[0]).max(r[1]))
             / scale;
-        eprintln!(
-            "{}: residual with the wrong lambda = {worst:.2e}",
-            label(&case)
-        );
+        eprintln!("{}: residual with the wrong lambda = {worst:.2e}", label(&case));
         // Observed: at least 0.29 (Kirsch); 1e-2 is 1e4 above the tolerance above.
-        assert!(
-            worst > 1e-2,
-            "{}: wrong lambda not detected ({worst:e})",
-            label(&case)
-        );
+        assert!(worst > 1e-2, "{}: wrong lambda not detected ({worst:e})", label(&case));
     }
 }
 
@@ -246,15 +177,8 @@ fn gradient_matches_finite_differences() {
                 worst = worst.max((g[i][j] - fd[i][j]).abs() / scale);
             }
         }
-        eprintln!(
-            "{}: max |gradient - FD| / (U / ell) = {worst:.2e}",
-            label(&case)
-        );
-        assert!(
-            worst <= 1e-8,
-            "{}: gradient off by {worst:e} of U/ell",
-            label(&case)
-        );
+        eprintln!("{}: max |gradient - FD| / (U / ell) = {worst:.2e}", label(&case));
+        assert!(worst <= 1e-8, "{}: gradient off by {worst:e} of U/ell", label(&case));
     }
 }
 
@@ -269,17 +193,8 @@ fn stress_is_hookes_law_of_the_gradient() {
         let s = case.solution.as_ref();
         let lame = s.material().lame();
         let (worst, scale) = stress_mismatch(&case, lame);
-        eprintln!(
-            "{}: max |stress - Hooke(grad)| / scale = {:.2e}",
-            label(&case),
-            worst / scale
-        );
-        assert!(
-            worst <= 1e-10 * scale,
-            "{}: stress mismatch {:e} of {scale:e}",
-            label(&case),
-            worst / scale
-        );
+        eprintln!("{}: max |stress - Hooke(grad)| / scale = {:.2e}", label(&case), worst / scale);
+        assert!(worst <= 1e-10 * scale, "{}: stress mismatch {:e} of {scale:e}", label(&case), worst / scale);
     }
 }
 
@@ -301,16 +216,8 @@ fn stress_check_detects_the_wrong_plane_model() {
             PlaneModel::Strain => PlaneModel::Stress,
         };
         let (worst, scale) = stress_mismatch(&case, Material { plane, ..m }.lame());
-        eprintln!(
-            "{}: stress mismatch with the wrong lambda = {:.2e}",
-            label(&case),
-            worst / scale
-        );
-        assert!(
-            worst > 1e-3 * scale,
-            "{}: wrong lambda not detected",
-            label(&case)
-        );
+        eprintln!("{}: stress mismatch with the wrong lambda = {:.2e}", label(&case), worst / scale);
+        assert!(worst > 1e-3 * scale, "{}: wrong lambda not detected", label(&case));
     }
 }
 
@@ -345,10 +252,7 @@ fn kolosov_matches_lame_parameters() {
             let m = material(7.0, nu, plane);
             let material::Lame { lambda, mu } = m.lame();
             let expected = (lambda + 3.0 * mu) / (lambda + mu);
-            assert!(
-                (kolosov(&m) - expected).abs() <= 1e-13 * expected,
-                "{plane:?}, nu = {nu}"
-            );
+            assert!((kolosov(&m) - expected).abs() <= 1e-13 * expected, "{plane:?}, nu = {nu}");
         }
     }
 }

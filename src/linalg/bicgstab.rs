@@ -112,17 +112,7 @@ pub fn solve_bicgstab(
             max_iters: budget,
             ..Default::default()
         };
-        let result = bicgstab(
-            x.as_mut(),
-            id,
-            pc,
-            a.as_ref(),
-            rhs,
-            params,
-            |_| {},
-            par,
-            MemStack::new(&mut mem),
-        );
+        let result = bicgstab(x.as_mut(), id, pc, a.as_ref(), rhs, params, |_| {}, par, MemStack::new(&mut mem));
         let claimed = match result {
             Ok(info) => {
                 out.iterations += info.iter_count;
@@ -149,8 +139,6 @@ pub fn solve_bicgstab(
         }
         out.restarts += 1;
         let inner = relative_residual(a, &out.x, b);
-        inner_tol = inner_tol
-            .min(0.5 * tolerance * inner / out.relative_residual)
-            .max(f64::EPSILON);
+        inner_tol = inner_tol.min(0.5 * tolerance * inner / out.relative_residual).max(f64::EPSILON);
     }
 }

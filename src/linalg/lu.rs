@@ -40,9 +40,7 @@ impl SparseLu {
                      displacements are fixed somewhere"
                 ),
             },
-            LuError::Generic(e) => SolveError::Dimension {
-                detail: format!("sparse LU could not run ({e:?}); the problem is too large"),
-            },
+            LuError::Generic(e) => SolveError::Dimension { detail: format!("sparse LU could not run ({e:?}); the problem is too large") },
         })?;
         Ok(SparseLu { lu, n: a.nrows() })
     }
@@ -80,15 +78,9 @@ impl SparseLu {
         if n == 0 {
             return 0.0;
         }
-        let a_norm1 = (0..n)
-            .map(|j| a.val_of_col(j).iter().map(|v| v.abs()).sum::<f64>())
-            .fold(0.0f64, f64::max);
+        let a_norm1 = (0..n).map(|j| a.val_of_col(j).iter().map(|v| v.abs()).sum::<f64>()).fold(0.0f64, f64::max);
         let norm1 = |v: &[f64]| v.iter().map(|x| x.abs()).sum::<f64>();
-        let sign = |v: &[f64]| -> Vec<f64> {
-            v.iter()
-                .map(|&x| if x >= 0.0 { 1.0 } else { -1.0 })
-                .collect()
-        };
+        let sign = |v: &[f64]| -> Vec<f64> { v.iter().map(|&x| if x >= 0.0 { 1.0 } else { -1.0 }).collect() };
         let mut y = self.solve(&vec![1.0 / n as f64; n]);
         let mut est = norm1(&y);
         if n > 1 {
@@ -99,9 +91,7 @@ impl SparseLu {
                 if !est.is_finite() || z.iter().any(|v| !v.is_finite()) {
                     return f64::INFINITY;
                 }
-                let j = (0..n)
-                    .max_by(|&p, &q| z[p].abs().total_cmp(&z[q].abs()))
-                    .unwrap_or(0);
+                let j = (0..n).max_by(|&p, &q| z[p].abs().total_cmp(&z[q].abs())).unwrap_or(0);
                 if j == j_prev {
                     break;
                 }
@@ -150,21 +140,12 @@ impl SparseLu {
 ///   [`CONDITION_LIMIT`]. This catches a singular but *consistent* system
 ///   (e.g. a pure-traction problem with self-equilibrated loads), for which LU
 ///   returns a small residual but an arbitrary rigid-body component.
-pub fn check_solution(
-    lu: &SparseLu,
-    a: &SparseMatrix,
-    x: &[f64],
-    b: &[f64],
-    relres: f64,
-) -> Result<(), SolveError> {
+pub fn check_solution(lu: &SparseLu, a: &SparseMatrix, x: &[f64], b: &[f64], relres: f64) -> Result<(), SolveError> {
     const HINT: &str = "check the boundary conditions (a pure-traction problem has rigid-body \
                         modes; every node needs exactly one equation per displacement component)";
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
         return Err(SolveError::Singular {
-            detail: format!(
-                "sparse LU produced a non-finite solution (entry {i} = {}), i.e. a zero pivot; {HINT}",
-                x[i]
-            ),
+            detail: format!("sparse LU produced a non-finite solution (entry {i} = {}), i.e. a zero pivot; {HINT}", x[i]),
         });
     }
     if relres.is_nan() || relres > LU_RESIDUAL_LIMIT {
@@ -187,12 +168,7 @@ pub fn check_solution(
     if b_inf > 0.0 {
         let mut row_sum = vec![0.0f64; a.nrows()];
         for j in 0..a.ncols() {
-            for (&i, &v) in a
-                .symbolic()
-                .row_idx_of_col_raw(j)
-                .iter()
-                .zip(a.val_of_col(j))
-            {
+            for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
                 row_sum[i] += v.abs();
             }
         }
@@ -200,10 +176,7 @@ pub fn check_solution(
         let x_inf = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let kappa_lower = a_inf * x_inf / b_inf;
         if kappa_lower > CONDITION_LIMIT {
-            return Err(too_ill(
-                kappa_lower,
-                "condition number is at least ‖A‖‖x‖/‖b‖ =",
-            ));
+            return Err(too_ill(kappa_lower, "condition number is at least ‖A‖‖x‖/‖b‖ ="));
         }
     }
     let kappa = lu.condition_estimate_1(a);
@@ -222,15 +195,7 @@ mod tests {
     fn small_nonsymmetric_system_is_solved_exactly() {
         // [[4, 1, 0], [2, 5, -1], [0, -3, 6]] x = b with x = (1, -2, 3).
         let mut t = Triplets::new(3);
-        for &(i, j, v) in &[
-            (0, 0, 4.0),
-            (0, 1, 1.0),
-            (1, 0, 2.0),
-            (1, 1, 5.0),
-            (1, 2, -1.0),
-            (2, 1, -3.0),
-            (2, 2, 6.0),
-        ] {
+        for &(i, j, v) in &[(0, 0, 4.0), (0, 1, 1.0), (1, 0, 2.0), (1, 1, 5.0), (1, 2, -1.0), (2, 1, -3.0), (2, 2, 6.0)] {
             t.push(i, j, v);
         }
         let a = assemble(&t).unwrap();
@@ -248,9 +213,6 @@ mod tests {
         // The estimate is a lower bound (up to rounding), in practice within a
         // factor 3 (Higham 1988).
         let k = lu.condition_estimate_1(&a);
-        assert!(
-            (4.21875 / 3.0..=4.21875 * (1.0 + 1e-12)).contains(&k),
-            "κ₁ estimate {k}"
-        );
+        assert!((4.21875 / 3.0..=4.21875 * (1.0 + 1e-12)).contains(&k), "κ₁ estimate {k}");
     }
 }

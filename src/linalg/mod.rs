@@ -107,14 +107,7 @@ impl SolverKind {
     /// A sensible iterative default: BiCGSTAB + ILUT(drop = 1e-5, fill = 20),
     /// tolerance 1e-10, at most 2000 iterations.
     pub fn default_bicgstab() -> Self {
-        SolverKind::Bicgstab {
-            preconditioner: Preconditioner::Ilut {
-                drop: 1e-5,
-                fill: 20,
-            },
-            tolerance: 1e-10,
-            max_iterations: 2000,
-        }
+        SolverKind::Bicgstab { preconditioner: Preconditioner::Ilut { drop: 1e-5, fill: 20 }, tolerance: 1e-10, max_iterations: 2000 }
     }
 
     /// Short label for reports, e.g. `lu` or `bicgstab+ilu0`.
@@ -141,10 +134,7 @@ pub struct SolverParams {
 impl Default for SolverParams {
     /// Direct LU on the row-equilibrated system.
     fn default() -> Self {
-        SolverParams {
-            kind: SolverKind::Lu,
-            equilibrate: true,
-        }
+        SolverParams { kind: SolverKind::Lu, equilibrate: true }
     }
 }
 
@@ -282,35 +272,20 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// the infinitely many solutions, rigid-body component included.
 ///
 /// An empty system (`n = 0`) returns an empty solution.
-pub fn solve(
-    a: &SparseMatrix,
-    b: &[f64],
-    params: &SolverParams,
-) -> Result<(Vec<f64>, SolveReport), SolveError> {
+pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let n = a.nrows();
     if a.ncols() != n {
-        return Err(SolveError::Dimension {
-            detail: format!("matrix is {}x{}, expected square", n, a.ncols()),
-        });
+        return Err(SolveError::Dimension { detail: format!("matrix is {}x{}, expected square", n, a.ncols()) });
     }
     if b.len() != n {
-        return Err(SolveError::Dimension {
-            detail: format!(
-                "right-hand side has length {}, matrix has {n} rows",
-                b.len()
-            ),
-        });
+        return Err(SolveError::Dimension { detail: format!("right-hand side has length {}, matrix has {n} rows", b.len()) });
     }
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(SolveError::Dimension {
-            detail: format!("right-hand side entry {i} is not finite ({v})"),
-        });
+        return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
     if let SolverKind::Bicgstab { tolerance, .. } = params.kind {
         if !(tolerance > 0.0 && tolerance.is_finite()) {
-            return Err(SolveError::Dimension {
-                detail: format!("BiCGSTAB tolerance must be positive and finite, got {tolerance}"),
-            });
+            return Err(SolveError::Dimension { detail: format!("BiCGSTAB tolerance must be positive and finite, got {tolerance}") });
         }
     }
 
@@ -367,18 +342,11 @@ pub fn solve(
                 },
             ))
         }
-        SolverKind::Bicgstab {
-            preconditioner,
-            tolerance,
-            max_iterations,
-        } => {
+        SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
             let pc = precond::BuiltPreconditioner::build(a_work, preconditioner)?;
             let setup_seconds = t_setup.elapsed().as_secs_f64();
             let t_solve = Instant::now();
-            let out =
-                bicgstab::solve_bicgstab(a_work, &b_work, &pc, tolerance, max_iterations, |x| {
-                    relative_residual(a, x, b)
-                });
+            let out = bicgstab::solve_bicgstab(a_work, &b_work, &pc, tolerance, max_iterations, |x| relative_residual(a, x, b));
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             let name = format!("BiCGSTAB+{}", preconditioner.display_name());
             let original_relative_residual = relative_residual(a, &out.x, b);

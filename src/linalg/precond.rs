@@ -41,9 +41,7 @@ impl Jacobi {
                 ),
             });
         }
-        Ok(Jacobi {
-            inv_diag: diag.iter().map(|d| 1.0 / d).collect(),
-        })
+        Ok(Jacobi { inv_diag: diag.iter().map(|d| 1.0 / d).collect() })
     }
 
     /// `x ← M⁻¹ x`.
@@ -127,12 +125,7 @@ fn to_csr(a: &SparseMatrix) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
     let mut next = ptr.clone();
     let (mut idx, mut val) = (vec![0usize; nnz], vec![0.0f64; nnz]);
     for j in 0..a.ncols() {
-        for (&i, &v) in a
-            .symbolic()
-            .row_idx_of_col_raw(j)
-            .iter()
-            .zip(a.val_of_col(j))
-        {
+        for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
             idx[next[i]] = j;
             val[next[i]] = v;
             next[i] += 1;
@@ -159,9 +152,7 @@ impl Ilut {
     /// non-finite `drop`.
     pub fn try_new(a: &SparseMatrix, drop: f64, fill: usize) -> Result<Self, SolveError> {
         if !(drop >= 0.0 && drop.is_finite()) {
-            return Err(SolveError::Dimension {
-                detail: format!("ILUT drop tolerance must be finite and >= 0, got {drop}"),
-            });
+            return Err(SolveError::Dimension { detail: format!("ILUT drop tolerance must be finite and >= 0, got {drop}") });
         }
         let n = a.nrows();
         let (a_ptr, a_idx, a_val) = to_csr(a);
@@ -183,10 +174,7 @@ impl Ilut {
         let (mut lower, mut upper) = (Vec::new(), Vec::new());
 
         for i in 0..n {
-            let (cols, vals) = (
-                &a_idx[a_ptr[i]..a_ptr[i + 1]],
-                &a_val[a_ptr[i]..a_ptr[i + 1]],
-            );
+            let (cols, vals) = (&a_idx[a_ptr[i]..a_ptr[i + 1]], &a_val[a_ptr[i]..a_ptr[i + 1]]);
             let row_norm = vals.iter().map(|v| v * v).sum::<f64>().sqrt();
             let tau = drop * row_norm;
             lower.clear();
@@ -330,20 +318,14 @@ impl BuiltPreconditioner {
                              structurally zero; use ilut or lu"
                         ),
                     },
-                    Ilu0Error::ZeroPivot { col } => SolveError::Singular {
-                        detail: format!(
-                            "ILU(0) hit a zero pivot at row/column {col}; use ilut or lu"
-                        ),
-                    },
-                    other => SolveError::Dimension {
-                        detail: format!("ILU(0) could not be built: {other}"),
-                    },
+                    Ilu0Error::ZeroPivot { col } => {
+                        SolveError::Singular { detail: format!("ILU(0) hit a zero pivot at row/column {col}; use ilut or lu") }
+                    }
+                    other => SolveError::Dimension { detail: format!("ILU(0) could not be built: {other}") },
                 })?;
                 BuiltPreconditioner::Ilu0(Box::new(p))
             }
-            Preconditioner::Ilut { drop, fill } => {
-                BuiltPreconditioner::Ilut(Ilut::try_new(a, drop, fill)?)
-            }
+            Preconditioner::Ilut { drop, fill } => BuiltPreconditioner::Ilut(Ilut::try_new(a, drop, fill)?),
         })
     }
 
@@ -389,23 +371,11 @@ impl LinOp<f64> for BuiltPreconditioner {
     fn ncols(&self) -> usize {
         self.dim()
     }
-    fn apply(
-        &self,
-        mut out: MatMut<'_, f64>,
-        rhs: MatRef<'_, f64>,
-        par: Par,
-        stack: &mut MemStack,
-    ) {
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
         out.copy_from(rhs);
         self.apply_in_place(out, par, stack);
     }
-    fn conj_apply(
-        &self,
-        out: MatMut<'_, f64>,
-        rhs: MatRef<'_, f64>,
-        par: Par,
-        stack: &mut MemStack,
-    ) {
+    fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
         self.apply(out, rhs, par, stack);
     }
 }
@@ -457,11 +427,7 @@ mod tests {
                     t.push(i, j, v);
                 }
             }
-            t.push(
-                i,
-                i,
-                (row_sum + 1.0) * if rng.random::<bool>() { 1.0 } else { -1.0 },
-            );
+            t.push(i, i, (row_sum + 1.0) * if rng.random::<bool>() { 1.0 } else { -1.0 });
         }
         assemble(&t).unwrap()
     }
@@ -480,10 +446,7 @@ mod tests {
         // Exact LU of a diagonally dominant (κ ≈ 10) 60×60 matrix: residual is
         // O(n ε) ≈ 1e-14; 1e-12 leaves margin but would catch any dropped entry
         // (a single dropped fill entry gives ≳ 1e-4).
-        assert!(
-            r < 1e-12,
-            "one ILUT(0, n) application left residual {r:.2e}"
-        );
+        assert!(r < 1e-12, "one ILUT(0, n) application left residual {r:.2e}");
     }
 
     #[test]
@@ -567,11 +530,7 @@ mod tests {
         t.push(0, 1, 1.0);
         t.push(1, 0, 1.0);
         let a = assemble(&t).unwrap();
-        for kind in [
-            Preconditioner::Jacobi,
-            Preconditioner::Ilu0,
-            Preconditioner::Ilut { drop: 0.0, fill: 2 },
-        ] {
+        for kind in [Preconditioner::Jacobi, Preconditioner::Ilu0, Preconditioner::Ilut { drop: 0.0, fill: 2 }] {
             match BuiltPreconditioner::build(&a, kind) {
                 Err(SolveError::Singular { .. }) => {}
                 other => panic!("{kind:?}: expected Singular, got {other:?}"),

@@ -24,11 +24,7 @@ pub fn row_max_abs(a: &SparseMatrix) -> Result<Vec<f64>, SolveError> {
         let mut col_max = 0.0f64;
         for (&i, &v) in rows.iter().zip(a.val_of_col(j)) {
             if !v.is_finite() {
-                return Err(SolveError::NotFinite {
-                    row: i,
-                    col: j,
-                    value: v,
-                });
+                return Err(SolveError::NotFinite { row: i, col: j, value: v });
             }
             row_max[i] = row_max[i].max(v.abs());
             col_max = col_max.max(v.abs());
@@ -99,12 +95,7 @@ mod tests {
         assert!((d[0] - 0.25e-12).abs() < 1e-27);
         let mut row_max = [0.0f64; 3];
         for j in 0..3 {
-            for (&i, &v) in s
-                .symbolic()
-                .row_idx_of_col_raw(j)
-                .iter()
-                .zip(s.val_of_col(j))
-            {
+            for (&i, &v) in s.symbolic().row_idx_of_col_raw(j).iter().zip(s.val_of_col(j)) {
                 row_max[i] = row_max[i].max(v.abs());
             }
         }

@@ -45,10 +45,7 @@ pub(super) fn navier_like(m: usize, convection: f64) -> (Triplets, Vec<f64>, Vec
                 t.push(rv, idx(i, j + 1, 0), mu / hh);
                 t.push(rv, idx(i, j - 1, 0), -mu / hh);
             } else {
-                for (r, c, kx, ky, other) in [
-                    (ru, 0, lam + 2.0 * mu, mu, 1),
-                    (rv, 1, mu, lam + 2.0 * mu, 0),
-                ] {
+                for (r, c, kx, ky, other) in [(ru, 0, lam + 2.0 * mu, mu, 1), (rv, 1, mu, lam + 2.0 * mu, 0)] {
                     t.push(r, idx(i, j, c), -2.0 * (kx + ky) / h2);
                     t.push(r, idx(i - 1, j, c), kx / h2 - cx / hh);
                     t.push(r, idx(i + 1, j, c), kx / h2 + cx / hh);
@@ -93,10 +90,7 @@ pub(super) fn coo_relres(t: &Triplets, x: &[f64], b: &[f64]) -> f64 {
 }
 
 fn max_rel_diff(x: &[f64], y: &[f64]) -> f64 {
-    let d = x
-        .iter()
-        .zip(y)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let d = x.iter().zip(y).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     d / y.iter().fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
@@ -112,14 +106,7 @@ fn residual_floor(t: &Triplets, x: &[f64], b: &[f64]) -> f64 {
 }
 
 fn bicgstab_params(preconditioner: Preconditioner, equilibrate: bool) -> SolverParams {
-    SolverParams {
-        kind: SolverKind::Bicgstab {
-            preconditioner,
-            tolerance: 1e-10,
-            max_iterations: 2000,
-        },
-        equilibrate,
-    }
+    SolverParams { kind: SolverKind::Bicgstab { preconditioner, tolerance: 1e-10, max_iterations: 2000 }, equilibrate }
 }
 
 #[test]
@@ -151,14 +138,7 @@ fn lu_and_bicgstab_agree_on_collocation_like_system() {
     assert!(max_rel_diff(&x_lu, &x_exact) < 1e-9);
 
     let mut iterations = Vec::new();
-    for pc in [
-        Preconditioner::Jacobi,
-        Preconditioner::Ilu0,
-        Preconditioner::Ilut {
-            drop: 1e-5,
-            fill: 20,
-        },
-    ] {
+    for pc in [Preconditioner::Jacobi, Preconditioner::Ilu0, Preconditioner::Ilut { drop: 1e-5, fill: 20 }] {
         let (x, rep) = solve(&a, &b, &bicgstab_params(pc, true)).unwrap();
         let independent = coo_relres(&t, &x, &b);
         let floor = residual_floor(&t, &x, &b);
@@ -185,18 +165,12 @@ fn lu_and_bicgstab_agree_on_collocation_like_system() {
         );
         // Residual 1e-10 with a modest effective amplification gives ~1e-10
         // agreement (measured 2e-11..2e-10); the brief asks for 1e-8.
-        assert!(
-            diff < 1e-8,
-            "{pc:?}: relative max-norm difference to LU {diff:.2e}"
-        );
+        assert!(diff < 1e-8, "{pc:?}: relative max-norm difference to LU {diff:.2e}");
         iterations.push(rep.iterations);
     }
     // Stronger preconditioners must need fewer iterations (measured 844 /
     // 206 / 15); a broken ILU would fail this even if BiCGSTAB still converges.
-    assert!(
-        iterations[2] < iterations[1] && iterations[1] < iterations[0],
-        "{iterations:?}"
-    );
+    assert!(iterations[2] < iterations[1] && iterations[1] < iterations[0], "{iterations:?}");
 }
 
 /// Rows of `navier_like(30, 20)` multiplied by `10^u`, `u` spread
@@ -219,16 +193,9 @@ fn equilibration_handles_rows_scaled_from_1e_minus_12_to_1e12() {
     for kind in [
         SolverKind::Lu,
         SolverKind::default_bicgstab(),
-        SolverKind::Bicgstab {
-            preconditioner: Preconditioner::Ilu0,
-            tolerance: 1e-10,
-            max_iterations: 2000,
-        },
+        SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 2000 },
     ] {
-        let params = SolverParams {
-            kind,
-            equilibrate: true,
-        };
+        let params = SolverParams { kind, equilibrate: true };
         let (x, rep) = solve(&a, &b, &params).unwrap();
         let err = max_rel_diff(&x, &x_exact);
         let independent = coo_relres(&t, &x, &b);
@@ -251,10 +218,7 @@ fn equilibration_handles_rows_scaled_from_1e_minus_12_to_1e12() {
     }
     // Without equilibration LU pivots on the huge rows: faer's "solution" is
     // off by ~7e-4 and κ₁ ≈ 1e29, so it must be refused, not returned.
-    let params = SolverParams {
-        kind: SolverKind::Lu,
-        equilibrate: false,
-    };
+    let params = SolverParams { kind: SolverKind::Lu, equilibrate: false };
     match solve(&a, &b, &params) {
         Err(SolveError::Singular { detail }) => assert!(detail.contains("turn it on"), "{detail}"),
         other => panic!("expected Singular without equilibration, got {other:?}"),
@@ -303,10 +267,7 @@ fn expect_singular(r: Result<(Vec<f64>, SolveReport), SolveError>, what: &str) -
 
 #[test]
 fn singular_systems_are_errors_not_garbage() {
-    let lu = |equilibrate| SolverParams {
-        kind: SolverKind::Lu,
-        equilibrate,
-    };
+    let lu = |equilibrate| SolverParams { kind: SolverKind::Lu, equilibrate };
     for eq in [true, false] {
         // All-zero row 1 (its column still has an entry).
         let mut t = Triplets::new(3);
@@ -316,14 +277,7 @@ fn singular_systems_are_errors_not_garbage() {
         let a = assemble(&t).unwrap();
         let msg = expect_singular(solve(&a, &[1.0, 1.0, 1.0], &lu(eq)), "zero row");
         assert!(msg.contains("row 1"), "{msg}");
-        let msg = expect_singular(
-            solve(
-                &a,
-                &[1.0, 1.0, 1.0],
-                &bicgstab_params(Preconditioner::Ilu0, eq),
-            ),
-            "zero row, bicgstab",
-        );
+        let msg = expect_singular(solve(&a, &[1.0, 1.0, 1.0], &bicgstab_params(Preconditioner::Ilu0, eq)), "zero row, bicgstab");
         assert!(msg.contains("row 1"), "{msg}");
 
         // Two identical rows, consistent and inconsistent right-hand sides.
@@ -361,16 +315,9 @@ fn non_finite_matrix_entry_is_named() {
     // `Triplets::push` debug-asserts finiteness, so build the faer matrix
     // directly, as a caller bypassing `assemble` could.
     use faer::sparse::Triplet;
-    let entries = [
-        Triplet::new(0, 0, 1.0),
-        Triplet::new(1, 1, 1.0),
-        Triplet::new(1, 0, f64::INFINITY),
-    ];
+    let entries = [Triplet::new(0, 0, 1.0), Triplet::new(1, 1, 1.0), Triplet::new(1, 0, f64::INFINITY)];
     let a = SparseMatrix::try_new_from_triplets(2, 2, &entries).unwrap();
-    for params in [
-        SolverParams::default(),
-        bicgstab_params(Preconditioner::Jacobi, false),
-    ] {
+    for params in [SolverParams::default(), bicgstab_params(Preconditioner::Jacobi, false)] {
         match solve(&a, &[1.0, 1.0], &params) {
             Err(e @ SolveError::NotFinite { row: 1, col: 0, .. }) => {
                 assert!(e.to_string().contains("(1, 0)"))
@@ -385,23 +332,11 @@ fn no_convergence_reports_the_true_residual() {
     let (t, _, b) = navier_like(40, 20.0);
     let a = assemble(&t).unwrap();
     let (pc, tol, max_it) = (Preconditioner::Jacobi, 1e-10, 2);
-    let params = SolverParams {
-        kind: SolverKind::Bicgstab {
-            preconditioner: pc,
-            tolerance: tol,
-            max_iterations: max_it,
-        },
-        equilibrate: true,
-    };
+    let params =
+        SolverParams { kind: SolverKind::Bicgstab { preconditioner: pc, tolerance: tol, max_iterations: max_it }, equilibrate: true };
     let err = solve(&a, &b, &params).unwrap_err();
     let msg = err.to_string();
-    let SolveError::NoConvergence {
-        iterations,
-        relative_residual,
-        ref method,
-        ..
-    } = err
-    else {
+    let SolveError::NoConvergence { iterations, relative_residual, ref method, .. } = err else {
         panic!("expected NoConvergence, got {err}");
     };
     println!("{msg}");
@@ -415,13 +350,8 @@ fn no_convergence_reports_the_true_residual() {
     let (s, d) = scaling::equilibrate_rows(&a).unwrap();
     let bs = scaling::scale_rhs(&b, &d);
     let p = precond::BuiltPreconditioner::build(&s, pc).unwrap();
-    let out = bicgstab::solve_bicgstab(&s, &bs, &p, tol, max_it, |x| {
-        super::relative_residual(&a, x, &b)
-    });
+    let out = bicgstab::solve_bicgstab(&s, &bs, &p, tol, max_it, |x| super::relative_residual(&a, x, &b));
     let independent = coo_relres(&t, &out.x, &b);
     assert!((relative_residual - independent).abs() <= 10.0 * residual_floor(&t, &out.x, &b));
-    assert!(
-        (relative_residual - 1.0).abs() > 1e-3,
-        "looks like the initial residual"
-    );
+    assert!((relative_residual - 1.0).abs() > 1e-3, "looks like the initial residual");
 }

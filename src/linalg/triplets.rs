@@ -22,25 +22,15 @@ impl Triplets {
 
     /// Empty triplet list for an `n × n` matrix with room for `cap` entries.
     pub fn with_capacity(n: usize, cap: usize) -> Self {
-        Triplets {
-            n,
-            entries: Vec::with_capacity(cap),
-        }
+        Triplets { n, entries: Vec::with_capacity(cap) }
     }
 
     /// Add `value` at `(row, col)`. Debug builds assert that the indices are
     /// in range and the value is finite; release builds defer both checks to
     /// [`assemble`], which returns an error instead of panicking.
     pub fn push(&mut self, row: usize, col: usize, value: f64) {
-        debug_assert!(
-            row < self.n && col < self.n,
-            "triplet ({row}, {col}) out of range for a {0}x{0} matrix",
-            self.n
-        );
-        debug_assert!(
-            value.is_finite(),
-            "triplet ({row}, {col}) has non-finite value {value}"
-        );
+        debug_assert!(row < self.n && col < self.n, "triplet ({row}, {col}) out of range for a {0}x{0} matrix", self.n);
+        debug_assert!(value.is_finite(), "triplet ({row}, {col}) has non-finite value {value}");
         self.entries.push(Triplet::new(row, col, value));
     }
 
@@ -48,10 +38,7 @@ impl Triplets {
     /// merging per-thread accumulators). Dimensions must agree
     /// (debug-asserted; [`assemble`] re-checks the indices).
     pub fn append(&mut self, other: &mut Triplets) {
-        debug_assert_eq!(
-            self.n, other.n,
-            "appending triplets of a different dimension"
-        );
+        debug_assert_eq!(self.n, other.n, "appending triplets of a different dimension");
         self.entries.append(&mut other.entries);
     }
 
@@ -86,36 +73,20 @@ pub fn assemble(t: &Triplets) -> Result<SparseMatrix, SolveError> {
     let n = t.n;
     for e in &t.entries {
         if e.row >= n || e.col >= n {
-            return Err(SolveError::Dimension {
-                detail: format!(
-                    "triplet ({}, {}) is out of range for a {n}x{n} matrix",
-                    e.row, e.col
-                ),
-            });
+            return Err(SolveError::Dimension { detail: format!("triplet ({}, {}) is out of range for a {n}x{n} matrix", e.row, e.col) });
         }
         if !e.val.is_finite() {
-            return Err(SolveError::NotFinite {
-                row: e.row,
-                col: e.col,
-                value: e.val,
-            });
+            return Err(SolveError::NotFinite { row: e.row, col: e.col, value: e.val });
         }
     }
-    let m = SparseMatrix::try_new_from_triplets(n, n, &t.entries).map_err(|e| {
-        SolveError::Dimension {
-            detail: format!("could not build the sparse matrix: {e:?}"),
-        }
-    })?;
+    let m = SparseMatrix::try_new_from_triplets(n, n, &t.entries)
+        .map_err(|e| SolveError::Dimension { detail: format!("could not build the sparse matrix: {e:?}") })?;
     // Two finite values can still overflow to ±inf when summed.
     for j in 0..n {
         let rows = m.symbolic().row_idx_of_col_raw(j);
         for (&i, &v) in rows.iter().zip(m.val_of_col(j)) {
             if !v.is_finite() {
-                return Err(SolveError::NotFinite {
-                    row: i,
-                    col: j,
-                    value: v,
-                });
+                return Err(SolveError::NotFinite { row: i, col: j, value: v });
             }
         }
     }
@@ -152,11 +123,7 @@ mod tests {
         t.push(0, 0, 1.0);
         t.entries.push(Triplet::new(2, 1, f64::NAN));
         match assemble(&t) {
-            Err(SolveError::NotFinite {
-                row: 2,
-                col: 1,
-                value,
-            }) => assert!(value.is_nan()),
+            Err(SolveError::NotFinite { row: 2, col: 1, value }) => assert!(value.is_nan()),
             other => panic!("expected NotFinite at (2, 1), got {other:?}"),
         }
         let msg = assemble(&t).unwrap_err().to_string();
@@ -168,10 +135,7 @@ mod tests {
         let mut t = Triplets::new(2);
         t.push(1, 1, f64::MAX);
         t.push(1, 1, f64::MAX);
-        assert!(matches!(
-            assemble(&t),
-            Err(SolveError::NotFinite { row: 1, col: 1, .. })
-        ));
+        assert!(matches!(assemble(&t), Err(SolveError::NotFinite { row: 1, col: 1, .. })));
         let mut t = Triplets::new(2);
         t.entries.push(Triplet::new(0, 2, 1.0));
         assert!(matches!(assemble(&t), Err(SolveError::Dimension { .. })));

@@ -67,12 +67,7 @@ impl Shapes {
 }
 
 /// Compute, for every node `i`, the shapes of the operators `needs[i]`.
-pub fn compute_shapes(
-    positions: &[Point],
-    supports: &Supports,
-    approx: &Approximation,
-    needs: &[OpSet],
-) -> Result<Shapes, ShapeError> {
+pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approximation, needs: &[OpSet]) -> Result<Shapes, ShapeError> {
     let n = supports.size();
     let stored = needs.iter().fold(OpSet::EMPTY, |a, &b| a | b);
     let mut slot = [usize::MAX; 6];

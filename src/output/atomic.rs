@@ -26,9 +26,7 @@ impl Drop for TempGuard {
 
 /// Creates a fresh hidden temp file next to `path`, returning its name and handle.
 fn create_temp(path: &Path) -> Result<(TempGuard, File), OutputError> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| OutputError::invalid(path, "path has no file name"))?;
+    let name = path.file_name().ok_or_else(|| OutputError::invalid(path, "path has no file name"))?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -42,24 +40,13 @@ fn create_temp(path: &Path) -> Result<(TempGuard, File), OutputError> {
         tmp_name.push(format!(".{pid}.{n}.tmp"));
         let tmp = dir.join(tmp_name);
         match OpenOptions::new().write(true).create_new(true).open(&tmp) {
-            Ok(f) => {
-                return Ok((
-                    TempGuard {
-                        path: tmp,
-                        armed: true,
-                    },
-                    f,
-                ))
-            }
+            Ok(f) => return Ok((TempGuard { path: tmp, armed: true }, f)),
             // A stale temp file of a crashed process with the same pid: try the next name.
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => last_err = Some(e),
             Err(e) => return Err(OutputError::io(path, e)),
         }
     }
-    Err(OutputError::io(
-        path,
-        last_err.unwrap_or_else(|| io::Error::other("could not create a temp file")),
-    ))
+    Err(OutputError::io(path, last_err.unwrap_or_else(|| io::Error::other("could not create a temp file"))))
 }
 
 /// Core of all atomic writers: `fill` streams the content into a buffered temp file which is
@@ -72,9 +59,7 @@ where
     let (mut guard, file) = create_temp(path)?;
     let mut w = BufWriter::with_capacity(1 << 16, file);
     fill(&mut w)?;
-    let file = w
-        .into_inner()
-        .map_err(|e| OutputError::io(path, e.into_error()))?;
+    let file = w.into_inner().map_err(|e| OutputError::io(path, e.into_error()))?;
     file.sync_all().map_err(|e| OutputError::io(path, e))?;
     drop(file);
     fs::rename(&guard.path, path).map_err(|e| OutputError::io(path, e))?;
@@ -83,11 +68,7 @@ where
     // directory, and the data itself is already safe at this point.
     #[cfg(unix)]
     if let Some(dir) = guard.path.parent() {
-        let dir = if dir.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            dir
-        };
+        let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
         if let Ok(d) = File::open(dir) {
             let _ = d.sync_all();
         }
@@ -102,9 +83,7 @@ where
 /// permissions (those of the previous file are not copied), and if `path` is a symbolic link
 /// the link itself is replaced. The parent directory must exist; it is not created.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    write_atomic_with(path, |w| {
-        w.write_all(bytes).map_err(|e| OutputError::io(path, e))
-    })
+    write_atomic_with(path, |w| w.write_all(bytes).map_err(|e| OutputError::io(path, e)))
 }
 
 /// Serialises `value` as pretty-printed JSON (with a trailing newline) and writes it
@@ -115,10 +94,7 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), Out
             if e.is_io() {
                 OutputError::io(path, e.into())
             } else {
-                OutputError::Json {
-                    path: path.to_path_buf(),
-                    source: e,
-                }
+                OutputError::Json { path: path.to_path_buf(), source: e }
             }
         })?;
         w.write_all(b"\n").map_err(|e| OutputError::io(path, e))
@@ -142,19 +118,8 @@ fn csv_cell(s: &str) -> String {
 /// values, otherwise [`OutputError::InvalidInput`] names the first bad row (0-based, not
 /// counting the header) and nothing is written.
 pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<(), OutputError> {
-    if let Some((i, r)) = rows
-        .iter()
-        .enumerate()
-        .find(|(_, r)| r.len() != header.len())
-    {
-        return Err(OutputError::invalid(
-            path,
-            format!(
-                "CSV row {i} has {} values but the header has {} columns",
-                r.len(),
-                header.len()
-            ),
-        ));
+    if let Some((i, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != header.len()) {
+        return Err(OutputError::invalid(path, format!("CSV row {i} has {} values but the header has {} columns", r.len(), header.len())));
     }
     write_atomic_with(path, |w| {
         let io = |e| OutputError::io(path, e);
@@ -182,10 +147,7 @@ mod tests {
 
     /// Names of all entries of `dir` (to detect leftover temp files).
     fn entries(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> = fs::read_dir(dir)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
+        let mut v: Vec<String> = fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         v.sort();
         v
     }
@@ -257,11 +219,7 @@ mod tests {
         }
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("s.json");
-        let s = S {
-            a: 0.1 + 0.2,
-            b: vec![1, 2, 3],
-            name: "x\"y".into(),
-        };
+        let s = S { a: 0.1 + 0.2, b: vec![1, 2, 3], name: "x\"y".into() };
         write_json(&p, &s).unwrap();
         let text = fs::read_to_string(&p).unwrap();
         assert!(text.contains("\n  \"a\""), "not pretty: {text}");
@@ -288,21 +246,13 @@ mod tests {
     fn csv_full_precision_and_header() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("t.csv");
-        let rows = vec![
-            vec![1.0 / 3.0, -2.5e-300, 0.0],
-            vec![1e20, f64::NAN, 123.456],
-        ];
+        let rows = vec![vec![1.0 / 3.0, -2.5e-300, 0.0], vec![1e20, f64::NAN, 123.456]];
         write_csv(&p, &["x", "err, rel", "h"], &rows).unwrap();
         let text = fs::read_to_string(&p).unwrap();
         let mut lines = text.lines();
         assert_eq!(lines.next().unwrap(), "x,\"err, rel\",h");
         for row in &rows {
-            let parsed: Vec<f64> = lines
-                .next()
-                .unwrap()
-                .split(',')
-                .map(|s| s.parse().unwrap())
-                .collect();
+            let parsed: Vec<f64> = lines.next().unwrap().split(',').map(|s| s.parse().unwrap()).collect();
             assert_eq!(parsed.len(), row.len());
             for (a, b) in parsed.iter().zip(row) {
                 assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()));

@@ -82,18 +82,12 @@ pub enum OutputError {
 impl OutputError {
     /// Shorthand for [`OutputError::Io`].
     pub(crate) fn io(path: &std::path::Path, source: std::io::Error) -> Self {
-        OutputError::Io {
-            path: path.to_path_buf(),
-            source,
-        }
+        OutputError::Io { path: path.to_path_buf(), source }
     }
 
     /// Shorthand for [`OutputError::InvalidInput`].
     pub(crate) fn invalid(path: &std::path::Path, detail: impl Into<String>) -> Self {
-        OutputError::InvalidInput {
-            path: path.to_path_buf(),
-            detail: detail.into(),
-        }
+        OutputError::InvalidInput { path: path.to_path_buf(), detail: detail.into() }
     }
 }
 
@@ -145,16 +139,10 @@ mod tests {
 
     #[test]
     fn error_messages_name_the_path_and_field() {
-        let e = OutputError::io(
-            std::path::Path::new("/x/y.vtu"),
-            std::io::Error::other("boom"),
-        );
+        let e = OutputError::io(std::path::Path::new("/x/y.vtu"), std::io::Error::other("boom"));
         assert!(e.to_string().contains("/x/y.vtu"));
         assert!(std::error::Error::source(&e).is_some());
-        let e = OutputError::InvalidField {
-            name: "u".into(),
-            detail: "bad".into(),
-        };
+        let e = OutputError::InvalidField { name: "u".into(), detail: "bad".into() };
         assert!(e.to_string().contains("`u`"));
     }
 }

@@ -17,19 +17,11 @@ use delaunator::Point;
 ///   centroid. This is a picture for ParaView, not a mesh the solver depends on.
 pub fn triangulate(points: &[[f64; 2]], keep: impl Fn([f64; 2]) -> bool) -> Vec<[usize; 3]> {
     // Map from delaunator's (finite-only) numbering back to the caller's.
-    let index: Vec<usize> = (0..points.len())
-        .filter(|&i| points[i][0].is_finite() && points[i][1].is_finite())
-        .collect();
+    let index: Vec<usize> = (0..points.len()).filter(|&i| points[i][0].is_finite() && points[i][1].is_finite()).collect();
     if index.len() < 3 {
         return Vec::new();
     }
-    let pts: Vec<Point> = index
-        .iter()
-        .map(|&i| Point {
-            x: points[i][0],
-            y: points[i][1],
-        })
-        .collect();
+    let pts: Vec<Point> = index.iter().map(|&i| Point { x: points[i][0], y: points[i][1] }).collect();
 
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for p in &pts {
@@ -53,11 +45,7 @@ pub fn triangulate(points: &[[f64; 2]], keep: impl Fn([f64; 2]) -> bool) -> Vec<
             continue;
         }
         let (i, j, k) = (index[t[0]], index[t[1]], index[t[2]]);
-        out.push(if twice_area > 0.0 {
-            [i, j, k]
-        } else {
-            [i, k, j]
-        });
+        out.push(if twice_area > 0.0 { [i, j, k] } else { [i, k, j] });
     }
     out
 }
@@ -83,16 +71,8 @@ mod tests {
         for ax in axes {
             let n = (ax[0] * ax[0] + ax[1] * ax[1]).sqrt();
             let proj = |v: [f64; 2]| (v[0] * ax[0] + v[1] * ax[1]) / n;
-            let (t0, t1) = tri
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(proj(v)), b.max(proj(v)))
-                });
-            let (b0, b1) = boxc
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(proj(v)), b.max(proj(v)))
-                });
+            let (t0, t1) = tri.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(proj(v)), b.max(proj(v))));
+            let (b0, b1) = boxc.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(proj(v)), b.max(proj(v))));
             if t1.min(b1) - t0.max(b0) <= eps {
                 return false; // separated (or only touching) along this axis
             }
@@ -107,9 +87,7 @@ mod tests {
         let n = 20;
         let (lo, hi) = ([0.3, 0.3], [0.7, 0.7]);
         let in_hole = |p: [f64; 2]| p[0] > lo[0] && p[0] < hi[0] && p[1] > lo[1] && p[1] < hi[1];
-        let in_hole_strict = |p: [f64; 2]| {
-            p[0] > 0.3 + 1e-9 && p[0] < 0.7 - 1e-9 && p[1] > 0.3 + 1e-9 && p[1] < 0.7 - 1e-9
-        };
+        let in_hole_strict = |p: [f64; 2]| p[0] > 0.3 + 1e-9 && p[0] < 0.7 - 1e-9 && p[1] > 0.3 + 1e-9 && p[1] < 0.7 - 1e-9;
         let mut pts = Vec::new();
         for j in 0..=n {
             for i in 0..=n {
@@ -126,17 +104,11 @@ mod tests {
             let a = area(&pts, t);
             assert!(a > 0.0, "triangle {t:?} is not counter-clockwise");
             total += a;
-            let c = [
-                (pts[t[0]][0] + pts[t[1]][0] + pts[t[2]][0]) / 3.0,
-                (pts[t[0]][1] + pts[t[1]][1] + pts[t[2]][1]) / 3.0,
-            ];
+            let c = [(pts[t[0]][0] + pts[t[1]][0] + pts[t[2]][0]) / 3.0, (pts[t[0]][1] + pts[t[1]][1] + pts[t[2]][1]) / 3.0];
             assert!((0.0..=1.0).contains(&c[0]) && (0.0..=1.0).contains(&c[1]));
             assert!(!in_hole(c), "centroid {c:?} inside the hole");
             let tri = [pts[t[0]], pts[t[1]], pts[t[2]]];
-            assert!(
-                !overlaps_open_box(tri, lo, hi, 1e-12),
-                "triangle {tri:?} crosses the hole"
-            );
+            assert!(!overlaps_open_box(tri, lo, hi, 1e-12), "triangle {tri:?} crosses the hole");
         }
         // On a square lattice every Delaunay triangle is half a lattice cell (only the cell's
         // own 4 corners lie on its circumcircle), and every cell is entirely inside or outside
@@ -156,21 +128,14 @@ mod tests {
         let in_notch = |p: [f64; 2]| p[0] > 0.5 && p[1] > 0.5;
         let mut seed: u64 = 12345;
         let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         let mut pts = Vec::new();
         for j in 0..=n {
             for i in 0..=n {
                 let p = [i as f64 * h, j as f64 * h];
-                let on_boundary = i == 0
-                    || j == 0
-                    || i == n
-                    || j == n
-                    || (i == n / 2 && j >= n / 2)
-                    || (j == n / 2 && i >= n / 2);
+                let on_boundary = i == 0 || j == 0 || i == n || j == n || (i == n / 2 && j >= n / 2) || (j == n / 2 && i >= n / 2);
                 if in_notch(p) && !on_boundary {
                     continue;
                 }
@@ -190,16 +155,10 @@ mod tests {
             let a = area(&pts, t);
             assert!(a > 0.0);
             total += a;
-            let c = [
-                (pts[t[0]][0] + pts[t[1]][0] + pts[t[2]][0]) / 3.0,
-                (pts[t[0]][1] + pts[t[1]][1] + pts[t[2]][1]) / 3.0,
-            ];
+            let c = [(pts[t[0]][0] + pts[t[1]][0] + pts[t[2]][0]) / 3.0, (pts[t[0]][1] + pts[t[1]][1] + pts[t[2]][1]) / 3.0];
             assert!(!in_notch(c) && c[0] >= 0.0 && c[1] >= 0.0 && c[0] <= 1.0 && c[1] <= 1.0);
             let tri = [pts[t[0]], pts[t[1]], pts[t[2]]];
-            assert!(
-                !overlaps_open_box(tri, [0.5, 0.5], [1.5, 1.5], 1e-12),
-                "triangle {tri:?} crosses into the notch"
-            );
+            assert!(!overlaps_open_box(tri, [0.5, 0.5], [1.5, 1.5], 1e-12), "triangle {tri:?} crosses into the notch");
         }
         // Why the tolerance is rounding-level rather than O(h): every pair of consecutive
         // boundary nodes on the notch edges (distance h) is a Gabriel edge, since all other

@@ -29,8 +29,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer,
-    UnstructuredGridPiece, Version, VertexNumbers, Vtk,
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer, UnstructuredGridPiece, Version,
+    VertexNumbers, Vtk,
 };
 
 use super::{format_f64, write_atomic, OutputError};
@@ -79,29 +79,17 @@ pub struct PointField {
 impl PointField {
     /// A one-component `f64` field.
     pub fn scalar(name: impl Into<String>, values: Vec<f64>) -> Self {
-        PointField {
-            name: name.into(),
-            components: 1,
-            values: FieldValues::F64(values),
-        }
+        PointField { name: name.into(), components: 1, values: FieldValues::F64(values) }
     }
 
     /// A 2D vector field, stored with 2 components (padded to 3 on writing).
     pub fn vector2(name: impl Into<String>, values: &[[f64; 2]]) -> Self {
-        PointField {
-            name: name.into(),
-            components: 2,
-            values: FieldValues::F64(values.iter().flatten().copied().collect()),
-        }
+        PointField { name: name.into(), components: 2, values: FieldValues::F64(values.iter().flatten().copied().collect()) }
     }
 
     /// A one-component `i32` field.
     pub fn integer(name: impl Into<String>, values: Vec<i32>) -> Self {
-        PointField {
-            name: name.into(),
-            components: 1,
-            values: FieldValues::I32(values),
-        }
+        PointField { name: name.into(), components: 1, values: FieldValues::I32(values) }
     }
 }
 
@@ -119,9 +107,7 @@ pub struct VtuContents {
 
 /// Pads each group of two values with a zero third component.
 fn pad_to_3<T: Copy + Default>(v: &[T]) -> Vec<T> {
-    v.chunks_exact(2)
-        .flat_map(|c| [c[0], c[1], T::default()])
-        .collect()
+    v.chunks_exact(2).flat_map(|c| [c[0], c[1], T::default()]).collect()
 }
 
 /// Validates `fields` against `n` points and converts them to `vtkio` attributes.
@@ -129,10 +115,7 @@ fn point_attributes(fields: &[PointField], n: usize) -> Result<Vec<Attribute>, O
     let mut seen = HashSet::new();
     let mut out = Vec::with_capacity(fields.len());
     for f in fields {
-        let bad = |detail: String| OutputError::InvalidField {
-            name: f.name.clone(),
-            detail,
-        };
+        let bad = |detail: String| OutputError::InvalidField { name: f.name.clone(), detail };
         if f.name.is_empty() {
             return Err(bad("field name is empty".into()));
         }
@@ -161,18 +144,11 @@ fn point_attributes(fields: &[PointField], n: usize) -> Result<Vec<Attribute>, O
             (FieldValues::I32(v), _) => v.clone().into(),
         };
         let elem = match comps {
-            1 => ElementType::Scalars {
-                num_comp: 1,
-                lookup_table: None,
-            },
+            1 => ElementType::Scalars { num_comp: 1, lookup_table: None },
             3 => ElementType::Vectors,
             _ => ElementType::Generic(comps_u32),
         };
-        out.push(Attribute::DataArray(DataArray {
-            name: f.name.clone(),
-            elem,
-            data,
-        }));
+        out.push(Attribute::DataArray(DataArray { name: f.name.clone(), elem, data }));
     }
     Ok(out)
 }
@@ -185,45 +161,21 @@ fn point_attributes(fields: &[PointField], n: usize) -> Result<Vec<Attribute>, O
 /// `values.len() == components * points.len()` ([`OutputError::InvalidField`] naming the
 /// field). Non-finite field values are allowed and written as they are. The file is
 /// written with [`write_atomic`].
-pub fn write_vtu(
-    path: &Path,
-    points: &[[f64; 2]],
-    triangles: &[[usize; 3]],
-    fields: &[PointField],
-) -> Result<(), OutputError> {
+pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fields: &[PointField]) -> Result<(), OutputError> {
     let n = points.len();
     if u32::try_from(n).is_err() || u32::try_from(triangles.len()).is_err() {
-        return Err(OutputError::invalid(
-            path,
-            "vtkio supports at most u32::MAX points and cells per file",
-        ));
+        return Err(OutputError::invalid(path, "vtkio supports at most u32::MAX points and cells per file"));
     }
-    if let Some(i) = points
-        .iter()
-        .position(|p| !(p[0].is_finite() && p[1].is_finite()))
-    {
-        return Err(OutputError::invalid(
-            path,
-            format!("point {i} has a non-finite coordinate {:?}", points[i]),
-        ));
+    if let Some(i) = points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
+        return Err(OutputError::invalid(path, format!("point {i} has a non-finite coordinate {:?}", points[i])));
     }
     if let Some(k) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
-        return Err(OutputError::invalid(
-            path,
-            format!(
-                "triangle {k} {:?} refers to a point >= {n} (number of points)",
-                triangles[k]
-            ),
-        ));
+        return Err(OutputError::invalid(path, format!("triangle {k} {:?} refers to a point >= {n} (number of points)", triangles[k])));
     }
     let point_data = point_attributes(fields, n)?;
 
     let piece = UnstructuredGridPiece {
-        points: points
-            .iter()
-            .flat_map(|p| [p[0], p[1], 0.0])
-            .collect::<Vec<f64>>()
-            .into(),
+        points: points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect::<Vec<f64>>().into(),
         cells: Cells {
             cell_verts: VertexNumbers::XML {
                 connectivity: triangles.iter().flatten().map(|&i| i as u64).collect(),
@@ -231,10 +183,7 @@ pub fn write_vtu(
             },
             types: vec![CellType::Triangle; triangles.len()],
         },
-        data: Attributes {
-            point: point_data,
-            cell: Vec::new(),
-        },
+        data: Attributes { point: point_data, cell: Vec::new() },
     };
     let vtk = Vtk {
         version: Version::new_xml(1, 0),
@@ -245,10 +194,7 @@ pub fn write_vtu(
     };
     // In memory first: see the module documentation for why not straight to the file.
     let mut bytes = Vec::new();
-    vtk.write_xml(&mut bytes).map_err(|e| OutputError::Vtk {
-        path: path.to_path_buf(),
-        detail: e.to_string(),
-    })?;
+    vtk.write_xml(&mut bytes).map_err(|e| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() })?;
     bytes.push(b'\n');
     write_atomic(path, &strip_nonfinite_ranges(&bytes))
 }
@@ -273,9 +219,7 @@ fn strip_nonfinite_ranges(xml: &[u8]) -> Vec<u8> {
             let v0 = p + key.len();
             if let Some(v1) = find(xml, b"\"", v0) {
                 let value = std::str::from_utf8(&xml[v0..v1]).ok();
-                let finite = value
-                    .and_then(|v| v.parse::<f64>().ok())
-                    .is_some_and(f64::is_finite);
+                let finite = value.and_then(|v| v.parse::<f64>().ok()).is_some_and(f64::is_finite);
                 if !finite {
                     at = v1 + 1; // skip the whole attribute
                 }
@@ -292,10 +236,7 @@ fn strip_nonfinite_ranges(xml: &[u8]) -> Vec<u8> {
 
 /// Position of `needle` in `hay` at or after `from`.
 fn find(hay: &[u8], needle: &[u8], from: usize) -> Option<usize> {
-    hay.get(from..)?
-        .windows(needle.len())
-        .position(|w| w == needle)
-        .map(|p| p + from)
+    hay.get(from..)?.windows(needle.len()).position(|w| w == needle).map(|p| p + from)
 }
 
 /// Number of `<DataArray` elements inside the first `<PointData>` element of the raw XML.
@@ -331,10 +272,7 @@ fn count_point_arrays(xml: &[u8]) -> usize {
 /// A panic inside vtkio is caught and reported as [`OutputError::Vtk`] (the default panic
 /// hook still prints its message to stderr).
 pub fn read_vtu(path: &Path) -> Result<VtuContents, OutputError> {
-    let vtk_err = |detail: String| OutputError::Vtk {
-        path: path.to_path_buf(),
-        detail,
-    };
+    let vtk_err = |detail: String| OutputError::Vtk { path: path.to_path_buf(), detail };
     let bytes = std::fs::read(path).map_err(|e| OutputError::io(path, e))?;
     let expected_arrays = count_point_arrays(&bytes);
     // vtkio panics on some malformed files; report those as errors instead.
@@ -347,17 +285,9 @@ pub fn read_vtu(path: &Path) -> Result<VtuContents, OutputError> {
     if pieces.len() != 1 {
         return Err(vtk_err(format!("expected 1 piece, found {}", pieces.len())));
     }
-    let piece = pieces
-        .into_iter()
-        .next()
-        .expect("one piece")
-        .into_loaded_piece_data(None)
-        .map_err(|e| vtk_err(e.to_string()))?;
+    let piece = pieces.into_iter().next().expect("one piece").into_loaded_piece_data(None).map_err(|e| vtk_err(e.to_string()))?;
 
-    let coords = piece
-        .points
-        .cast_into::<f64>()
-        .ok_or_else(|| vtk_err("points are not numeric".into()))?;
+    let coords = piece.points.cast_into::<f64>().ok_or_else(|| vtk_err("points are not numeric".into()))?;
     if coords.len() % 3 != 0 {
         return Err(vtk_err(format!("{} point coordinates", coords.len())));
     }
@@ -372,26 +302,16 @@ pub fn read_vtu(path: &Path) -> Result<VtuContents, OutputError> {
         let Attribute::DataArray(a) = attr else {
             continue; // field data: legacy format only, never in .vtu
         };
-        let values = a
-            .data
-            .cast_into::<f64>()
-            .ok_or_else(|| vtk_err(format!("array `{}` is not numeric", a.name)))?;
+        let values = a.data.cast_into::<f64>().ok_or_else(|| vtk_err(format!("array `{}` is not numeric", a.name)))?;
         let comps = a.elem.num_comp() as usize;
         if fields.insert(a.name.clone(), (comps, values)).is_some() {
             return Err(vtk_err(format!("duplicate point-data array `{}`", a.name)));
         }
     }
     if fields.len() != expected_arrays {
-        return Err(vtk_err(format!(
-            "file has {expected_arrays} point-data arrays but only {} could be decoded",
-            fields.len()
-        )));
+        return Err(vtk_err(format!("file has {expected_arrays} point-data arrays but only {} could be decoded", fields.len())));
     }
-    Ok(VtuContents {
-        points,
-        cells,
-        fields,
-    })
+    Ok(VtuContents { points, cells, fields })
 }
 
 /// Escapes the five XML special characters for use in an attribute value.
@@ -423,21 +343,13 @@ pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> Result<(), OutputErr
     );
     for (i, (t, file)) in entries.iter().enumerate() {
         if !t.is_finite() {
-            return Err(OutputError::invalid(
-                path,
-                format!("entry {i} has non-finite time {t}"),
-            ));
+            return Err(OutputError::invalid(path, format!("entry {i} has non-finite time {t}")));
         }
         if file.is_empty() {
             return Err(OutputError::invalid(path, format!("entry {i} has no file")));
         }
         // Writing to a String cannot fail.
-        let _ = writeln!(
-            xml,
-            "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>",
-            format_f64(*t),
-            xml_escape(file)
-        );
+        let _ = writeln!(xml, "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>", format_f64(*t), xml_escape(file));
     }
     xml.push_str("  </Collection>\n</VTKFile>\n");
     write_atomic(path, xml.as_bytes())

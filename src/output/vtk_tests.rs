@@ -16,10 +16,7 @@ fn grid() -> (Vec<[f64; 2]>, Vec<[usize; 3]>) {
     let mut pts = Vec::new();
     for j in 0..5 {
         for i in 0..7 {
-            pts.push([
-                1e-3 + i as f64 / 3.0,
-                -7.0 + j as f64 * std::f64::consts::PI,
-            ]);
+            pts.push([1e-3 + i as f64 / 3.0, -7.0 + j as f64 * std::f64::consts::PI]);
         }
     }
     let tris = triangulate(&pts, |_| true);
@@ -34,9 +31,7 @@ fn vtu_round_trip_is_bit_exact() {
     let n = pts.len();
     assert_eq!(tris.len(), 2 * 6 * 4);
 
-    let s: Vec<f64> = (0..n)
-        .map(|i| (i as f64 + 0.1).sin() * 10f64.powi(i as i32 % 40 - 20))
-        .collect();
+    let s: Vec<f64> = (0..n).map(|i| (i as f64 + 0.1).sin() * 10f64.powi(i as i32 % 40 - 20)).collect();
     let u: Vec<[f64; 2]> = (0..n).map(|i| [1.0 / (i as f64 + 3.0), -1e-310]).collect();
     let v3: Vec<f64> = (0..3 * n).map(|k| (k as f64).sqrt() - 2.5).collect();
     let g4: Vec<f64> = (0..4 * n).map(|k| k as f64 * 0.1).collect();
@@ -52,16 +47,8 @@ fn vtu_round_trip_is_bit_exact() {
     let fields = vec![
         PointField::scalar("s", s.clone()),
         PointField::vector2("displacement", &u),
-        PointField {
-            name: "v3".into(),
-            components: 3,
-            values: FieldValues::F64(v3.clone()),
-        },
-        PointField {
-            name: "g4".into(),
-            components: 4,
-            values: FieldValues::F64(g4.clone()),
-        },
+        PointField { name: "v3".into(), components: 3, values: FieldValues::F64(v3.clone()) },
+        PointField { name: "g4".into(), components: 4, values: FieldValues::F64(g4.clone()) },
         PointField::integer("kind", kind.clone()),
         PointField::scalar("special", special.clone()),
         PointField::scalar("a<b & \"c\"", s.clone()),
@@ -82,9 +69,7 @@ fn vtu_round_trip_is_bit_exact() {
     }
     // Non-finite ranges (from the "special" array) are removed, finite ones kept.
     assert!(!raw.contains("\"NaN\"") && !raw.contains("\"inf\"") && !raw.contains("\"-inf\""));
-    assert!(raw.contains(
-        "Name=\"kind\" format=\"binary\" RangeMin=\"-2147483648\" RangeMax=\"2147483647\""
-    ));
+    assert!(raw.contains("Name=\"kind\" format=\"binary\" RangeMin=\"-2147483648\" RangeMax=\"2147483647\""));
 
     let back = read_vtu(&path).unwrap();
     assert_eq!(back.points.len(), n);
@@ -116,10 +101,7 @@ fn vtu_round_trip_is_bit_exact() {
 fn strip_nonfinite_ranges_only_touches_nonfinite_values() {
     let x = br#"<A Name="n" RangeMin="NaN" RangeMax="1.5"><B RangeMin="-inf" RangeMax="inf" Rangefoo="x">AB+/=</B></A>"#;
     let y = super::strip_nonfinite_ranges(x);
-    assert_eq!(
-        std::str::from_utf8(&y).unwrap(),
-        r#"<A Name="n" RangeMax="1.5"><B Rangefoo="x">AB+/=</B></A>"#
-    );
+    assert_eq!(std::str::from_utf8(&y).unwrap(), r#"<A Name="n" RangeMax="1.5"><B Rangefoo="x">AB+/=</B></A>"#);
     let z = br#"<A RangeMin="0" RangeMax="1e300"> Range</A>"#;
     assert_eq!(super::strip_nonfinite_ranges(z), z.to_vec());
 }
@@ -142,10 +124,7 @@ fn invalid_field_length_names_the_field() {
     let path = dir.path().join("bad.vtu");
     let (pts, tris) = grid();
     let n = pts.len();
-    let fields = vec![
-        PointField::scalar("ok", vec![0.0; n]),
-        PointField::vector2("sigma_bad", &vec![[0.0; 2]; n - 1]),
-    ];
+    let fields = vec![PointField::scalar("ok", vec![0.0; n]), PointField::vector2("sigma_bad", &vec![[0.0; 2]; n - 1])];
     let err = write_vtu(&path, &pts, &tris, &fields).unwrap_err();
     match &err {
         OutputError::InvalidField { name, detail } => {
@@ -157,18 +136,11 @@ fn invalid_field_length_names_the_field() {
     assert!(err.to_string().contains("sigma_bad"));
     assert!(!path.exists(), "nothing may be written on error");
 
-    let zero = PointField {
-        name: "z".into(),
-        components: 0,
-        values: FieldValues::F64(vec![]),
-    };
+    let zero = PointField { name: "z".into(), components: 0, values: FieldValues::F64(vec![]) };
     let err = write_vtu(&path, &pts, &tris, &[zero]).unwrap_err();
     assert!(matches!(err, OutputError::InvalidField { ref name, .. } if name == "z"));
 
-    let dup = vec![
-        PointField::integer("k", vec![0; n]),
-        PointField::integer("k", vec![1; n]),
-    ];
+    let dup = vec![PointField::integer("k", vec![0; n]), PointField::integer("k", vec![1; n])];
     let err = write_vtu(&path, &pts, &tris, &dup).unwrap_err();
     assert!(matches!(err, OutputError::InvalidField { ref name, .. } if name == "k"));
     assert!(!path.exists());
@@ -213,13 +185,7 @@ fn read_vtu_reports_bad_files_without_panicking() {
 
     // A point-data array with a wrong length is dropped by vtkio; we must notice.
     let good = dir.path().join("good.vtu");
-    write_vtu(
-        &good,
-        &[[0.0, 0.0], [1.0, 0.0]],
-        &[],
-        &[PointField::scalar("f", vec![1.0, 2.0])],
-    )
-    .unwrap();
+    write_vtu(&good, &[[0.0, 0.0], [1.0, 0.0]], &[], &[PointField::scalar("f", vec![1.0, 2.0])]).unwrap();
     assert_eq!(read_vtu(&good).unwrap().fields.len(), 1);
     // Claim two components for a one-component array: vtkio drops it silently on reading.
     let text = std::fs::read_to_string(&good).unwrap();
@@ -235,11 +201,8 @@ fn read_vtu_reports_bad_files_without_panicking() {
 fn pvd_lists_every_file_and_time() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("series.pvd");
-    let entries: Vec<(f64, String)> = vec![
-        (0.0, "run_0000.vtu".into()),
-        (0.1 + 0.2, "run_0001.vtu".into()),
-        (1e-9, "sub/run&2.vtu".into()),
-    ];
+    let entries: Vec<(f64, String)> =
+        vec![(0.0, "run_0000.vtu".into()), (0.1 + 0.2, "run_0001.vtu".into()), (1e-9, "sub/run&2.vtu".into())];
     write_pvd(&path, &entries).unwrap();
     let xml = std::fs::read_to_string(&path).unwrap();
     assert!(xml.starts_with("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\""));

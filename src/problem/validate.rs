@@ -145,7 +145,10 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         );
     }
     if expected_nodes > MAX_NODES {
-        return c.err("nodes.spacing", format!("spacing {} gives about {expected_nodes:.1e} nodes (over 5e7); this machine cannot hold the system", fill.spacing));
+        return c.err(
+            "nodes.spacing",
+            format!("spacing {} gives about {expected_nodes:.1e} nodes (over 5e7); this machine cannot hold the system", fill.spacing),
+        );
     }
     let material = material(&c, &spec.material)?;
     let exact = match &spec.exact {
@@ -187,19 +190,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     let conditions = conditions(&c, &spec.boundary, &domain, &present, &exact_word)?;
     let solver = solver(&c, &spec.solver)?;
     let outputs = outputs(&c, &spec.output, exact.is_some())?;
-    Ok(Problem {
-        name,
-        source: path.to_path_buf(),
-        domain,
-        fill,
-        approximation,
-        material,
-        body_force,
-        conditions,
-        solver,
-        outputs,
-        exact,
-    })
+    Ok(Problem { name, source: path.to_path_buf(), domain, fill, approximation, material, body_force, conditions, solver, outputs, exact })
 }
 
 fn domain(c: &Ctx, spec: &DomainSpec) -> Result<Domain, ProblemError> {
@@ -286,10 +277,12 @@ fn domain(c: &Ctx, spec: &DomainSpec) -> Result<Domain, ProblemError> {
                     Some(n) => n.clone(),
                     None => (0..v.len()).map(|i| format!("edge{i}")).collect(),
                 };
-                let area2: f64 = (0..v.len()).map(|i| {
-                    let (a, b) = (v[i], v[(i + 1) % v.len()]);
-                    a[0] * b[1] - b[0] * a[1]
-                }).sum();
+                let area2: f64 = (0..v.len())
+                    .map(|i| {
+                        let (a, b) = (v[i], v[(i + 1) % v.len()]);
+                        a[0] * b[1] - b[0] * a[1]
+                    })
+                    .sum();
                 if area2.abs() <= 1e-14 * polygon_scale(&v).powi(2) {
                     return c.err(f("vertices"), "the polygon has zero area");
                 }
@@ -386,11 +379,17 @@ fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind) -> Result<Appro
                 "mq" => RbfKind::Mq,
                 _ => RbfKind::Imq,
             };
-            let shape = c.positive("approximation.shape", c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?)?;
+            let shape = c.positive(
+                "approximation.shape",
+                c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?,
+            )?;
             Basis::Rbf { rbf, shape }
         }
         other => {
-            return c.err("approximation.basis", format!("unknown basis \"{other}\" (expected \"monomials\", \"tensor\", \"gaussian\", \"mq\" or \"imq\")"))
+            return c.err(
+                "approximation.basis",
+                format!("unknown basis \"{other}\" (expected \"monomials\", \"tensor\", \"gaussian\", \"mq\" or \"imq\")"),
+            )
         }
     };
     if s.shape.is_some() && !matches!(basis, Basis::Rbf { .. }) {
@@ -418,7 +417,11 @@ fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind) -> Result<Appro
     if !matches!(basis, Basis::Rbf { .. }) && support < m {
         return c.err(
             "approximation.support",
-            format!("{support} nodes cannot determine the {m} coefficients of the basis ({}); use support >= {m} (about {} recommended)", basis.describe(), 2 * m),
+            format!(
+                "{support} nodes cannot determine the {m} coefficients of the basis ({}); use support >= {m} (about {} recommended)",
+                basis.describe(),
+                2 * m
+            ),
         );
     }
     Ok(Approximation { basis, weight, support, ghost_nodes: s.ghost_nodes.unwrap_or(DEFAULT_GHOST_NODES) })
@@ -452,7 +455,12 @@ fn exact(c: &Ctx, s: &ExactSpec) -> Result<ExactKind, ProblemError> {
         "kirsch" => &["tension", "radius"],
         "lame" => &["pressure", "inner", "outer"],
         "manufactured" => &[],
-        other => return c.err("exact.kind", format!("unknown solution \"{other}\" (expected \"cantilever\", \"kirsch\", \"lame\" or \"manufactured\")")),
+        other => {
+            return c.err(
+                "exact.kind",
+                format!("unknown solution \"{other}\" (expected \"cantilever\", \"kirsch\", \"lame\" or \"manufactured\")"),
+            )
+        }
     };
     let given = [
         ("load", s.load),
@@ -508,7 +516,13 @@ fn conditions(
             return c.err(f("part"), format!("\"{}\" is not a boundary part of the domain (known: {})", b.part, known()));
         };
         if !present[part] {
-            return c.err(f("part"), format!("\"{}\" does not reach the boundary of the solid (it lies inside or outside the other regions); remove this condition", b.part));
+            return c.err(
+                f("part"),
+                format!(
+                    "\"{}\" does not reach the boundary of the solid (it lies inside or outside the other regions); remove this condition",
+                    b.part
+                ),
+            );
         }
         if out[part].is_some() {
             return c.err(f("part"), format!("\"{}\" already has a condition; give one [[boundary]] per part", b.part));
@@ -516,7 +530,9 @@ fn conditions(
         let comp = |field: &str, w: &Option<String>| -> Result<ComponentCondition, ProblemError> {
             match w {
                 None => c.err(f(field), "a mixed condition names the condition of each component: x = \"displacement\" or \"traction\""),
-                Some(w) => c.word(&f(field), w, &[("displacement", ComponentCondition::Displacement), ("traction", ComponentCondition::Traction)]),
+                Some(w) => {
+                    c.word(&f(field), w, &[("displacement", ComponentCondition::Displacement), ("traction", ComponentCondition::Traction)])
+                }
             }
         };
         let components = match b.kind.as_str() {
@@ -528,7 +544,9 @@ fn conditions(
                 [cc, cc]
             }
             "mixed" => [comp("x", &b.x)?, comp("y", &b.y)?],
-            other => return c.err(f("kind"), format!("unknown condition \"{other}\" (expected \"displacement\", \"traction\" or \"mixed\")")),
+            other => {
+                return c.err(f("kind"), format!("unknown condition \"{other}\" (expected \"displacement\", \"traction\" or \"mixed\")"))
+            }
         };
         let value = match &b.value {
             None => Value::Constant([0.0, 0.0]),
@@ -572,7 +590,13 @@ fn conditions(
 fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemError> {
     let equilibrate = s.equilibrate.unwrap_or(true);
     let kind = s.kind.as_deref().unwrap_or("lu");
-    let iterative_only = [("preconditioner", s.preconditioner.is_some()), ("drop", s.drop.is_some()), ("fill", s.fill.is_some()), ("tolerance", s.tolerance.is_some()), ("max_iterations", s.max_iterations.is_some())];
+    let iterative_only = [
+        ("preconditioner", s.preconditioner.is_some()),
+        ("drop", s.drop.is_some()),
+        ("fill", s.fill.is_some()),
+        ("tolerance", s.tolerance.is_some()),
+        ("max_iterations", s.max_iterations.is_some()),
+    ];
     let kind = match kind {
         "lu" => {
             if let Some((k, _)) = iterative_only.iter().find(|(_, p)| *p) {
@@ -581,7 +605,8 @@ fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemError> {
             SolverKind::Lu
         }
         "bicgstab" => {
-            let SolverKind::Bicgstab { preconditioner: def_p, tolerance: def_t, max_iterations: def_m } = SolverKind::default_bicgstab() else {
+            let SolverKind::Bicgstab { preconditioner: def_p, tolerance: def_t, max_iterations: def_m } = SolverKind::default_bicgstab()
+            else {
                 unreachable!("default_bicgstab is a BiCGSTAB configuration")
             };
             let (def_drop, def_fill) = match def_p {
@@ -611,7 +636,12 @@ fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemError> {
                         Preconditioner::Jacobi
                     }
                 }
-                other => return c.err("solver.preconditioner", format!("unknown preconditioner \"{other}\" (expected \"ilut\", \"ilu0\" or \"jacobi\")")),
+                other => {
+                    return c.err(
+                        "solver.preconditioner",
+                        format!("unknown preconditioner \"{other}\" (expected \"ilut\", \"ilu0\" or \"jacobi\")"),
+                    )
+                }
             };
             let tolerance = s.tolerance.unwrap_or(def_t);
             if !(tolerance > 0.0 && tolerance < 1.0) {
@@ -629,7 +659,8 @@ fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemError> {
 }
 
 fn outputs(c: &Ctx, s: &OutputSpec, has_exact: bool) -> Result<Outputs, ProblemError> {
-    let default: Vec<String> = ["displacement", "stress", "von_mises"].iter().map(|s| s.to_string()).chain(has_exact.then(|| "error".to_string())).collect();
+    let default: Vec<String> =
+        ["displacement", "stress", "von_mises"].iter().map(|s| s.to_string()).chain(has_exact.then(|| "error".to_string())).collect();
     let fields = s.fields.clone().unwrap_or(default);
     let mut o = Outputs::default();
     for (k, f) in fields.iter().enumerate() {
@@ -640,7 +671,10 @@ fn outputs(c: &Ctx, s: &OutputSpec, has_exact: bool) -> Result<Outputs, ProblemE
             "von_mises" => &mut o.von_mises,
             "error" => &mut o.error,
             other => {
-                return c.err(format!("output.fields[{k}]"), format!("unknown field \"{other}\" (expected displacement, strain, stress, von_mises, error)"))
+                return c.err(
+                    format!("output.fields[{k}]"),
+                    format!("unknown field \"{other}\" (expected displacement, strain, stress, von_mises, error)"),
+                )
             }
         };
         *slot = true;
