@@ -169,27 +169,27 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
     let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
     let has_traction =
         |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
-    // Ghost nodes: positions n.., one per traction boundary node, at distance h along its normal.
-    // Ghost nodes only where both equations are tractions: on mixed (symmetry) nodes
-    // an extra Navier row made scattered-node runs unstable (measured on kirsch.toml:
-    // e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
+    // Ghost nodes (positions n..) only where both equations are tractions: on mixed
+    // (symmetry) nodes an extra Navier row made scattered-node runs unstable (measured
+    // on kirsch.toml: e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
+    // Placing them is part of building the point cloud, so it is timed with the supports.
     let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
-    let candidates: Vec<usize> =
-        if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
-    let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
-    let ghost_of: Vec<usize> = ghosts.iter().map(|g| g.0).collect();
-    let mut positions = nodes.positions.clone();
-    positions.extend(ghosts.iter().map(|g| g.1));
-    let n_all = positions.len();
-    let mut ghost = vec![usize::MAX; n];
-    for (k, &i) in ghost_of.iter().enumerate() {
-        ghost[i] = n + k;
-    }
-
-    let supports = timed(progress, Stage::Supports, &mut t.supports, || {
-        let note = format!("{n_support} nearest, {} ghost nodes", ghost_of.len());
-        Ok((Supports::nearest(&positions, n_support), note))
+    let (positions, ghost, supports) = timed(progress, Stage::Supports, &mut t.supports, || {
+        let candidates: Vec<usize> =
+            if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
+        let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
+        let mut positions = nodes.positions.clone();
+        positions.extend(ghosts.iter().map(|g| g.1));
+        let mut ghost = vec![usize::MAX; n];
+        for (k, g) in ghosts.iter().enumerate() {
+            ghost[g.0] = n + k;
+        }
+        let supports = Supports::nearest(&positions, n_support);
+        let note = format!("{n_support} nearest, {} ghost nodes", ghosts.len());
+        Ok(((positions, ghost, supports), note))
     })?;
+    let n_all = positions.len();
+    let ghost_count = n_all - n;
 
     let gradient_needed = problem.outputs.needs_gradient();
     let needs: Vec<OpSet> = (0..n_all)
@@ -274,7 +274,7 @@ pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, Run
         stress,
         exact: exact_fields,
         errors,
-        ghost_nodes: ghost_of.len(),
+        ghost_nodes: ghost_count,
         unknowns: dofs.len(),
         nonzeros,
         operators_computed,

@@ -5,18 +5,24 @@ mod common;
 use common::*;
 use mlsm::cli::{Cli, Command};
 use mlsm::output::read_vtu;
+use std::path::PathBuf;
 
-#[test]
-fn vtu_reads_back_with_expected_arrays() {
+/// Copy `problems/<name>.toml` into a temp dir with `edit` applied, and run it through
+/// the command-line entry point; returns the temp dir, the scene path and the output folder.
+fn run_scene(name: &str, edit: impl Fn(String) -> String) -> (tempfile::TempDir, PathBuf, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
-    let scene_path = dir.path().join("kirsch.toml");
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/kirsch.toml"))
-        .unwrap()
-        .replace("spacing = 0.04", "spacing = 0.1");
-    std::fs::write(&scene_path, &text).unwrap();
+    let scene_path = dir.path().join(format!("{name}.toml"));
+    let text = std::fs::read_to_string(format!("{}/problems/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    std::fs::write(&scene_path, edit(text)).unwrap();
     let out = dir.path().join("res");
     mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None } })
         .unwrap();
+    (dir, scene_path, out)
+}
+
+#[test]
+fn vtu_reads_back_with_expected_arrays() {
+    let (_dir, scene_path, out) = run_scene("kirsch", |t| t.replace("spacing = 0.04", "spacing = 0.1"));
 
     // The same run through the library, to compare values.
     let p = mlsm::problem::Problem::from_file(&scene_path).unwrap();
@@ -76,14 +82,9 @@ fn vtu_reads_back_with_expected_arrays() {
 
 #[test]
 fn plane_strain_writes_sigma_zz_and_only_requested_fields() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene_path = dir.path().join("plate.toml");
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/problems/steel_plate.toml"))
-        .unwrap()
-        .replace("spacing = 0.01", "spacing = 0.05");
-    std::fs::write(&scene_path, format!("{text}\n[output]\nfields = [\"displacement\", \"stress\", \"strain\"]\n")).unwrap();
-    let out = dir.path().join("res");
-    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path, out: Some(out.clone()), spacing: None } }).unwrap();
+    let (_dir, _, out) = run_scene("steel_plate", |t| {
+        format!("{}\n[output]\nfields = [\"displacement\", \"stress\", \"strain\"]\n", t.replace("spacing = 0.01", "spacing = 0.05"))
+    });
     let vtu = read_vtu(&out.join("solution.vtu")).unwrap();
     for name in ["sigma_zz", "eps_xx", "eps_yy", "eps_xy"] {
         assert!(vtu.fields.contains_key(name), "missing {name}");

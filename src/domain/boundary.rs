@@ -42,7 +42,7 @@ impl BoundarySample {
 }
 
 /// Parameter intervals `[s0, s1]` of `curve` that lie on the solid's boundary.
-pub fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -> Vec<(f64, f64)> {
+fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -> Vec<(f64, f64)> {
     let len = c.curve.length();
     let on = |s: f64| domain.signed_distance(c.curve.at(s).0).abs() <= tol;
     let samples = ((len / (h / 8.0)).ceil() as usize).max(16);
