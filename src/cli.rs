@@ -15,6 +15,15 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// Model selector of `run`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum ModelArg {
+    /// The Navier equation by MLSM.
+    Navier,
+    /// Linear bond-based peridynamics.
+    Peridynamics,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -28,6 +37,12 @@ pub enum Command {
         /// Override the scene's node spacing (m), e.g. for timing studies.
         #[arg(long)]
         spacing: Option<f64>,
+        /// Model to solve (default: the scene's `model`, else navier).
+        #[arg(long, value_enum)]
+        model: Option<ModelArg>,
+        /// Override the peridynamic horizon delta (m); h = delta / m.
+        #[arg(long)]
+        horizon: Option<f64>,
     },
     /// Validate a scene file without solving it.
     Check {

@@ -12,6 +12,10 @@
 //! 5. [`linalg`]: sparse assembly, sparse LU or preconditioned BiCGSTAB;
 //! 6. [`post`]: error norms and observed orders; [`exact`]: closed-form solutions;
 //! 7. [`output`]: `solution.vtu`, `summary.json`, CSV tables (atomic writes);
+//! 8. [`peridynamics`]: the linear bond-based model on the same plate (nodes as
+//!    quadrature points, families, calibrated kernels, static solve);
+//! 9. [`compare`]: the nonlocal-to-local comparison (PD at a sequence of horizons
+//!    against the Navier solution).
 //!
 //! [`run`] strings the stages together; [`app`] and [`cli`] are the command line.
 
@@ -21,6 +25,7 @@ pub mod exact;
 pub mod linalg;
 pub mod mlsm;
 pub mod output;
+pub mod peridynamics;
 pub mod post;
 pub mod problem;
 pub mod run;

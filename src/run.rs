@@ -26,6 +26,10 @@ pub enum Stage {
     Supports,
     /// Shape functions.
     Shapes,
+    /// Peridynamic families (bonds within the horizon).
+    Families,
+    /// Peridynamic bond weights.
+    Weights,
     /// Matrix assembly.
     Assembly,
     /// Linear solve.
@@ -41,6 +45,8 @@ impl Stage {
             Stage::Nodes => "nodes",
             Stage::Supports => "supports",
             Stage::Shapes => "shapes",
+            Stage::Families => "families",
+            Stage::Weights => "weights",
             Stage::Assembly => "assembly",
             Stage::Solve => "solve",
             Stage::Post => "post",
@@ -130,7 +136,7 @@ pub struct Solution {
     pub timings: Timings,
 }
 
-fn timed<T>(
+pub(crate) fn timed<T>(
     progress: &dyn Progress,
     stage: Stage,
     slot: &mut f64,

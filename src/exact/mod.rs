@@ -143,5 +143,7 @@ pub fn from_kind(kind: &crate::problem::ExactKind, material: Material) -> Result
         K::Kirsch { tension, radius } => Box::new(Kirsch::new(tension, radius, material)?),
         K::Lame { pressure, inner, outer } => Box::new(LameCylinder::new(pressure, inner, outer, material)?),
         K::Manufactured => Box::new(Manufactured::new(material)?),
+        K::Tension { tension } => Box::new(Polynomial::uniaxial_tension(tension, material)?),
+        K::Polynomial { ux, uy } => Box::new(Polynomial::new(ux, uy, material)?),
     })
 }

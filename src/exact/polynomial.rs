@@ -38,6 +38,17 @@ impl Polynomial {
         Ok(Polynomial { ux, uy, material })
     }
 
+    /// Uniform uniaxial stress `sigma_xx = tension`, `sigma_yy = sigma_xy = 0`:
+    /// `u = (e_xx x, e_yy y)` with (in-plane Lame parameters)
+    /// `e_xx = T (lambda + 2 mu) / (4 mu (lambda + mu))` and `e_yy = -lambda e_xx / (lambda + 2 mu)`.
+    pub fn uniaxial_tension(tension: f64, material: Material) -> Result<Self, ParameterError> {
+        Check("tension").finite("tension", tension)?;
+        let l = material.lame();
+        let exx = tension * (l.lambda + 2.0 * l.mu) / (4.0 * l.mu * (l.lambda + l.mu));
+        let eyy = -l.lambda * exx / (l.lambda + 2.0 * l.mu);
+        Polynomial::quadratic([0.0, exx, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, eyy, 0.0, 0.0, 0.0], material)
+    }
+
     /// A quadratic field: coefficients of `1, x, y, x^2, x y, y^2`.
     pub fn quadratic(ux: [f64; 6], uy: [f64; 6], material: Material) -> Result<Self, ParameterError> {
         let pad = |c: [f64; 6]| {

@@ -8,6 +8,7 @@ use crate::domain::{Domain, FillParams};
 use crate::elasticity::material::Material;
 use crate::linalg::SolverParams;
 use crate::mlsm::Approximation;
+use crate::peridynamics::PdParams;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -64,6 +65,20 @@ pub enum ExactKind {
     Lame { pressure: f64, inner: f64, outer: f64 },
     /// `u = (sin(pi x) cos(pi y), x^2 y^3)` with its body force (verification.md 6).
     Manufactured,
+    /// Uniform uniaxial stress `sigma_xx = tension` (a linear field, zero at the origin).
+    Tension { tension: f64 },
+    /// A polynomial field of degree <= 3 with its body force (patch tests).
+    Polynomial { ux: [f64; 10], uy: [f64; 10] },
+}
+
+/// The model `mlsm run` solves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Model {
+    /// The Navier equation by MLSM.
+    Navier,
+    /// Linear bond-based peridynamics.
+    Peridynamics,
 }
 
 /// Output fields a run writes.
@@ -113,6 +128,10 @@ pub struct Problem {
     pub outputs: Outputs,
     /// Closed-form solution, if any.
     pub exact: Option<ExactKind>,
+    /// Model of `mlsm run`.
+    pub model: Model,
+    /// Peridynamic discretisation, when the scene has a `[peridynamics]` table.
+    pub peridynamics: Option<PdParams>,
 }
 
 impl Problem {
@@ -154,5 +173,18 @@ impl Problem {
                 Ok(p)
             }
         }
+    }
+
+    /// The same problem with other peridynamic parameters (used by `compare` and
+    /// `--horizon`), checked like the scene's own table.
+    pub fn with_peridynamics(&self, params: PdParams) -> Result<Problem, ProblemError> {
+        validate::check_peridynamics(&params, &self.domain).map_err(|(field, reason)| ProblemError {
+            file: self.source.clone(),
+            field: format!("peridynamics.{field}"),
+            reason,
+        })?;
+        let mut p = self.clone();
+        p.peridynamics = Some(params);
+        Ok(p)
     }
 }

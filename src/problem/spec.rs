@@ -34,6 +34,28 @@ pub struct SceneSpec {
     pub output: OutputSpec,
     /// Closed-form solution to compare with (and to take boundary values from).
     pub exact: Option<ExactSpec>,
+    /// Which model `mlsm run` solves: `navier` (default) or `peridynamics`.
+    pub model: Option<String>,
+    /// Peridynamic discretisation of the same plate.
+    pub peridynamics: Option<PeridynamicsSpec>,
+}
+
+/// `[peridynamics]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PeridynamicsSpec {
+    /// Horizon delta (m).
+    pub horizon: Option<f64>,
+    /// Ratio delta / h (default 3).
+    pub m: Option<f64>,
+    /// `plain` or `regularised`.
+    pub kernel: Option<String>,
+    /// Exponent of the regularised kernel (default -3).
+    pub alpha: Option<f64>,
+    /// Quadrature rule name.
+    pub quadrature: Option<String>,
+    /// `none` or `volume`.
+    pub correction: Option<String>,
 }
 
 /// `[domain]`: a list of regions combined left to right.
@@ -195,7 +217,7 @@ pub struct OutputSpec {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ExactSpec {
-    /// `cantilever`, `kirsch`, `lame`, `manufactured`.
+    /// `cantilever`, `kirsch`, `lame`, `manufactured`, `tension`, `polynomial`.
     pub kind: String,
     /// Cantilever end load P (N/m).
     pub load: Option<f64>,
@@ -203,7 +225,7 @@ pub struct ExactSpec {
     pub length: Option<f64>,
     /// Cantilever depth D (m).
     pub depth: Option<f64>,
-    /// Kirsch far-field tension T (Pa).
+    /// Kirsch far-field tension T, or the uniaxial tension of `tension` (Pa).
     pub tension: Option<f64>,
     /// Kirsch hole radius a (m).
     pub radius: Option<f64>,
@@ -213,4 +235,8 @@ pub struct ExactSpec {
     pub inner: Option<f64>,
     /// Lame outer radius b (m).
     pub outer: Option<f64>,
+    /// Polynomial coefficients of u over `1, x, y, x^2, x y, y^2, x^3, x^2 y, x y^2, y^3`.
+    pub ux: Option<Vec<f64>>,
+    /// Polynomial coefficients of v.
+    pub uy: Option<Vec<f64>>,
 }

@@ -2,11 +2,12 @@
 //! (physics and consistency). Every error names the file, the field and the reason.
 
 use super::spec::*;
-use super::{BoundaryCondition, ComponentCondition, ExactKind, Outputs, Problem, ProblemError, Value};
+use super::{BoundaryCondition, ComponentCondition, ExactKind, Model, Outputs, Problem, ProblemError, Value};
 use crate::domain::{CsgOp, Domain, FillKind, FillParams, Primitive, Region};
 use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
 use crate::linalg::{Preconditioner, SolverKind, SolverParams};
 use crate::mlsm::{Approximation, Basis, RbfKind, Weight};
+use crate::peridynamics::{Kernel, PdParams, Quadrature, SurfaceCorrection};
 use std::path::Path;
 
 /// Default support size for a basis of `m` functions.
@@ -98,7 +99,7 @@ impl Ctx<'_> {
         }
     }
 
-    fn need<T: Copy>(&self, field: &str, v: Option<T>, what: &str) -> Result<T, ProblemError> {
+    fn need<T>(&self, field: &str, v: Option<T>, what: &str) -> Result<T, ProblemError> {
         match v {
             Some(x) => Ok(x),
             None => self.err(field, format!("missing: {what}")),
@@ -190,7 +191,143 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     let conditions = conditions(&c, &spec.boundary, &domain, &present, &exact_word)?;
     let solver = solver(&c, &spec.solver)?;
     let outputs = outputs(&c, &spec.output, exact.is_some())?;
-    Ok(Problem { name, source: path.to_path_buf(), domain, fill, approximation, material, body_force, conditions, solver, outputs, exact })
+    let peridynamics = match &spec.peridynamics {
+        Some(pd) => Some(peridynamics(&c, pd, &domain, &material, &conditions, &spec.boundary)?),
+        None => None,
+    };
+    let model = match spec.model.as_deref() {
+        None => Model::Navier,
+        Some(m) => c.word("model", m, &[("navier", Model::Navier), ("peridynamics", Model::Peridynamics)])?,
+    };
+    if model == Model::Peridynamics && peridynamics.is_none() {
+        return c.err("model", "model = \"peridynamics\" needs a [peridynamics] table (horizon, quadrature, ...)");
+    }
+    Ok(Problem {
+        name,
+        source: path.to_path_buf(),
+        domain,
+        fill,
+        approximation,
+        material,
+        body_force,
+        conditions,
+        solver,
+        outputs,
+        exact,
+        model,
+        peridynamics,
+    })
+}
+
+/// Largest ratio `m = delta / h` accepted (bonds per node grow like `pi m^2`).
+pub const MAX_HORIZON_RATIO: f64 = 12.0;
+
+/// Limits on the peridynamic numbers shared by the scene table and `compare`:
+/// `(field, reason)` of the first violated one.
+pub fn check_peridynamics(p: &PdParams, domain: &Domain) -> Result<(), (String, String)> {
+    let fail = |f: &str, r: String| Err((f.to_string(), r));
+    if !(p.horizon.is_finite() && p.horizon > 0.0) {
+        return fail("horizon", format!("must be a positive finite number, got {}", p.horizon));
+    }
+    if !(p.ratio.is_finite() && p.ratio >= 1.0) {
+        return fail(
+            "m",
+            format!(
+                "m = delta / h = {} makes the horizon smaller than the node spacing: no node would have a bond; use m >= 1 (3 is usual)",
+                p.ratio
+            ),
+        );
+    }
+    if p.ratio > MAX_HORIZON_RATIO {
+        return fail(
+            "m",
+            format!(
+                "m = {} gives about {:.0} bonds per node; at most {MAX_HORIZON_RATIO}",
+                p.ratio,
+                std::f64::consts::PI * p.ratio * p.ratio
+            ),
+        );
+    }
+    let (lo, hi) = domain.bounding_box();
+    let extent = (hi[0] - lo[0]).min(hi[1] - lo[1]);
+    if p.horizon > extent / 2.0 {
+        return fail(
+            "horizon",
+            format!(
+                "horizon {} is larger than half the solid's smallest extent ({extent:.4e}): no node would have a complete family; use a smaller horizon",
+                p.horizon
+            ),
+        );
+    }
+    let nodes = domain.area_estimate(400) / p.spacing().powi(2) * p.nodes_per_cell() as f64;
+    if nodes > MAX_NODES {
+        return fail("horizon", format!("horizon {} with m = {} gives about {nodes:.1e} nodes (over {MAX_NODES:e})", p.horizon, p.ratio));
+    }
+    Ok(())
+}
+
+fn peridynamics(
+    c: &Ctx,
+    s: &PeridynamicsSpec,
+    domain: &Domain,
+    material: &Material,
+    conditions: &[BoundaryCondition],
+    specs: &[BoundarySpec],
+) -> Result<PdParams, ProblemError> {
+    if !crate::peridynamics::kernel::representable(material) {
+        let (need, plane) = match material.plane {
+            PlaneModel::Strain => ("1/4", "plane strain"),
+            PlaneModel::Stress => ("1/3", "plane stress"),
+        };
+        return c.err(
+            "material.nu",
+            format!(
+                "bond-based peridynamics represents only in-plane lambda = mu, that is nu = {need} in {plane}; got nu = {} \
+                 (remove the [peridynamics] table or set nu = {need})",
+                material.elastic.poisson
+            ),
+        );
+    }
+    for (k, b) in specs.iter().enumerate() {
+        if b.kind == "mixed" {
+            return c.err(
+                format!("boundary[{k}].kind"),
+                "mixed (per-component) conditions have no peridynamic volume constraint here; use displacement or traction",
+            );
+        }
+    }
+    debug_assert!(conditions.iter().all(|bc| bc.components[0] == bc.components[1]));
+    let horizon = c.need("peridynamics.horizon", s.horizon, "the horizon delta (m)")?;
+    let kernel = match s.kernel.as_deref().unwrap_or("plain") {
+        "plain" => {
+            if s.alpha.is_some() {
+                return c.err("peridynamics.alpha", "only the regularised kernel takes alpha");
+            }
+            Kernel::Plain
+        }
+        "regularised" => {
+            let alpha = s.alpha.unwrap_or(-3.0);
+            if !(alpha.is_finite() && alpha > -4.0 && alpha <= 10.0) {
+                return c
+                    .err("peridynamics.alpha", format!("must lie in (-4, 10] (the operator is unbounded for alpha <= -4), got {alpha}"));
+            }
+            Kernel::Regularised { alpha }
+        }
+        other => return c.err("peridynamics.kernel", format!("unknown kernel \"{other}\" (expected \"plain\" or \"regularised\")")),
+    };
+    let quadrature = c.word("peridynamics.quadrature", s.quadrature.as_deref().unwrap_or("ac"), &Quadrature::ALL)?;
+    let correction = c.word(
+        "peridynamics.correction",
+        s.correction.as_deref().unwrap_or("none"),
+        &[("none", SurfaceCorrection::None), ("volume", SurfaceCorrection::Volume)],
+    )?;
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction };
+    check_peridynamics(&params, domain).map_err(|(f, r)| ProblemError {
+        file: c.path.to_path_buf(),
+        field: format!("peridynamics.{f}"),
+        reason: r,
+    })?;
+    Ok(params)
 }
 
 fn domain(c: &Ctx, spec: &DomainSpec) -> Result<Domain, ProblemError> {
@@ -455,12 +592,30 @@ fn exact(c: &Ctx, s: &ExactSpec) -> Result<ExactKind, ProblemError> {
         "kirsch" => &["tension", "radius"],
         "lame" => &["pressure", "inner", "outer"],
         "manufactured" => &[],
+        "tension" => &["tension"],
+        "polynomial" => &["ux", "uy"],
         other => {
             return c.err(
                 "exact.kind",
-                format!("unknown solution \"{other}\" (expected \"cantilever\", \"kirsch\", \"lame\" or \"manufactured\")"),
+                format!(
+                    "unknown solution \"{other}\" (expected \"cantilever\", \"kirsch\", \"lame\", \"manufactured\", \"tension\" or \"polynomial\")"
+                ),
             )
         }
+    };
+    for (k, v) in [("ux", s.ux.is_some()), ("uy", s.uy.is_some())] {
+        if v && !allowed.contains(&k) {
+            return c.err(format!("exact.{k}"), format!("not a parameter of the {} solution (it takes: {})", s.kind, allowed.join(", ")));
+        }
+    }
+    let coefficients = |k: &str, v: &Option<Vec<f64>>| -> Result<[f64; 10], ProblemError> {
+        let field = format!("exact.{k}");
+        let v = c.need(&field, v.as_ref(), "the polynomial solution needs ux and uy (10 coefficients each)")?;
+        let a: [f64; 10] = v.as_slice().try_into().or_else(|_| {
+            c.err(&field, format!("needs 10 coefficients (of 1, x, y, x^2, x y, y^2, x^3, x^2 y, x y^2, y^3), got {}", v.len()))
+        })?;
+        c.finite(&field, &a)?;
+        Ok(a)
     };
     let given = [
         ("load", s.load),
@@ -497,6 +652,8 @@ fn exact(c: &Ctx, s: &ExactSpec) -> Result<ExactKind, ProblemError> {
             }
             ExactKind::Lame { pressure: get("pressure")?, inner, outer }
         }
+        "tension" => ExactKind::Tension { tension: get("tension")? },
+        "polynomial" => ExactKind::Polynomial { ux: coefficients("ux", &s.ux)?, uy: coefficients("uy", &s.uy)? },
         _ => ExactKind::Manufactured,
     })
 }

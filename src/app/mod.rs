@@ -1,9 +1,12 @@
 //! Orchestration of the commands; the only module that prints.
 
-use crate::cli::{Cli, Command};
+mod peridynamics;
+
+use crate::cli::{Cli, Command, ModelArg};
 use crate::elasticity::conditions::ComponentEquation;
 use crate::output::{self, FieldValues, OutputError, PointField};
 use crate::post::{observed_order, ErrorNorms};
+use crate::problem::Model;
 use crate::problem::{Problem, ProblemError};
 use crate::run::{self, Progress, RunError, Solution, Stage};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -87,8 +90,44 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             }
             Ok(())
         }
-        Command::Run { scene, out, spacing } => {
+        Command::Run { scene, out, spacing, model, horizon } => {
             let mut p = Problem::from_file(scene)?;
+            if let Some(m) = model {
+                p.model = match m {
+                    ModelArg::Navier => Model::Navier,
+                    ModelArg::Peridynamics => Model::Peridynamics,
+                };
+            }
+            if p.model == Model::Peridynamics {
+                let Some(mut params) = p.peridynamics else {
+                    return Err(AppError::Usage(format!("{}: the peridynamic model needs a [peridynamics] table", scene.display())));
+                };
+                if spacing.is_some() {
+                    return Err(AppError::Usage(
+                        "--spacing sets the MLSM node spacing; for peridynamics use --horizon (h = delta / m)".into(),
+                    ));
+                }
+                if let Some(d) = *horizon {
+                    params.horizon = d;
+                    p = p.with_peridynamics(params)?;
+                }
+                let dir = out.clone().unwrap_or_else(|| default_out(&p));
+                if !cli.quiet {
+                    eprintln!("{}: solving (peridynamics, {})", p.name, params.quadrature.name());
+                }
+                let t0 = Instant::now();
+                let mut sol = crate::peridynamics::solve::solve(&p, &params, &term)?;
+                let t_out = Instant::now();
+                peridynamics::write_pd_run(&p, &mut sol, &dir, t0)?;
+                if !cli.quiet {
+                    eprintln!("  {:<9} {:>9.3} s  {}", "output", t_out.elapsed().as_secs_f64(), dir.display());
+                    peridynamics::print_pd_result(&sol);
+                }
+                return Ok(());
+            }
+            if horizon.is_some() {
+                return Err(AppError::Usage("--horizon belongs to the peridynamic model (--model peridynamics)".into()));
+            }
             if let Some(h) = *spacing {
                 p = p.with_spacing(h)?;
             }
@@ -238,18 +277,20 @@ fn scalar(name: &str, v: impl Iterator<Item = f64>) -> PointField {
     PointField { name: name.into(), components: 1, values: FieldValues::F64(v.collect()) }
 }
 
-/// Point-data arrays of the requested outputs.
-fn fields(p: &Problem, sol: &Solution) -> Vec<PointField> {
-    let n = sol.nodes.len();
-    let nb = sol.nodes.boundary.len();
-    let mut f = vec![vector("displacement", sol.displacement.iter().copied())];
-    if let (Some(g), true) = (&sol.gradient, p.outputs.strain) {
+/// Strain, stress and von Mises arrays, as far as the scene asks for them.
+fn stress_fields(
+    p: &Problem,
+    gradient: &Option<Vec<[[f64; 2]; 2]>>,
+    stress: &Option<(Vec<[f64; 3]>, Vec<f64>, Vec<f64>)>,
+) -> Vec<PointField> {
+    let mut f = Vec::new();
+    if let (Some(g), true) = (gradient, p.outputs.strain) {
         let e: Vec<[f64; 3]> = g.iter().map(|g| crate::elasticity::stress::strain(*g)).collect();
         for (k, name) in ["eps_xx", "eps_yy", "eps_xy"].iter().enumerate() {
             f.push(scalar(name, e.iter().map(|e| e[k])));
         }
     }
-    if let Some((s, szz, vm)) = &sol.stress {
+    if let Some((s, szz, vm)) = stress {
         if p.outputs.stress {
             for (k, name) in ["sigma_xx", "sigma_yy", "sigma_xy"].iter().enumerate() {
                 f.push(scalar(name, s.iter().map(|s| s[k])));
@@ -262,6 +303,15 @@ fn fields(p: &Problem, sol: &Solution) -> Vec<PointField> {
             f.push(scalar("von_mises", vm.iter().copied()));
         }
     }
+    f
+}
+
+/// Point-data arrays of the requested outputs.
+fn fields(p: &Problem, sol: &Solution) -> Vec<PointField> {
+    let n = sol.nodes.len();
+    let nb = sol.nodes.boundary.len();
+    let mut f = vec![vector("displacement", sol.displacement.iter().copied())];
+    f.extend(stress_fields(p, &sol.gradient, &sol.stress));
     let kinds = (0..n).map(|i| if i < nb { node_kind(&sol.boundary_equations[i]) } else { 0 });
     f.push(PointField { name: "node_kind".into(), components: 1, values: FieldValues::I32(kinds.collect()) });
     let parts = (0..n).map(|i| if i < nb { sol.nodes.boundary[i].touches[0].0 as i32 } else { -1 });

@@ -1,0 +1,190 @@
+//! The static peridynamic run: nodes -> families -> bond weights -> stiffness ->
+//! solve -> post-processing (nonlocal strain, errors against an exact solution on
+//! the whole plate and on the interior region at distance >= delta from the boundary).
+
+use super::family::Families;
+use super::kernel::{fourth_moment, Micromodulus};
+use super::nodes::{self, PdNodes};
+use super::operator::Bonds;
+use super::weights::{bond_coefficients, search_radius, BondWeights};
+use super::{loads, strain, PdParams};
+use crate::elasticity::stress;
+use crate::linalg::{self, SolveReport};
+use crate::post::{relative_errors, ErrorNorms};
+use crate::problem::Problem;
+use crate::run::{exact_solution, timed, Progress, RunError, Stage};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Wall-clock seconds per stage of a peridynamic run.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct PdTimings {
+    /// Node layout (cells, collar).
+    pub nodes: f64,
+    /// Family search.
+    pub families: f64,
+    /// Bond weights (quadrature, correction, compatible weights).
+    pub weights: f64,
+    /// Loads and stiffness assembly.
+    pub assembly: f64,
+    /// Linear solve.
+    pub solve: f64,
+    /// Strain, stress, errors.
+    pub post: f64,
+    /// Writing files (filled by the caller).
+    pub output: f64,
+}
+
+/// Everything a static peridynamic run computed.
+pub struct PdSolution {
+    /// The parameters used.
+    pub params: PdParams,
+    /// Nodes (free first, then the constrained collar).
+    pub nodes: PdNodes,
+    /// Displacement of every node (prescribed values on the collar).
+    pub displacement: Vec<[f64; 2]>,
+    /// Body force density at the free nodes (tractions included).
+    pub body_force: Vec<[f64; 2]>,
+    /// Free nodes at distance >= delta from the boundary.
+    pub interior: Vec<bool>,
+    /// Free nodes carrying a traction layer load.
+    pub layer_nodes: usize,
+    /// Bonds (both directions counted).
+    pub bonds: usize,
+    /// Bond weighting report.
+    pub weights: WeightsSummary,
+    /// Unknowns and nonzeros.
+    pub unknowns: usize,
+    /// Nonzeros of the stiffness.
+    pub nonzeros: usize,
+    /// Nonlocal displacement gradient, when outputs need it.
+    pub gradient: Option<Vec<[[f64; 2]; 2]>>,
+    /// Stress `[sxx, syy, sxy]`, `sigma_zz`, von Mises, from the gradient.
+    pub stress: Option<(Vec<[f64; 3]>, Vec<f64>, Vec<f64>)>,
+    /// Exact displacement at the free nodes.
+    pub exact: Option<Vec<[f64; 2]>>,
+    /// Errors on the whole plate and on the interior region.
+    pub errors: Option<(ErrorNorms, Option<ErrorNorms>)>,
+    /// Calibrated micromodulus.
+    pub micromodulus: Micromodulus,
+    /// Solver report.
+    pub solver: SolveReport,
+    /// Stage timings.
+    pub timings: PdTimings,
+}
+
+/// Counts from the weighting stage.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct WeightsSummary {
+    /// Free nodes with a complete family.
+    pub complete_families: usize,
+    /// Rows with asymptotically compatible weights.
+    pub compatible_rows: usize,
+    /// Complete rows whose moment problem was singular (base weights kept).
+    pub compatible_failures: usize,
+}
+
+/// Displacement error norms over the free nodes selected by `keep`.
+pub fn displacement_errors(u: &[[f64; 2]], reference: &[[f64; 2]], keep: impl Fn(usize) -> bool) -> Option<ErrorNorms> {
+    let (a, b): (Vec<[f64; 2]>, Vec<[f64; 2]>) = (0..reference.len()).filter(|&i| keep(i)).map(|i| (u[i], reference[i])).unzip();
+    (!a.is_empty()).then(|| {
+        let (e_inf_u, rel_l2_u) = relative_errors(&a, &b);
+        ErrorNorms { e_inf_u, e_inf_sigma: None, rel_l2_u, rel_l2_sigma: None }
+    })
+}
+
+/// Solve the static peridynamic problem of `problem` with `params`.
+pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> Result<PdSolution, RunError> {
+    let mut t = PdTimings::default();
+    let exact = exact_solution(problem);
+    let exact = exact.as_deref();
+    let mut slot = 0.0;
+
+    let nodes = timed(progress, Stage::Nodes, &mut slot, || {
+        let n = nodes::generate(&problem.domain, &problem.conditions, exact, params);
+        let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
+        Ok((n, note))
+    })?;
+    t.nodes = slot;
+    let families = timed(progress, Stage::Families, &mut slot, || {
+        let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
+        let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
+        Ok((f, note))
+    })?;
+    t.families = slot;
+    let moment = fourth_moment(&problem.material);
+    let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
+    let weights: BondWeights = timed(progress, Stage::Weights, &mut slot, || {
+        let w = bond_coefficients(&nodes, &families, &micromodulus, params, moment);
+        let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
+        Ok((w, note))
+    })?;
+    t.weights = slot;
+    let bonds = Bonds { nodes: &nodes, families: &families, coefficients: &weights.coefficients };
+
+    let (matrix, rhs, body_force, layer_nodes) = timed(progress, Stage::Assembly, &mut slot, || {
+        let (b, layer) = loads::body_forces(&problem.domain, &problem.conditions, problem.body_force, exact, &nodes);
+        let (triplets, rhs) = bonds.stiffness(&b);
+        if let Some(k) = triplets.entries().iter().position(|e| !e.val.is_finite()) {
+            let node = triplets.entries()[k].row / 2;
+            let p = nodes.positions[node];
+            return Err(RunError::NotFinite { node, x: p[0], y: p[1] });
+        }
+        let m = linalg::assemble(&triplets)?;
+        let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.compute_nnz());
+        Ok(((m, rhs, b, layer), note))
+    })?;
+    t.assembly = slot;
+    let nonzeros = matrix.compute_nnz();
+    let (x, report) = timed(progress, Stage::Solve, &mut slot, || {
+        let (x, report) = linalg::solve(&matrix, &rhs, &problem.solver)?;
+        let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
+        Ok(((x, report), note))
+    })?;
+    t.solve = slot;
+    drop(matrix);
+
+    let (displacement, interior, gradient, stress, exact_u, errors) = timed(progress, Stage::Post, &mut slot, || {
+        let mut u: Vec<[f64; 2]> = (0..nodes.free).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
+        u.extend_from_slice(&nodes.prescribed);
+        let interior: Vec<bool> =
+            nodes.positions[..nodes.free].par_iter().map(|p| problem.domain.signed_distance(*p) <= -params.horizon).collect();
+        let gradient = problem.outputs.needs_gradient().then(|| strain::gradients(&nodes, &families, &u));
+        let stress = gradient.as_ref().map(|g| stress::stresses(&problem.material, g));
+        let exact_u: Option<Vec<[f64; 2]>> = exact.map(|e| nodes.positions[..nodes.free].par_iter().map(|p| e.displacement(*p)).collect());
+        let errors = exact_u.as_ref().map(|ue| {
+            let whole = displacement_errors(&u, ue, |_| true).expect("at least one free node");
+            (whole, displacement_errors(&u, ue, |i| interior[i]))
+        });
+        let note = match &errors {
+            Some((w, i)) => format!("e_inf(u) = {:.3e} (interior {})", w.e_inf_u, i.map_or("-".into(), |i| format!("{:.3e}", i.e_inf_u))),
+            None => String::new(),
+        };
+        Ok(((u, interior, gradient, stress, exact_u, errors), note))
+    })?;
+    t.post = slot;
+
+    Ok(PdSolution {
+        params: *params,
+        unknowns: 2 * nodes.free,
+        bonds: families.bonds(),
+        weights: WeightsSummary {
+            complete_families: weights.complete_families,
+            compatible_rows: weights.compatible_rows,
+            compatible_failures: weights.compatible_failures,
+        },
+        nodes,
+        displacement,
+        body_force,
+        interior,
+        layer_nodes,
+        nonzeros,
+        gradient,
+        stress,
+        exact: exact_u,
+        errors,
+        micromodulus,
+        solver: report,
+        timings: t,
+    })
+}

@@ -1,0 +1,199 @@
+//! Bond coefficients `c_ij` of `(L_h u)_i = sum_j c_ij (xi_ij ⊗ xi_ij)(u_j - u_i)`:
+//!
+//! ```text
+//! c_ij = lambda(|xi_ij|) * V_j * f_ij * g_ij
+//! ```
+//!
+//! with `V_j` the node's quadrature weight (cell area share), `f_ij` the partial-area
+//! fraction `|cell_j ∩ B(x_i, delta)| / |cell_j|` (partial-area rule; 1 otherwise) and
+//! `g_ij = 2 / (r_i + r_j)` the volume surface correction, `r_i = V_i^fam / V^fam_full`
+//! the node's family volume relative to that of the same rule point in an unbounded
+//! lattice (1 for constrained nodes; `g = 1` without correction). Using the lattice's own
+//! full-family volume rather than `pi delta^2` keeps `g = 1` exactly in the interior.
+//! With the asymptotically compatible rule, rows whose family is complete are then
+//! replaced by [`super::compatible::compatible_weights`].
+//!
+//! Every rule but the compatible one gives `V_i c_ij = V_j c_ji`: the stiffness is symmetric.
+
+use super::compatible::compatible_weights;
+use super::family::Families;
+use super::nodes::{rule, PdNodes};
+use super::{Micromodulus, PdParams, Quadrature, SurfaceCorrection};
+use crate::domain::Point;
+use rayon::prelude::*;
+
+/// Radius of the family search of a rule (padded by `1e-9` relative so that lattice
+/// points at exactly the horizon belong to the family).
+pub fn search_radius(params: &PdParams) -> f64 {
+    let reach = match params.quadrature {
+        Quadrature::PartialArea => params.horizon + params.spacing() / 2f64.sqrt(),
+        _ => params.horizon,
+    };
+    reach * (1.0 + 1e-9)
+}
+
+/// Area of the disc of radius `r` at the origin inside `[x0, x1] x [y0, y1]`, exactly
+/// (inclusion-exclusion of quadrant areas; circular segments by their primitive).
+pub fn disc_rectangle_area(r: f64, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    // Area of the disc inside [0, x] x [0, y] for x, y >= 0.
+    let quadrant = |x: f64, y: f64| -> f64 {
+        let (x, y) = (x.min(r), y.min(r));
+        if x * x + y * y <= r * r {
+            return x * y;
+        }
+        let prim = |t: f64| 0.5 * (t * (r * r - t * t).max(0.0).sqrt() + r * r * (t / r).clamp(-1.0, 1.0).asin());
+        let a = (r * r - y * y).max(0.0).sqrt();
+        a * y + prim(x) - prim(a)
+    };
+    let signed = |x: f64, y: f64| x.signum() * y.signum() * quadrant(x.abs(), y.abs());
+    signed(x1, y1) - signed(x0, y1) - signed(x1, y0) + signed(x0, y0)
+}
+
+/// `f_ij`: share of the cell of side `h` centred at offset `xi` inside the horizon disc.
+pub fn partial_area_fraction(xi: Point, h: f64, delta: f64) -> f64 {
+    let a = disc_rectangle_area(delta, xi[0] - h / 2.0, xi[0] + h / 2.0, xi[1] - h / 2.0, xi[1] + h / 2.0);
+    (a / (h * h)).clamp(0.0, 1.0)
+}
+
+fn area_fraction(params: &PdParams, xi: Point) -> f64 {
+    match params.quadrature {
+        Quadrature::PartialArea => partial_area_fraction(xi, params.spacing(), params.horizon),
+        _ => 1.0,
+    }
+}
+
+/// Family volume and bond count of each rule point in an unbounded lattice.
+pub fn full_families(params: &PdParams) -> Vec<(f64, usize)> {
+    let h = params.spacing();
+    let pts = rule(params.quadrature);
+    let radius = search_radius(params);
+    let k = (radius / h).ceil() as i64 + 2;
+    pts.iter()
+        .enumerate()
+        .map(|(own, (q, _))| {
+            let (mut volume, mut count) = (0.0, 0);
+            for a in -k..=k {
+                for b in -k..=k {
+                    for (l, (p, w)) in pts.iter().enumerate() {
+                        if a == 0 && b == 0 && l == own {
+                            continue;
+                        }
+                        let xi = [(a as f64 + p[0] - q[0]) * h, (b as f64 + p[1] - q[1]) * h];
+                        if xi[0].hypot(xi[1]) <= radius {
+                            volume += w * h * h * area_fraction(params, xi);
+                            count += 1;
+                        }
+                    }
+                }
+            }
+            (volume, count)
+        })
+        .collect()
+}
+
+/// Bond coefficients and what the weighting did.
+#[derive(Debug, Clone)]
+pub struct BondWeights {
+    /// `c_ij` per bond, in family order.
+    pub coefficients: Vec<f64>,
+    /// Free nodes whose family is complete (as many bonds as in an unbounded lattice).
+    pub complete_families: usize,
+    /// Rows given asymptotically compatible weights.
+    pub compatible_rows: usize,
+    /// Complete rows where the moment problem was singular (base weights kept).
+    pub compatible_failures: usize,
+}
+
+/// Coefficients of every bond (module docs); `moment` is the calibrated `M`.
+pub fn bond_coefficients(nodes: &PdNodes, families: &Families, kernel: &Micromodulus, params: &PdParams, moment: f64) -> BondWeights {
+    let x = &nodes.positions;
+    let offset = |i: usize, j: u32| -> Point {
+        let (a, b) = (x[i], x[j as usize]);
+        [b[0] - a[0], b[1] - a[1]]
+    };
+    let full = full_families(params);
+    let base_row = |i: usize| -> Vec<f64> {
+        families
+            .of(i)
+            .iter()
+            .map(|&j| kernel.value(norm(offset(i, j))) * nodes.volumes[j as usize] * area_fraction(params, offset(i, j)))
+            .collect()
+    };
+    // Relative family volume r_i of free nodes (constrained nodes count as complete).
+    let ratio: Vec<f64> = match params.correction {
+        SurfaceCorrection::None => Vec::new(),
+        SurfaceCorrection::Volume => (0..nodes.free)
+            .into_par_iter()
+            .map(|i| {
+                let v: f64 = families.of(i).iter().map(|&j| nodes.volumes[j as usize] * area_fraction(params, offset(i, j))).sum();
+                v / full[nodes.rule_point[i] as usize].0
+            })
+            .collect(),
+    };
+    let r_of = |j: usize| if j < nodes.free { ratio[j] } else { 1.0 };
+    let rows: Vec<(Vec<f64>, bool, Option<bool>)> = (0..nodes.free)
+        .into_par_iter()
+        .map(|i| {
+            let mut c = base_row(i);
+            if params.correction == SurfaceCorrection::Volume {
+                for (cj, &j) in c.iter_mut().zip(families.of(i)) {
+                    *cj *= 2.0 / (r_of(i) + r_of(j as usize));
+                }
+            }
+            let complete = families.of(i).len() == full[nodes.rule_point[i] as usize].1;
+            let mut compatible = None;
+            if complete && params.quadrature == Quadrature::Compatible {
+                let xi: Vec<Point> = families.of(i).iter().map(|&j| offset(i, j)).collect();
+                match compatible_weights(&xi, &c, params.horizon, moment) {
+                    Some(w) => {
+                        c = w;
+                        compatible = Some(true);
+                    }
+                    None => compatible = Some(false),
+                }
+            }
+            (c, complete, compatible)
+        })
+        .collect();
+    let complete_families = rows.iter().filter(|r| r.1).count();
+    let compatible_rows = rows.iter().filter(|r| r.2 == Some(true)).count();
+    let compatible_failures = rows.iter().filter(|r| r.2 == Some(false)).count();
+    let coefficients = rows.into_iter().flat_map(|r| r.0).collect();
+    BondWeights { coefficients, complete_families, compatible_rows, compatible_failures }
+}
+
+fn norm(p: Point) -> f64 {
+    p[0].hypot(p[1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disc_rectangle_area_limits() {
+        let pi = std::f64::consts::PI;
+        // Whole disc, a quadrant, a half, a square inside.
+        assert!((disc_rectangle_area(1.0, -2.0, 2.0, -2.0, 2.0) - pi).abs() < 1e-14);
+        assert!((disc_rectangle_area(1.0, 0.0, 5.0, 0.0, 5.0) - pi / 4.0).abs() < 1e-14);
+        assert!((disc_rectangle_area(2.0, -3.0, 0.0, -3.0, 3.0) - 2.0 * pi).abs() < 1e-13);
+        assert!((disc_rectangle_area(1.0, -0.5, 0.5, -0.5, 0.5) - 1.0).abs() < 1e-15);
+        assert_eq!(disc_rectangle_area(1.0, 2.0, 3.0, 0.0, 1.0), 0.0);
+        // A strip x in [0.5, 1]: segment area r^2 acos(d) - d sqrt(r^2 - d^2) with d = 0.5.
+        let seg = (0.5f64).acos() - 0.5 * (0.75f64).sqrt();
+        assert!((disc_rectangle_area(1.0, 0.5, 2.0, -2.0, 2.0) - seg).abs() < 1e-14);
+    }
+
+    /// Partial areas of all cells of a lattice add up to the disc area.
+    #[test]
+    fn partial_areas_tile_the_disc() {
+        let (h, delta) = (0.1, 0.3);
+        let mut total = 0.0;
+        for a in -5..=5 {
+            for b in -5..=5 {
+                total += partial_area_fraction([a as f64 * h, b as f64 * h], h, delta) * h * h;
+            }
+        }
+        assert!((total - std::f64::consts::PI * delta * delta).abs() < 1e-14);
+    }
+}
