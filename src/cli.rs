@@ -60,4 +60,28 @@ pub enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Peridynamics at a sequence of horizons against the local (Navier) solution:
+    /// difference norms on the interior region and the whole plate, observed orders in delta.
+    Compare {
+        /// Scene file (TOML) with a [peridynamics] table.
+        scene: PathBuf,
+        /// Ratio m = delta / h (default: the scene's).
+        #[arg(long)]
+        m: Option<f64>,
+        /// Horizons, comma-separated (default: the scene's horizon and --levels halvings).
+        #[arg(long, value_delimiter = ',')]
+        deltas: Option<Vec<f64>>,
+        /// Halvings of the scene's horizon when --deltas is not given.
+        #[arg(long, default_value_t = 3)]
+        levels: usize,
+        /// Quadrature rules, comma-separated (default: the scene's), e.g. ac,full-area,partial-area.
+        #[arg(long, value_delimiter = ',')]
+        quadratures: Option<Vec<String>>,
+        /// Node spacing of the MLSM reference (default: the scene's; unused when the scene has an [exact] solution).
+        #[arg(long)]
+        reference_spacing: Option<f64>,
+        /// Output folder (default: output/<scene name>/compare).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }

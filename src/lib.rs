@@ -19,6 +19,7 @@
 //!
 //! [`run`] strings the stages together; [`app`] and [`cli`] are the command line.
 
+pub mod compare;
 pub mod domain;
 pub mod elasticity;
 pub mod exact;

@@ -33,6 +33,16 @@ pub fn relative_errors<const K: usize>(numerical: &[[f64; K]], exact: &[[f64; K]
     (max_d / max_e, (sum_d / sum_e).sqrt())
 }
 
+/// Displacement error norms over the entries `i < reference.len()` selected by `keep`
+/// (`None` when none is selected); stress norms are left empty.
+pub fn masked_errors(u: &[[f64; 2]], reference: &[[f64; 2]], keep: impl Fn(usize) -> bool) -> Option<ErrorNorms> {
+    let (a, b): (Vec<[f64; 2]>, Vec<[f64; 2]>) = (0..reference.len()).filter(|&i| keep(i)).map(|i| (u[i], reference[i])).unzip();
+    (!a.is_empty()).then(|| {
+        let (e_inf_u, rel_l2_u) = relative_errors(&a, &b);
+        ErrorNorms { e_inf_u, e_inf_sigma: None, rel_l2_u, rel_l2_sigma: None }
+    })
+}
+
 /// Least-squares slope of `log e` against `log h`: the observed order of convergence.
 pub fn observed_order(h: &[f64], e: &[f64]) -> Option<f64> {
     let pts: Vec<(f64, f64)> = h.iter().zip(e).filter(|(h, e)| **h > 0.0 && **e > 0.0).map(|(h, e)| (h.ln(), e.ln())).collect();

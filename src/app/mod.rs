@@ -1,5 +1,6 @@
 //! Orchestration of the commands; the only module that prints.
 
+mod compare;
 mod peridynamics;
 
 use crate::cli::{Cli, Command, ModelArg};
@@ -144,6 +145,18 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 print_result(&sol);
             }
             Ok(())
+        }
+        Command::Compare { scene, m, deltas, levels, quadratures, reference_spacing, out } => {
+            let p = Problem::from_file(scene)?;
+            let dir = out.clone().unwrap_or_else(|| default_out(&p).join("compare"));
+            let req = compare::CompareRequest {
+                m: *m,
+                deltas: deltas.clone(),
+                levels: *levels,
+                quadratures: quadratures.clone(),
+                reference_spacing: *reference_spacing,
+            };
+            compare::compare(&p, req, &dir, &term, cli.quiet)
         }
         Command::Convergence { scene, levels, out } => {
             let p = Problem::from_file(scene)?;

@@ -10,6 +10,7 @@
 //! * [`write_vtu`] / [`read_vtu`]: XML unstructured grid with triangle cells and point data,
 //!   written with `vtkio` (inline base64, Float64/Int32 arrays, so values are bit-exact).
 //! * [`write_pvd`]: a ParaView collection (time series) file, written by hand.
+//! * [`write_loglog_svg`]: log-log convergence plots (SVG, plotters).
 //! * [`peak_memory_bytes`]: peak resident memory of the process (Linux `VmHWM`).
 //!
 //! Errors are reported as [`OutputError`]; every variant names the file or field concerned.
@@ -21,11 +22,13 @@ use std::path::PathBuf;
 
 mod atomic;
 mod memory;
+mod plot;
 mod triangulate;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
 pub use memory::peak_memory_bytes;
+pub use plot::{write_loglog_svg, Series};
 pub use triangulate::triangulate;
 pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};
 

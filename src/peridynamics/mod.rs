@@ -91,6 +91,8 @@ pub struct PdParams {
     pub quadrature: Quadrature,
     /// Surface correction.
     pub correction: SurfaceCorrection,
+    /// Linear solver of the static system (`[peridynamics.solver]`).
+    pub solver: crate::linalg::SolverParams,
 }
 
 impl PdParams {

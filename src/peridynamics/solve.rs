@@ -10,7 +10,7 @@ use super::weights::{bond_coefficients, search_radius, BondWeights};
 use super::{loads, strain, PdParams};
 use crate::elasticity::stress;
 use crate::linalg::{self, SolveReport};
-use crate::post::{relative_errors, ErrorNorms};
+use crate::post::{masked_errors, ErrorNorms};
 use crate::problem::Problem;
 use crate::run::{exact_solution, timed, Progress, RunError, Stage};
 use rayon::prelude::*;
@@ -84,15 +84,6 @@ pub struct WeightsSummary {
     pub compatible_failures: usize,
 }
 
-/// Displacement error norms over the free nodes selected by `keep`.
-pub fn displacement_errors(u: &[[f64; 2]], reference: &[[f64; 2]], keep: impl Fn(usize) -> bool) -> Option<ErrorNorms> {
-    let (a, b): (Vec<[f64; 2]>, Vec<[f64; 2]>) = (0..reference.len()).filter(|&i| keep(i)).map(|i| (u[i], reference[i])).unzip();
-    (!a.is_empty()).then(|| {
-        let (e_inf_u, rel_l2_u) = relative_errors(&a, &b);
-        ErrorNorms { e_inf_u, e_inf_sigma: None, rel_l2_u, rel_l2_sigma: None }
-    })
-}
-
 /// Solve the static peridynamic problem of `problem` with `params`.
 pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> Result<PdSolution, RunError> {
     let mut t = PdTimings::default();
@@ -137,7 +128,7 @@ pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> R
     t.assembly = slot;
     let nonzeros = matrix.compute_nnz();
     let (x, report) = timed(progress, Stage::Solve, &mut slot, || {
-        let (x, report) = linalg::solve(&matrix, &rhs, &problem.solver)?;
+        let (x, report) = linalg::solve(&matrix, &rhs, &params.solver)?;
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;
@@ -153,8 +144,8 @@ pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> R
         let stress = gradient.as_ref().map(|g| stress::stresses(&problem.material, g));
         let exact_u: Option<Vec<[f64; 2]>> = exact.map(|e| nodes.positions[..nodes.free].par_iter().map(|p| e.displacement(*p)).collect());
         let errors = exact_u.as_ref().map(|ue| {
-            let whole = displacement_errors(&u, ue, |_| true).expect("at least one free node");
-            (whole, displacement_errors(&u, ue, |i| interior[i]))
+            let whole = masked_errors(&u, ue, |_| true).expect("at least one free node");
+            (whole, masked_errors(&u, ue, |i| interior[i]))
         });
         let note = match &errors {
             Some((w, i)) => format!("e_inf(u) = {:.3e} (interior {})", w.e_inf_u, i.map_or("-".into(), |i| format!("{:.3e}", i.e_inf_u))),

@@ -56,6 +56,8 @@ pub struct PeridynamicsSpec {
     pub quadrature: Option<String>,
     /// `none` or `volume`.
     pub correction: Option<String>,
+    /// Linear solver of the peridynamic system (default BiCGSTAB + ILU(0)).
+    pub solver: Option<SolverSpec>,
 }
 
 /// `[domain]`: a list of regions combined left to right.

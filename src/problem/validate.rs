@@ -321,7 +321,19 @@ fn peridynamics(
         s.correction.as_deref().unwrap_or("none"),
         &[("none", SurfaceCorrection::None), ("volume", SurfaceCorrection::Volume)],
     )?;
-    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction };
+    let solver = match &s.solver {
+        // The PD stiffness is an M-matrix-like, diagonally dominant block Laplacian:
+        // ILU(0)-preconditioned BiCGSTAB beat sparse LU 6x at 1.4e4 nodes (BENCHMARKS.md).
+        None => SolverParams {
+            kind: SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 5000 },
+            equilibrate: true,
+        },
+        Some(spec) => solver(c, spec).map_err(|mut e| {
+            e.field = e.field.replacen("solver", "peridynamics.solver", 1);
+            e
+        })?,
+    };
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver };
     check_peridynamics(&params, domain).map_err(|(f, r)| ProblemError {
         file: c.path.to_path_buf(),
         field: format!("peridynamics.{f}"),
