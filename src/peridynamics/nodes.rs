@@ -80,31 +80,60 @@ impl PdNodes {
     }
 }
 
-/// Lay out the nodes of `params.quadrature` over `domain` and its Dirichlet collar.
-pub fn generate(domain: &Domain, conditions: &[BoundaryCondition], exact: Option<&dyn ExactSolution>, params: &PdParams) -> PdNodes {
+/// The solid together with its Dirichlet collar: which points carry material and
+/// which of them are constrained.
+pub struct Body<'a> {
+    domain: &'a Domain,
+    conditions: &'a [BoundaryCondition],
+    exact: Option<&'a dyn ExactSolution>,
+    samples: Vec<crate::domain::BoundarySample>,
+    tree: ImmutableKdTree<f64, 2>,
+    /// Collar width `delta + 0.75 h`.
+    pub collar: f64,
+}
+
+impl<'a> Body<'a> {
+    /// The body of `domain` for the horizon and cell size of `params`.
+    pub fn new(domain: &'a Domain, conditions: &'a [BoundaryCondition], exact: Option<&'a dyn ExactSolution>, params: &PdParams) -> Self {
+        let h = params.spacing();
+        // Which boundary part is nearest to an outside point: fine boundary samples.
+        let samples = discretise_boundary(domain, h / 4.0);
+        let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
+        let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&points).expect("finite boundary samples");
+        Body { domain, conditions, exact, samples, tree, collar: params.horizon + 0.75 * h }
+    }
+
+    /// Prescribed displacement of an outside point whose nearest boundary part has a
+    /// displacement condition (corner rule as for MLSM: a displacement part wins).
+    pub fn constraint(&self, p: Point) -> Option<[f64; 2]> {
+        let nearest = self.tree.query(&p).nearest_one::<SquaredEuclidean<f64>>().execute();
+        let s = &self.samples[nearest.item as usize];
+        s.touches.iter().map(|(part, _)| self.conditions[*part]).find(|bc| bc.components == [ComponentCondition::Displacement; 2]).map(
+            |bc| match bc.value {
+                Value::Constant(v) => v,
+                Value::Exact => self.exact.expect("validated: exact values need an exact solution").displacement(p),
+            },
+        )
+    }
+
+    /// Whether `p` carries material: inside the solid or in the constrained collar.
+    pub fn contains(&self, p: Point) -> bool {
+        let d = self.domain.signed_distance(p);
+        d <= 0.0 || (d <= self.collar && self.constraint(p).is_some())
+    }
+}
+
+/// Lay out the nodes of `params.quadrature` over the body (solid and collar).
+pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
+    let domain = body.domain;
     let h = params.spacing();
-    let collar = params.horizon + 0.75 * h;
+    let collar = body.collar;
     let (lo, hi) = domain.bounding_box();
     let pad = (collar / h).ceil() as i64 + 1;
     let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
     let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
     let rule = rule(params.quadrature);
-
-    // Which boundary part is nearest to an outside point: fine boundary samples.
-    let samples = discretise_boundary(domain, h / 4.0);
-    let sample_points: Vec<Point> = samples.iter().map(|s| s.position).collect();
-    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&sample_points).expect("finite boundary samples");
-    let constraint_of = |p: Point| -> Option<[f64; 2]> {
-        let nearest = tree.query(&p).nearest_one::<SquaredEuclidean<f64>>().execute();
-        let s = &samples[nearest.item as usize];
-        // Corner rule as for MLSM: a displacement part wins.
-        s.touches.iter().map(|(part, _)| conditions[*part]).find(|bc| bc.components == [ComponentCondition::Displacement; 2]).map(|bc| {
-            match bc.value {
-                Value::Constant(v) => v,
-                Value::Exact => exact.expect("validated: exact values need an exact solution").displacement(p),
-            }
-        })
-    };
+    let constraint_of = |p: Point| body.constraint(p);
 
     // Row by row in parallel, then free nodes first, constrained after, each in lattice order.
     type Free = (Point, f64, u8);

@@ -4,7 +4,7 @@
 
 use super::family::Families;
 use super::kernel::{fourth_moment, Micromodulus};
-use super::nodes::{self, PdNodes};
+use super::nodes::{self, Body, PdNodes};
 use super::operator::Bonds;
 use super::weights::{bond_coefficients, search_radius, BondWeights};
 use super::{loads, strain, PdParams};
@@ -84,33 +84,57 @@ pub struct WeightsSummary {
     pub compatible_failures: usize,
 }
 
+/// The discrete peridynamic operator of a scene: nodes, families, bond weights.
+pub struct Discretisation {
+    /// Nodes (free first, then the constrained collar).
+    pub nodes: PdNodes,
+    /// Families of the free nodes.
+    pub families: Families,
+    /// Bond coefficients.
+    pub weights: BondWeights,
+    /// Calibrated micromodulus.
+    pub micromodulus: Micromodulus,
+}
+
+impl Discretisation {
+    /// Build the nodes, families and bond weights of `problem` with `params`, timing
+    /// each stage into `t`.
+    pub fn new(problem: &Problem, params: &PdParams, progress: &dyn Progress, t: &mut PdTimings) -> Result<Self, RunError> {
+        let exact = exact_solution(problem);
+        let body = Body::new(&problem.domain, &problem.conditions, exact.as_deref(), params);
+        let nodes = timed(progress, Stage::Nodes, &mut t.nodes, || {
+            let n = nodes::generate(&body, params);
+            let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
+            Ok((n, note))
+        })?;
+        let families = timed(progress, Stage::Families, &mut t.families, || {
+            let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
+            let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
+            Ok((f, note))
+        })?;
+        let moment = fourth_moment(&problem.material);
+        let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
+        let weights = timed(progress, Stage::Weights, &mut t.weights, || {
+            let w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment);
+            let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
+            Ok((w, note))
+        })?;
+        Ok(Discretisation { nodes, families, weights, micromodulus })
+    }
+
+    /// The operator `L_h` over these bonds.
+    pub fn bonds(&self) -> Bonds<'_> {
+        Bonds { nodes: &self.nodes, families: &self.families, coefficients: &self.weights.coefficients }
+    }
+}
+
 /// Solve the static peridynamic problem of `problem` with `params`.
 pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> Result<PdSolution, RunError> {
     let mut t = PdTimings::default();
     let exact = exact_solution(problem);
     let exact = exact.as_deref();
     let mut slot = 0.0;
-
-    let nodes = timed(progress, Stage::Nodes, &mut slot, || {
-        let n = nodes::generate(&problem.domain, &problem.conditions, exact, params);
-        let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
-        Ok((n, note))
-    })?;
-    t.nodes = slot;
-    let families = timed(progress, Stage::Families, &mut slot, || {
-        let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
-        let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
-        Ok((f, note))
-    })?;
-    t.families = slot;
-    let moment = fourth_moment(&problem.material);
-    let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
-    let weights: BondWeights = timed(progress, Stage::Weights, &mut slot, || {
-        let w = bond_coefficients(&nodes, &families, &micromodulus, params, moment);
-        let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
-        Ok((w, note))
-    })?;
-    t.weights = slot;
+    let Discretisation { nodes, families, weights, micromodulus } = Discretisation::new(problem, params, progress, &mut t)?;
     let bonds = Bonds { nodes: &nodes, families: &families, coefficients: &weights.coefficients };
 
     let (matrix, rhs, body_force, layer_nodes) = timed(progress, Stage::Assembly, &mut slot, || {

@@ -77,3 +77,8 @@ pub fn orders(name: &str, spacings: &[f64], extra: &[(&str, Option<toml::Value>)
     eprintln!("{name}: {rows:?} -> order u {pu:.3}, sigma {ps:.3}");
     (pu, ps, rows)
 }
+
+/// An array-of-floats TOML value.
+pub fn arr(v: &[f64]) -> Option<toml::Value> {
+    Some(toml::Value::Array(v.iter().map(|x| toml::Value::Float(*x)).collect()))
+}
