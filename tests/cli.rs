@@ -98,6 +98,11 @@ fn scene_plus(extra: &str) -> String {
     format!("{TEMPLATE}\n{extra}")
 }
 
+/// [`TEMPLATE`] with nu = 1/4 and a `[peridynamics]` table (horizon 0.2), with edits.
+fn pd(edits: &[(&str, &str)]) -> String {
+    edit(&scene_plus("[peridynamics]\nhorizon = 0.2\n").replace("nu = 0.3", "nu = 0.25"), edits)
+}
+
 /// [`TEMPLATE`] without [exact] (and so without the exact body force and boundary
 /// values): a valid scene whose solution is zero.
 fn no_exact() -> String {
@@ -372,6 +377,64 @@ fn invalid_scenes_exit_2_naming_the_field() {
             &["boundary[0].kind", "clamped"],
         ),
         ("nonexistent scene file", None, &["(file)"]),
+        // Peridynamics ([peridynamics] table on the template, nu = 1/4 unless the case is about nu).
+        ("bond-based PD with nu = 0.3", Some(scene_plus("[peridynamics]\nhorizon = 0.2\n")), &["material.nu", "nu = 1/4", "plane strain"]),
+        (
+            "PD horizon smaller than the spacing",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.2\nm = 0.5")])),
+            &["peridynamics.m", "smaller than the node spacing"],
+        ),
+        (
+            "PD unknown quadrature",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.2\nquadrature = \"simpson\"")])),
+            &["peridynamics.quadrature", "simpson", "\"ac\""],
+        ),
+        (
+            "PD horizon larger than the domain",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.7")])),
+            &["peridynamics.horizon", "larger than half"],
+        ),
+        ("PD without horizon", Some(pd(&[("horizon = 0.2", "")])), &["peridynamics.horizon", "missing"]),
+        ("PD unknown kernel", Some(pd(&[("horizon = 0.2", "horizon = 0.2\nkernel = \"gauss\"")])), &["peridynamics.kernel", "regularised"]),
+        ("PD alpha on the plain kernel", Some(pd(&[("horizon = 0.2", "horizon = 0.2\nalpha = 1.0")])), &["peridynamics.alpha"]),
+        (
+            "PD alpha <= -4",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.2\nkernel = \"regularised\"\nalpha = -4.0")])),
+            &["peridynamics.alpha", "unbounded"],
+        ),
+        (
+            "PD unknown correction",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.2\ncorrection = \"energy\"")])),
+            &["peridynamics.correction", "volume"],
+        ),
+        ("PD unknown key", Some(pd(&[("horizon = 0.2", "horizon = 0.2\ndelta = 0.1")])), &["peridynamics.delta", "unknown field"]),
+        (
+            "PD solver",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.2\n[peridynamics.solver]\nkind = \"cg\"")])),
+            &["peridynamics.solver.kind", "cg"],
+        ),
+        (
+            "PD with a mixed condition",
+            Some(edit(
+                &pd(&[]),
+                &[("part = \"top\"\nkind = \"displacement\"", "part = \"top\"\nkind = \"mixed\"\nx = \"displacement\"\ny = \"traction\"")],
+            )),
+            &["boundary[3].kind", "volume constraint"],
+        ),
+        (
+            "model without [peridynamics]",
+            Some(scene(&[("body_force = \"exact\"\n", "body_force = \"exact\"\nmodel = \"peridynamics\"\n")])),
+            &["model", "[peridynamics]"],
+        ),
+        ("unknown model", Some(scene(&[("body_force = \"exact\"\n", "body_force = \"exact\"\nmodel = \"fem\"\n")])), &["model", "fem"]),
+        (
+            "polynomial with 3 coefficients",
+            Some(scene(&[(
+                "kind = \"manufactured\"",
+                "kind = \"polynomial\"\nux = [1.0, 2.0, 3.0]\nuy = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]",
+            )])),
+            &["exact.ux", "10 coefficients"],
+        ),
     ];
     assert!(cases.len() >= 20);
     let mut failures = Vec::new();
@@ -446,4 +509,85 @@ fn solver_failure_exits_3() {
     assert!(err.contains("residual"), "{err}");
     assert!(!err.contains("panicked"), "{err}");
     assert!(!res.exists(), "output folder created by a failed solve");
+}
+
+#[test]
+fn peridynamic_run_writes_solution_and_summary() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "pd.toml", &pd(&[("horizon = 0.2", "horizon = 0.1")]));
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "pd.toml", "--model", "peridynamics", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    assert_eq!(s["model"], "peridynamics");
+    assert_eq!(count(&s, "nodes"), 900, "30 x 30 cells of h = 0.1 / 3");
+    assert!(count(&s, "constrained_nodes") > 0 && count(&s, "bonds") == 900 * 28, "{s}");
+    assert_eq!(count(&s, "unknowns"), 1800);
+    for stage in ["nodes", "families", "weights", "assembly", "solve", "post", "output", "total"] {
+        assert!(s["timings_s"][stage].as_f64().is_some(), "timing {stage} missing");
+    }
+    let e = num(&s["errors"], "e_inf_u");
+    assert!(e > 0.0 && e < 1e-2, "manufactured solution, delta = 0.1: e_inf {e}");
+    let vtu = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
+    assert_eq!(vtu.points.len(), 900);
+    assert!(vtu.fields.contains_key("displacement") && vtu.fields.contains_key("interior"));
+    // --spacing belongs to MLSM.
+    let o = mlsm(tmp.path(), &["run", "pd.toml", "--model", "peridynamics", "--spacing", "0.1"]);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+}
+
+#[test]
+fn compare_end_to_end_with_vtk_read_back() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "pd.toml", &pd(&[]));
+    let res = tmp.path().join("cmp");
+    let o =
+        mlsm(tmp.path(), &["compare", "pd.toml", "--deltas", "0.2,0.1", "--quadratures", "ac,full-area", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("observed order in delta") && out.contains("full-area"), "{out}");
+    let t = read_json(&res.join("compare.json"));
+    let rows = t["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    for f in ["compare.svg", "compare_ac.csv", "compare_full-area.csv"] {
+        assert!(res.join(f).exists(), "{f} missing");
+    }
+    let svg = std::fs::read_to_string(res.join("compare.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("ac interior"), "not a plot");
+    // The difference stored in each .vtu reproduces the table's whole-plate norm.
+    for r in rows {
+        let vtu = mlsm::output::read_vtu(&res.join(r["vtu"].as_str().unwrap())).unwrap();
+        let field = |name: &str| vtu.fields.get(name).unwrap_or_else(|| panic!("{name} missing")).1.clone();
+        let (pd, local) = (field("peridynamic_displacement"), field("local_displacement"));
+        let diff = pd.iter().zip(&local).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let max = local.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let e = num(r, "e_inf_whole");
+        assert!((diff / max - e).abs() <= 1e-12 * e, "{}: {} vs {e}", r["vtu"], diff / max);
+    }
+    // The compatible rule converges (delta 0.2 -> 0.1), the full-area one does not.
+    let order = |q: &str| t["orders"].as_array().unwrap().iter().find(|o| o["quadrature"] == q).unwrap()["e_inf_whole"].as_f64().unwrap();
+    assert!(order("ac") > 1.5 && order("full-area") < 0.5, "{}", t["orders"]);
+}
+
+#[test]
+fn compare_refuses_bad_requests() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "pd.toml", &pd(&[]));
+    write(tmp.path(), "plain.toml", TEMPLATE);
+    let cases: [(&[&str], &str); 5] = [
+        (&["compare", "pd.toml", "--quadratures", "ac,simpson"], "simpson"),
+        (&["compare", "pd.toml", "--deltas", "0.1"], "two horizons"),
+        (&["compare", "pd.toml", "--deltas", "0.1,0.9"], "peridynamics.horizon"),
+        (&["compare", "pd.toml", "--deltas", "0.2,0.1", "--m", "0.5"], "peridynamics.m"),
+        (&["compare", "plain.toml"], "[peridynamics]"),
+    ];
+    for (args, msg) in cases {
+        let res = tmp.path().join("cmp");
+        let mut a = args.to_vec();
+        a.extend(["--out", res.to_str().unwrap()]);
+        let o = mlsm(tmp.path(), &a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", describe(&o));
+        assert!(stderr(&o).contains(msg), "{args:?}: {}", describe(&o));
+        assert!(!res.exists(), "{args:?}: output written before the request was checked");
+    }
 }

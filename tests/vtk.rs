@@ -15,8 +15,11 @@ fn run_scene(name: &str, edit: impl Fn(String) -> String) -> (tempfile::TempDir,
     let text = std::fs::read_to_string(format!("{}/problems/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
     std::fs::write(&scene_path, edit(text)).unwrap();
     let out = dir.path().join("res");
-    mlsm::app::run(&Cli { quiet: true, command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None } })
-        .unwrap();
+    mlsm::app::run(&Cli {
+        quiet: true,
+        command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None, model: None, horizon: None },
+    })
+    .unwrap();
     (dir, scene_path, out)
 }
 
