@@ -204,10 +204,12 @@ fn continuum_operator_of_calibrated_kernels_is_navier_on_cubics() {
 /// Dense copy of the stiffness from its triplets.
 fn dense_stiffness(d: &Discretisation) -> Vec<Vec<f64>> {
     let n = 2 * d.nodes.free;
-    let (t, _) = d.bonds().stiffness(&vec![[0.0, 0.0]; d.nodes.free]);
+    let (m, _) = d.bonds().stiffness(&vec![[0.0, 0.0]; d.nodes.free]).unwrap();
     let mut k = vec![vec![0.0; n]; n];
-    for e in t.entries() {
-        k[e.row][e.col] += e.val;
+    for col in 0..n {
+        for (&row, &v) in m.symbolic().row_idx_of_col_raw(col).iter().zip(m.val_of_col(col)) {
+            k[row][col] += v;
+        }
     }
     k
 }

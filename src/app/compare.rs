@@ -1,9 +1,9 @@
 //! `mlsm compare`: peridynamics at a sequence of horizons (fixed m = delta / h) against
 //! the local solution; tables (CSV, JSON), a log-log plot (SVG) and one .vtu per run.
 
-use super::{scalar, vector, AppError, Terminal};
+use super::{create_dir, scalar, vector, write_points_vtu, AppError, Terminal};
 use crate::compare::LocalReference;
-use crate::output::{self, FieldValues, OutputError, PointField, Series};
+use crate::output::{self, FieldValues, PointField, Series};
 use crate::peridynamics::{PdParams, Quadrature};
 use crate::post::{masked_errors, observed_order};
 use crate::problem::Problem;
@@ -95,7 +95,7 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
         Some(h) if p.exact.is_none() => p.with_spacing(h)?,
         _ => p.clone(),
     };
-    std::fs::create_dir_all(dir).map_err(|e| OutputError::Io { path: dir.to_path_buf(), source: e })?;
+    create_dir(dir)?;
     if !quiet {
         eprintln!("{}: local reference", p.name);
     }
@@ -112,7 +112,6 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
         let whole = masked_errors(&sol.displacement, &local, |_| true).expect("free nodes exist");
         let interior = masked_errors(&sol.displacement, &local, |i| sol.interior[i]);
         let name = format!("{}_delta{}.vtu", params.quadrature.name(), k % deltas.len());
-        let tris = output::triangulate(free, |c| p.domain.contains(c));
         let diff: Vec<[f64; 2]> = sol.displacement.iter().zip(&local).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
         let fields = vec![
             vector("peridynamic_displacement", sol.displacement[..free.len()].iter().copied()),
@@ -125,7 +124,7 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
                 values: FieldValues::I32(sol.interior.iter().map(|&b| b as i32).collect()),
             },
         ];
-        output::write_vtu(&dir.join(&name), free, &tris, &fields)?;
+        write_points_vtu(&dir.join(&name), free, &p.domain, &fields)?;
         let interior = interior.ok_or_else(|| {
             AppError::Usage(format!(
                 "delta = {}: no node lies at distance >= delta from the boundary; use smaller horizons",

@@ -88,6 +88,17 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                     p.approximation.support,
                     p.approximation.basis.describe()
                 );
+                if let Some(pd) = &p.peridynamics {
+                    println!(
+                        "  peridynamics: horizon {:.4e}, m = {}, h = {:.4e}, {} nodes per cell, quadrature {}, kernel {}",
+                        pd.horizon,
+                        pd.ratio,
+                        pd.spacing(),
+                        pd.nodes_per_cell(),
+                        pd.quadrature.name(),
+                        pd.kernel.label()
+                    );
+                }
             }
             Ok(())
         }
@@ -227,6 +238,24 @@ struct MaterialSummary {
     mu: f64,
 }
 
+impl MaterialSummary {
+    fn of(m: &crate::elasticity::material::Material) -> Self {
+        let lame = m.lame();
+        MaterialSummary { young: m.elastic.young, poisson: m.elastic.poisson, plane: m.plane, lambda: lame.lambda, mu: lame.mu }
+    }
+}
+
+/// Create `dir` (and parents) for a command's results.
+fn create_dir(dir: &Path) -> Result<(), AppError> {
+    std::fs::create_dir_all(dir).map_err(|e| AppError::Output(OutputError::Io { path: dir.to_path_buf(), source: e }))
+}
+
+/// Write `points` with `fields` to a .vtu, with Delaunay triangles inside the solid for viewing.
+fn write_points_vtu(path: &Path, points: &[[f64; 2]], domain: &crate::domain::Domain, fields: &[PointField]) -> Result<(), AppError> {
+    let tris = output::triangulate(points, |c| domain.contains(c));
+    Ok(output::write_vtu(path, points, &tris, fields)?)
+}
+
 #[derive(Serialize)]
 struct TimingsSummary {
     #[serde(flatten)]
@@ -235,7 +264,6 @@ struct TimingsSummary {
 }
 
 fn summary<'a>(p: &'a Problem, sol: &'a Solution, total: f64) -> Summary<'a> {
-    let lame = p.material.lame();
     Summary {
         scene: &p.name,
         source: p.source.display().to_string(),
@@ -250,13 +278,7 @@ fn summary<'a>(p: &'a Problem, sol: &'a Solution, total: f64) -> Summary<'a> {
         seed: p.fill.seed,
         relax_iterations: p.fill.relax_iterations,
         approximation: p.approximation,
-        material: MaterialSummary {
-            young: p.material.elastic.young,
-            poisson: p.material.elastic.poisson,
-            plane: p.material.plane,
-            lambda: lame.lambda,
-            mu: lame.mu,
-        },
+        material: MaterialSummary::of(&p.material),
         operators_computed: sol.operators_computed.iter().cloned().collect(),
         timings_s: TimingsSummary { stages: sol.timings, total },
         solver: SolverSummary {
@@ -343,9 +365,8 @@ fn fields(p: &Problem, sol: &Solution) -> Vec<PointField> {
 
 fn write_run(p: &Problem, sol: &mut Solution, dir: &Path, t0: Instant) -> Result<(), AppError> {
     let t = Instant::now();
-    std::fs::create_dir_all(dir).map_err(|e| OutputError::Io { path: dir.to_path_buf(), source: e })?;
-    let tris = output::triangulate(&sol.nodes.positions, |c| p.domain.contains(c));
-    output::write_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &tris, &fields(p, sol))?;
+    create_dir(dir)?;
+    write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.domain, &fields(p, sol))?;
     sol.timings.output = t.elapsed().as_secs_f64();
     let total = t0.elapsed().as_secs_f64();
     output::write_json(&dir.join("summary.json"), &summary(p, sol, total))?;
@@ -421,7 +442,7 @@ fn convergence(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet: b
         fitted_order_e_inf_sigma: if es.iter().all(|e| e.is_finite()) { observed_order(&hs, &es) } else { None },
         levels: rows,
     };
-    std::fs::create_dir_all(dir).map_err(|e| OutputError::Io { path: dir.to_path_buf(), source: e })?;
+    create_dir(dir)?;
     let nan = |o: Option<f64>| o.unwrap_or(f64::NAN);
     let csv: Vec<Vec<f64>> = table
         .levels

@@ -1,7 +1,7 @@
 //! `mlsm run` with the peridynamic model: solution.vtu and summary.json.
 
-use super::{scalar, stress_fields, vector, AppError, MaterialSummary};
-use crate::output::{self, FieldValues, OutputError, PointField};
+use super::{create_dir, scalar, stress_fields, vector, write_points_vtu, AppError, MaterialSummary};
+use crate::output::{self, FieldValues, PointField};
 use crate::peridynamics::solve::{PdSolution, PdTimings, WeightsSummary};
 use crate::peridynamics::{Micromodulus, PdParams};
 use crate::post::ErrorNorms;
@@ -67,12 +67,9 @@ pub(super) fn pd_fields(p: &Problem, sol: &PdSolution) -> Vec<PointField> {
 /// Write `solution.vtu` (free nodes, Delaunay cells inside the solid) and `summary.json`.
 pub(super) fn write_pd_run(p: &Problem, sol: &mut PdSolution, dir: &Path, t0: Instant) -> Result<(), AppError> {
     let t = Instant::now();
-    std::fs::create_dir_all(dir).map_err(|e| OutputError::Io { path: dir.to_path_buf(), source: e })?;
-    let points = &sol.nodes.positions[..sol.nodes.free];
-    let tris = output::triangulate(points, |c| p.domain.contains(c));
-    output::write_vtu(&dir.join("solution.vtu"), points, &tris, &pd_fields(p, sol))?;
+    create_dir(dir)?;
+    write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions[..sol.nodes.free], &p.domain, &pd_fields(p, sol))?;
     sol.timings.output = t.elapsed().as_secs_f64();
-    let lame = p.material.lame();
     let summary = PdSummary {
         scene: &p.name,
         source: p.source.display().to_string(),
@@ -89,13 +86,7 @@ pub(super) fn write_pd_run(p: &Problem, sol: &mut PdSolution, dir: &Path, t0: In
         spacing: sol.nodes.spacing,
         micromodulus: sol.micromodulus,
         weights: sol.weights,
-        material: MaterialSummary {
-            young: p.material.elastic.young,
-            poisson: p.material.elastic.poisson,
-            plane: p.material.plane,
-            lambda: lame.lambda,
-            mu: lame.mu,
-        },
+        material: MaterialSummary::of(&p.material),
         timings_s: Timings { stages: sol.timings, total: t0.elapsed().as_secs_f64() },
         solver: &sol.solver,
         errors: sol.errors.map(|e| e.0),

@@ -11,7 +11,8 @@
 use super::family::Families;
 use super::nodes::PdNodes;
 use crate::domain::Point;
-use crate::linalg::Triplets;
+use crate::linalg::SparseMatrix;
+use faer::sparse::{SparseRowMat, SymbolicSparseRowMat};
 use rayon::prelude::*;
 
 /// Families with their bond coefficients.
@@ -52,55 +53,77 @@ impl Bonds<'_> {
             .collect()
     }
 
-    /// Stiffness triplets over the free unknowns and the right-hand side
-    /// `V_i b_i + sum_{j constrained} V_i c_ij (xi ⊗ xi) u_j`.
-    pub fn stiffness(&self, body_force: &[[f64; 2]]) -> (Triplets, Vec<f64>) {
+    /// The stiffness over the free unknowns, built row by row directly in compressed
+    /// form (families are sorted, so every row's columns are too), and the right-hand
+    /// side `V_i b_i + sum_{j constrained} V_i c_ij (xi ⊗ xi) u_j`. Returns the first
+    /// row holding a non-finite coefficient as an error.
+    pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(SparseMatrix, Vec<f64>), usize> {
         let free = self.nodes.free;
-        let rows: Vec<(Vec<(usize, usize, f64)>, [f64; 2])> = (0..free)
+        // Per node: the column indices of its rows and the values of rows 2i and 2i+1.
+        let rows: Vec<(Vec<usize>, Vec<f64>, Vec<f64>, [f64; 2])> = (0..free)
             .into_par_iter()
             .map(|i| {
                 let v = self.nodes.volumes[i];
-                let mut e = Vec::with_capacity(4 * (self.families.of(i).len() + 1));
+                let k = self.families.of(i).len() + 1;
+                let (mut cols, mut top, mut bottom) = (Vec::with_capacity(2 * k), Vec::with_capacity(2 * k), Vec::with_capacity(2 * k));
                 let mut diag = [0.0; 3];
+                let mut diag_at = None;
                 let mut rhs = [v * body_force[i][0], v * body_force[i][1]];
                 for (b, &j) in self.families.range(i).zip(self.families.of(i)) {
                     let (j, c, m) = self.bond(i, b, j);
-                    let k = [v * c * m[0], v * c * m[1], v * c * m[2]];
+                    let kb = [v * c * m[0], v * c * m[1], v * c * m[2]];
                     for a in 0..3 {
-                        diag[a] += k[a];
+                        diag[a] += kb[a];
                     }
                     if j < free {
-                        e.extend([
-                            (2 * i, 2 * j, -k[0]),
-                            (2 * i, 2 * j + 1, -k[1]),
-                            (2 * i + 1, 2 * j, -k[1]),
-                            (2 * i + 1, 2 * j + 1, -k[2]),
-                        ]);
+                        if diag_at.is_none() && j > i {
+                            diag_at = Some(cols.len());
+                            cols.extend([2 * i, 2 * i + 1]);
+                            top.extend([0.0, 0.0]);
+                            bottom.extend([0.0, 0.0]);
+                        }
+                        cols.extend([2 * j, 2 * j + 1]);
+                        top.extend([-kb[0], -kb[1]]);
+                        bottom.extend([-kb[1], -kb[2]]);
                     } else {
                         let u = self.nodes.prescribed[j - free];
-                        rhs[0] += k[0] * u[0] + k[1] * u[1];
-                        rhs[1] += k[1] * u[0] + k[2] * u[1];
+                        rhs[0] += kb[0] * u[0] + kb[1] * u[1];
+                        rhs[1] += kb[1] * u[0] + kb[2] * u[1];
                     }
                 }
-                e.extend([
-                    (2 * i, 2 * i, diag[0]),
-                    (2 * i, 2 * i + 1, diag[1]),
-                    (2 * i + 1, 2 * i, diag[1]),
-                    (2 * i + 1, 2 * i + 1, diag[2]),
-                ]);
-                (e, rhs)
+                let d = match diag_at {
+                    Some(d) => d,
+                    None => {
+                        cols.extend([2 * i, 2 * i + 1]);
+                        top.extend([0.0, 0.0]);
+                        bottom.extend([0.0, 0.0]);
+                        cols.len() - 2
+                    }
+                };
+                top[d] = diag[0];
+                top[d + 1] = diag[1];
+                bottom[d] = diag[1];
+                bottom[d + 1] = diag[2];
+                (cols, top, bottom, rhs)
             })
             .collect();
-        let total: usize = rows.iter().map(|r| r.0.len()).sum();
-        let mut t = Triplets::with_capacity(2 * free, total);
-        let mut rhs = vec![0.0; 2 * free];
-        for (i, (e, r)) in rows.into_iter().enumerate() {
-            for (row, col, v) in e {
-                t.push(row, col, v);
-            }
-            rhs[2 * i] = r[0];
-            rhs[2 * i + 1] = r[1];
+        if let Some(bad) = rows.iter().position(|r| r.1.iter().chain(&r.2).chain(&r.3).any(|v| !v.is_finite())) {
+            return Err(bad);
         }
-        (t, rhs)
+        let nnz: usize = rows.iter().map(|r| 2 * r.0.len()).sum();
+        let (mut row_ptr, mut col_idx, mut values) = (Vec::with_capacity(2 * free + 1), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+        let mut rhs = Vec::with_capacity(2 * free);
+        row_ptr.push(0);
+        for (cols, top, bottom, r) in rows {
+            for vals in [top, bottom] {
+                col_idx.extend_from_slice(&cols);
+                values.extend(vals);
+                row_ptr.push(col_idx.len());
+            }
+            rhs.extend(r);
+        }
+        let symbolic = SymbolicSparseRowMat::new_checked(2 * free, 2 * free, row_ptr, None, col_idx);
+        let matrix = SparseRowMat::new(symbolic, values).to_col_major().expect("allocation of the column-major copy");
+        Ok((matrix, rhs))
     }
 }

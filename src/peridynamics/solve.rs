@@ -139,13 +139,10 @@ pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> R
 
     let (matrix, rhs, body_force, layer_nodes) = timed(progress, Stage::Assembly, &mut slot, || {
         let (b, layer) = loads::body_forces(&problem.domain, &problem.conditions, problem.body_force, exact, &nodes);
-        let (triplets, rhs) = bonds.stiffness(&b);
-        if let Some(k) = triplets.entries().iter().position(|e| !e.val.is_finite()) {
-            let node = triplets.entries()[k].row / 2;
+        let (m, rhs) = bonds.stiffness(&b).map_err(|node| {
             let p = nodes.positions[node];
-            return Err(RunError::NotFinite { node, x: p[0], y: p[1] });
-        }
-        let m = linalg::assemble(&triplets)?;
+            RunError::NotFinite { node, x: p[0], y: p[1] }
+        })?;
         let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.compute_nnz());
         Ok(((m, rhs, b, layer), note))
     })?;
