@@ -14,13 +14,15 @@
 //! 7. [`output`]: `solution.vtu`, `summary.json`, CSV tables (atomic writes);
 //! 8. [`peridynamics`]: the linear bond-based model on the same plate (nodes as
 //!    quadrature points, families, calibrated kernels, static solve);
-//! 9. [`compare`]: the nonlocal-to-local comparison (PD at a sequence of horizons
+//! 9. [`dynamics`]: explicit time integrators (EMU, Stormer-Verlet, RK4);
+//! 10. [`compare`]: the nonlocal-to-local comparison (PD at a sequence of horizons
 //!    against the Navier solution).
 //!
 //! [`run`] strings the stages together; [`app`] and [`cli`] are the command line.
 
 pub mod compare;
 pub mod domain;
+pub mod dynamics;
 pub mod elasticity;
 pub mod exact;
 pub mod linalg;

@@ -1,0 +1,43 @@
+//! Explicit time integration of `rho u_tt = F(u) + b` (seed 000, sec. 4.3) for any
+//! semi-discrete system: the peridynamic force, or a one-dimensional model problem.
+//!
+//! A [`SecondOrderSystem`] gives the acceleration `a(t, u) = (F(u) + b(t)) / rho` of a
+//! flat vector of unknowns; [`Integrator`] advances a [`State`] `(t, u, v, a)` by one
+//! step. `a` holds the acceleration of the last force evaluation of the scheme (for
+//! EMU the one at the start of the step, which is why its order in `a` is 1, as in the
+//! seed's table 4.3.1).
+
+pub mod integrators;
+pub mod rod;
+
+pub use integrators::Integrator;
+
+/// A semi-discrete second-order system `u_tt = a(t, u)`.
+pub trait SecondOrderSystem: Sync {
+    /// Number of scalar unknowns.
+    fn len(&self) -> usize;
+    /// Write `a(t, u)` into `a`.
+    fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]);
+}
+
+/// Time, displacement, velocity and the last acceleration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    /// Time.
+    pub t: f64,
+    /// Displacements.
+    pub u: Vec<f64>,
+    /// Velocities.
+    pub v: Vec<f64>,
+    /// Acceleration of the last force evaluation.
+    pub a: Vec<f64>,
+}
+
+impl State {
+    /// The state at `t0` with displacement `u` and velocity `v`; `a = a(t0, u)`.
+    pub fn new(system: &dyn SecondOrderSystem, t0: f64, u: Vec<f64>, v: Vec<f64>) -> State {
+        let mut a = vec![0.0; u.len()];
+        system.acceleration(t0, &u, &mut a);
+        State { t: t0, u, v, a }
+    }
+}
