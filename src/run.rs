@@ -34,6 +34,8 @@ pub enum Stage {
     Assembly,
     /// Linear solve.
     Solve,
+    /// Explicit time integration.
+    Integrate,
     /// Stresses and errors.
     Post,
 }
@@ -49,6 +51,7 @@ impl Stage {
             Stage::Weights => "weights",
             Stage::Assembly => "assembly",
             Stage::Solve => "solve",
+            Stage::Integrate => "integrate",
             Stage::Post => "post",
         }
     }
@@ -60,6 +63,8 @@ pub trait Progress: Sync {
     fn start(&self, stage: Stage);
     /// A stage ended after `seconds`, with a short note (sizes).
     fn finish(&self, stage: Stage, seconds: f64, note: &str);
+    /// `done` of `total` steps of the current stage are complete (long stages only).
+    fn advance(&self, _done: u64, _total: u64) {}
 }
 
 /// A progress observer that does nothing.
@@ -73,6 +78,12 @@ impl Progress for Silent {
 /// Why a run failed after validation.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
+    /// A fixed time step above the stability limit of the scheme.
+    #[error("time step {given:.3e} s exceeds the stable step {limit:.3e} s of the {integrator} scheme (central-difference bound sqrt(2 rho / max_i sum_j |c_ij| |xi|^2)); use a smaller dynamics.time_step or leave it out")]
+    UnstableTimeStep { given: f64, limit: f64, integrator: &'static str },
+    /// The solution became non-finite during time integration.
+    #[error("the solution became non-finite at step {step} (t = {t:.4e} s): the time integration diverged")]
+    Diverged { step: usize, t: f64 },
     /// Too few nodes for the support size.
     #[error("the node set has {nodes} nodes, fewer than the support size {support}; use a smaller nodes.spacing")]
     TooFewNodes { nodes: usize, support: usize },

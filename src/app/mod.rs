@@ -6,6 +6,7 @@ mod peridynamics;
 use crate::cli::{Cli, Command, ModelArg};
 use crate::elasticity::conditions::ComponentEquation;
 use crate::output::{self, FieldValues, OutputError, PointField};
+use crate::peridynamics::PdParams;
 use crate::post::{observed_order, ErrorNorms};
 use crate::problem::Model;
 use crate::problem::{Problem, ProblemError};
@@ -55,11 +56,25 @@ impl Progress for Terminal {
         if self.quiet {
             return;
         }
-        let bar = ProgressBar::new_spinner();
-        bar.set_style(ProgressStyle::with_template("  {spinner} {msg} ({elapsed})").unwrap());
+        let bar = if stage == Stage::Integrate {
+            let bar = ProgressBar::new(0);
+            bar.set_style(ProgressStyle::with_template("  {msg} [{bar:30}] {pos}/{len} steps ({elapsed}, ETA {eta})").unwrap());
+            bar
+        } else {
+            let bar = ProgressBar::new_spinner();
+            bar.set_style(ProgressStyle::with_template("  {spinner} {msg} ({elapsed})").unwrap());
+            bar
+        };
         bar.set_message(stage.name());
         bar.enable_steady_tick(Duration::from_millis(120));
         *self.bar.lock().unwrap() = Some(bar);
+    }
+
+    fn advance(&self, done: u64, total: u64) {
+        if let Some(bar) = self.bar.lock().unwrap().as_ref() {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
     }
 
     fn finish(&self, stage: Stage, seconds: f64, note: &str) {
@@ -109,6 +124,28 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                     ModelArg::Navier => Model::Navier,
                     ModelArg::Peridynamics => Model::Peridynamics,
                 };
+            }
+            if let (Model::Peridynamics, Some(dynamics), Some(params)) = (p.model, p.dynamics, p.peridynamics) {
+                if spacing.is_some() {
+                    return Err(AppError::Usage(
+                        "--spacing sets the MLSM node spacing; for peridynamics use --horizon (h = delta / m)".into(),
+                    ));
+                }
+                let params = match *horizon {
+                    Some(d) => {
+                        p = p.with_peridynamics(PdParams { horizon: d, ..params })?;
+                        p.peridynamics.expect("just set")
+                    }
+                    None => params,
+                };
+                let dir = out.clone().unwrap_or_else(|| default_out(&p));
+                return peridynamics::run_pd_dynamic(&p, &params, &dynamics, &dir, &term, cli.quiet);
+            }
+            if p.model == Model::Navier && p.dynamics.is_some() {
+                return Err(AppError::Usage(format!(
+                    "{}: time-dependent runs are available for the peridynamic model only so far (--model peridynamics)",
+                    scene.display()
+                )));
             }
             if p.model == Model::Peridynamics {
                 let Some(mut params) = p.peridynamics else {

@@ -18,6 +18,7 @@
 //! for output) and [`solve`] (the static run).
 
 pub mod compatible;
+pub mod dynamics;
 pub mod family;
 pub mod kernel;
 pub mod loads;
@@ -93,6 +94,19 @@ pub struct PdParams {
     pub correction: SurfaceCorrection,
     /// Linear solver of the static system (`[peridynamics.solver]`).
     pub solver: crate::linalg::SolverParams,
+    /// Bond force law.
+    pub force: BondForce,
+}
+
+/// Bond force law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BondForce {
+    /// `f = c_ij (xi ⊗ xi) eta` (seed 000, eq. 4.1.3).
+    Linear,
+    /// `f = c_ij |xi|^3 s (xi + eta)/|xi + eta|`, `s = (|xi + eta| - |xi|)/|xi|` (seed 000,
+    /// definition 4.1.1); its linearisation is the linear law. Dynamics only.
+    BondStretch,
 }
 
 impl PdParams {

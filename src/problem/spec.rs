@@ -38,6 +38,40 @@ pub struct SceneSpec {
     pub model: Option<String>,
     /// Peridynamic discretisation of the same plate.
     pub peridynamics: Option<PeridynamicsSpec>,
+    /// Time-dependent run (explicit integration from initial conditions).
+    pub dynamics: Option<DynamicsSpec>,
+}
+
+/// An affine field `c0 + cx x + cy y` per component.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct AffineSpec {
+    /// Coefficients `[c0, cx, cy]` of the x component.
+    pub x: [f64; 3],
+    /// Coefficients `[c0, cx, cy]` of the y component.
+    pub y: [f64; 3],
+}
+
+/// `[dynamics]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DynamicsSpec {
+    /// Mass density (kg/m^3).
+    pub density: Option<f64>,
+    /// Final time (s).
+    pub end_time: Option<f64>,
+    /// `emu`, `verlet` or `rk4`.
+    pub integrator: Option<String>,
+    /// Fixed time step (s); default a fraction of the stable step.
+    pub time_step: Option<f64>,
+    /// Fraction of the stable step used when `time_step` is not given.
+    pub safety: Option<f64>,
+    /// Initial displacement (affine), default zero.
+    pub initial_displacement: Option<AffineSpec>,
+    /// Initial velocity (affine), default zero.
+    pub initial_velocity: Option<AffineSpec>,
+    /// Number of snapshots written to the .pvd series (default 10).
+    pub snapshots: Option<usize>,
 }
 
 /// `[peridynamics]`.
@@ -58,6 +92,8 @@ pub struct PeridynamicsSpec {
     pub correction: Option<String>,
     /// Linear solver of the peridynamic system (default BiCGSTAB + ILU(0)).
     pub solver: Option<SolverSpec>,
+    /// Bond force: `linear` (default) or `bond-stretch` (nonlinear).
+    pub force: Option<String>,
 }
 
 /// `[domain]`: a list of regions combined left to right.

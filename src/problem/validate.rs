@@ -2,12 +2,13 @@
 //! (physics and consistency). Every error names the file, the field and the reason.
 
 use super::spec::*;
-use super::{BoundaryCondition, ComponentCondition, ExactKind, Model, Outputs, Problem, ProblemError, Value};
+use super::{Affine, BoundaryCondition, ComponentCondition, DynamicsParams, ExactKind, Model, Outputs, Problem, ProblemError, Value};
 use crate::domain::{CsgOp, Domain, FillKind, FillParams, Primitive, Region};
+use crate::dynamics::Integrator;
 use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
 use crate::linalg::{Preconditioner, SolverKind, SolverParams};
 use crate::mlsm::{Approximation, Basis, RbfKind, Weight};
-use crate::peridynamics::{Kernel, PdParams, Quadrature, SurfaceCorrection};
+use crate::peridynamics::{BondForce, Kernel, PdParams, Quadrature, SurfaceCorrection};
 use std::path::Path;
 
 /// Default support size for a basis of `m` functions.
@@ -188,11 +189,15 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
             present[part] = true;
         }
     }
-    let conditions = conditions(&c, &spec.boundary, &domain, &present, &exact_word)?;
+    let dynamics = match &spec.dynamics {
+        Some(d) => Some(dynamics(&c, d)?),
+        None => None,
+    };
+    let conditions = conditions(&c, &spec.boundary, &domain, &present, &exact_word, dynamics.is_some())?;
     let solver = solver(&c, &spec.solver)?;
     let outputs = outputs(&c, &spec.output, exact.is_some())?;
     let peridynamics = match &spec.peridynamics {
-        Some(pd) => Some(peridynamics(&c, pd, &domain, &material, &conditions, &spec.boundary)?),
+        Some(pd) => Some(peridynamics(&c, pd, &domain, &material, &conditions, &spec.boundary, spec.dynamics.is_some())?),
         None => None,
     };
     let model = match spec.model.as_deref() {
@@ -216,6 +221,53 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         exact,
         model,
         peridynamics,
+        dynamics,
+    })
+}
+
+fn dynamics(c: &Ctx, s: &DynamicsSpec) -> Result<DynamicsParams, ProblemError> {
+    let density = c.positive("dynamics.density", c.need("dynamics.density", s.density, "the mass density rho (kg/m^3)")?)?;
+    let end_time = c.positive("dynamics.end_time", c.need("dynamics.end_time", s.end_time, "the final time (s)")?)?;
+    let integrator = c.word("dynamics.integrator", s.integrator.as_deref().unwrap_or("verlet"), &Integrator::ALL)?;
+    let time_step = match s.time_step {
+        Some(dt) => Some(c.positive("dynamics.time_step", dt)?),
+        None => None,
+    };
+    if let Some(dt) = time_step {
+        if dt > end_time {
+            return c.err("dynamics.time_step", format!("{dt} is longer than end_time = {end_time}"));
+        }
+        if s.safety.is_some() {
+            return c.err("dynamics.safety", "only used without a fixed time_step");
+        }
+    }
+    let safety = s.safety.unwrap_or(0.8);
+    if !(safety > 0.0 && safety <= 1.0) {
+        return c.err("dynamics.safety", format!("must lie in (0, 1], got {safety}"));
+    }
+    let affine = |field: &str, a: Option<AffineSpec>| -> Result<Affine, ProblemError> {
+        match a {
+            None => Ok(Affine::ZERO),
+            Some(a) => {
+                c.finite(&format!("dynamics.{field}.x"), &a.x)?;
+                c.finite(&format!("dynamics.{field}.y"), &a.y)?;
+                Ok(Affine { x: a.x, y: a.y })
+            }
+        }
+    };
+    let snapshots = s.snapshots.unwrap_or(10);
+    if snapshots > 10_000 {
+        return c.err("dynamics.snapshots", format!("{snapshots} snapshots; at most 10000"));
+    }
+    Ok(DynamicsParams {
+        density,
+        end_time,
+        integrator,
+        time_step,
+        safety,
+        initial_displacement: affine("initial_displacement", s.initial_displacement)?,
+        initial_velocity: affine("initial_velocity", s.initial_velocity)?,
+        snapshots,
     })
 }
 
@@ -273,6 +325,7 @@ fn peridynamics(
     material: &Material,
     conditions: &[BoundaryCondition],
     specs: &[BoundarySpec],
+    dynamic: bool,
 ) -> Result<PdParams, ProblemError> {
     if !crate::peridynamics::kernel::representable(material) {
         let (need, plane) = match material.plane {
@@ -333,7 +386,15 @@ fn peridynamics(
             e
         })?,
     };
-    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver };
+    let force = c.word(
+        "peridynamics.force",
+        s.force.as_deref().unwrap_or("linear"),
+        &[("linear", BondForce::Linear), ("bond-stretch", BondForce::BondStretch)],
+    )?;
+    if force == BondForce::BondStretch && !dynamic {
+        return c.err("peridynamics.force", "the static solve uses the linear law; \"bond-stretch\" needs a [dynamics] table");
+    }
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force };
     check_peridynamics(&params, domain).map_err(|(f, r)| ProblemError {
         file: c.path.to_path_buf(),
         field: format!("peridynamics.{f}"),
@@ -676,6 +737,7 @@ fn conditions(
     domain: &Domain,
     present: &[bool],
     exact_word: &dyn Fn(&str, &str) -> Result<Value, ProblemError>,
+    dynamic: bool,
 ) -> Result<Vec<BoundaryCondition>, ProblemError> {
     let mut out: Vec<Option<BoundaryCondition>> = vec![None; domain.parts.len()];
     let known = || domain.parts.iter().map(|p| format!("\"{p}\"")).collect::<Vec<_>>().join(", ");
@@ -744,7 +806,12 @@ fn conditions(
             }
         }
     }
+    // A static problem needs each component fixed somewhere; a time-dependent one is
+    // well posed with free edges only (initial conditions fix the motion).
     for comp in 0..2 {
+        if dynamic {
+            break;
+        }
         if !conditions.iter().zip(present).any(|(bc, &here)| here && bc.components[comp] == ComponentCondition::Displacement) {
             let axis = ["x", "y"][comp];
             return c.err(
