@@ -591,3 +591,43 @@ fn compare_refuses_bad_requests() {
         assert!(!res.exists(), "{args:?}: output written before the request was checked");
     }
 }
+
+#[test]
+fn dynamic_run_writes_series_energies_and_summary() {
+    let tmp = TempDir::new().unwrap();
+    let scene = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    write(tmp.path(), "dyn.toml", &edit(&scene, &[("m = 6", "m = 3"), ("snapshots = 20", "snapshots = 4")]));
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "dyn.toml", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    let steps = count(&s["integration"], "steps");
+    assert!(steps > 10, "{s}");
+    assert!(num(&s["integration"], "time_step") <= std::f64::consts::SQRT_2 * num(&s["integration"], "stable_time_step"));
+    assert!(num(&s["integration"], "bond_updates_per_second_per_thread") > 0.0);
+    let pvd = std::fs::read_to_string(res.join("series.pvd")).unwrap();
+    let files: Vec<&str> = pvd.split("file=\"").skip(1).map(|s| s.split('"').next().unwrap()).collect();
+    assert!(files.len() >= 5, "{pvd}");
+    for f in &files {
+        let vtu = mlsm::output::read_vtu(&res.join(f)).unwrap();
+        assert!(vtu.fields.contains_key("displacement") && vtu.fields.contains_key("velocity"), "{f}");
+    }
+    // The last snapshot is the final state: its velocity at t_end differs from the initial one.
+    let first = mlsm::output::read_vtu(&res.join(files[0])).unwrap();
+    let last = mlsm::output::read_vtu(&res.join(files[files.len() - 1])).unwrap();
+    assert_ne!(first.fields["velocity"].1, last.fields["velocity"].1);
+    let csv = std::fs::read_to_string(res.join("energies.csv")).unwrap();
+    assert!(csv.starts_with("t,kinetic,elastic,external,total\n"));
+    assert_eq!(csv.lines().count() as u64, steps + 2, "one row per step plus the initial state and the header");
+    // A fixed step above the stability limit: exit 2, nothing written.
+    write(
+        tmp.path(),
+        "fast.toml",
+        &edit(&scene, &[("m = 6", "m = 3"), ("integrator = \"rk4\"", "integrator = \"verlet\"\ntime_step = 1e-4")]),
+    );
+    let bad = tmp.path().join("bad");
+    let o = mlsm(tmp.path(), &["run", "fast.toml", "--out", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    assert!(stderr(&o).contains("exceeds the stable step"), "{}", describe(&o));
+    assert!(!bad.exists(), "output written for a refused time step");
+}

@@ -35,10 +35,11 @@ pub enum AppError {
 }
 
 impl AppError {
-    /// Process exit code: 2 invalid input, 3 solver failure, 1 anything else.
+    /// Process exit code: 2 invalid input (a fixed time step above the stability limit
+    /// included), 3 solver failure, 1 anything else.
     pub fn exit_code(&self) -> u8 {
         match self {
-            AppError::Problem(_) | AppError::Usage(_) => 2,
+            AppError::Problem(_) | AppError::Usage(_) | AppError::Run(RunError::UnstableTimeStep { .. }) => 2,
             AppError::Run(_) => 3,
             AppError::Output(_) => 1,
         }

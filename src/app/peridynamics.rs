@@ -3,7 +3,7 @@
 use super::{create_dir, scalar, stress_fields, vector, write_points_vtu, AppError, MaterialSummary, Terminal};
 use crate::dynamics::State;
 use crate::output::{self, FieldValues, PointField};
-use crate::peridynamics::dynamics::{integrate, DynamicReport, EnergyRow, IntegrateError, PdDynamics};
+use crate::peridynamics::dynamics::{integrate, time_grid, DynamicReport, EnergyRow, IntegrateError, PdDynamics};
 use crate::peridynamics::loads;
 use crate::peridynamics::solve::Discretisation;
 use crate::peridynamics::solve::{PdSolution, PdTimings, WeightsSummary};
@@ -184,6 +184,7 @@ pub(super) fn run_pd_dynamic(
     let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let flat = |f: &crate::problem::Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
+    let grid = time_grid(&system, dynamics)?;
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
     create_dir(&dir.join("snapshots"))?;
     let tris = output::triangulate(free, |c| p.domain.contains(c));
@@ -195,7 +196,7 @@ pub(super) fn run_pd_dynamic(
     let mut series = Vec::new();
     term.start(Stage::Integrate);
     let started = Instant::now();
-    let (report, energies) = integrate(&system, &mut state, dynamics, term, |step, s| {
+    let (report, energies) = integrate(&system, &mut state, grid, dynamics, term, |step, s| {
         let name = format!("snapshots/step_{step:06}.vtu");
         write(&dir.join(&name), s)?;
         series.push((s.t, name));

@@ -160,32 +160,45 @@ pub struct DynamicReport {
 /// One line of the energy history: `(t, E_kin, E_el, E_ext)`.
 pub type EnergyRow = [f64; 4];
 
-/// Integrate `system` from `state` to `end_time` with `params`, calling `snapshot`
-/// at `snapshots` evenly spaced steps (and at the end) and recording the energies at
-/// every step (every `ceil(steps / 1000)`-th step for longer runs). Returns the report and the energy history.
+/// The step and step count of a run, checked against the stability limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeGrid {
+    /// Step.
+    pub dt: f64,
+    /// Number of steps to `end_time`.
+    pub steps: usize,
+    /// Stable step of the central-difference schemes.
+    pub stable: f64,
+}
+
+/// The step of `params` (fixed, or `safety` times the scheme's limit), refused when a
+/// fixed step exceeds the limit.
+pub fn time_grid(system: &PdDynamics, params: &crate::problem::DynamicsParams) -> Result<TimeGrid, crate::run::RunError> {
+    let stable = system.stable_time_step();
+    let limit = stable * params.integrator.stability_factor();
+    match params.time_step {
+        Some(dt) if dt > limit => Err(crate::run::RunError::UnstableTimeStep { given: dt, limit, integrator: params.integrator.name() }),
+        Some(dt) => Ok(TimeGrid { dt, steps: (params.end_time / dt).round().max(1.0) as usize, stable }),
+        None => {
+            let steps = (params.end_time / (params.safety * limit)).ceil().max(1.0) as usize;
+            Ok(TimeGrid { dt: params.end_time / steps as f64, steps, stable })
+        }
+    }
+}
+
+/// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
+/// `snapshot` at `params.snapshots` evenly spaced steps (and at the start and the end)
+/// and recording the energies at every step (every `ceil(steps / 1000)`-th step for
+/// longer runs). Returns the report and the energy history.
 pub fn integrate<E>(
     system: &PdDynamics,
     state: &mut crate::dynamics::State,
+    grid: TimeGrid,
     params: &crate::problem::DynamicsParams,
     progress: &dyn crate::run::Progress,
     mut snapshot: impl FnMut(usize, &crate::dynamics::State) -> Result<(), E>,
 ) -> Result<(DynamicReport, Vec<EnergyRow>), IntegrateError<E>> {
-    let stable = system.stable_time_step();
-    let limit = stable * params.integrator.stability_factor();
-    let (dt, steps) = match params.time_step {
-        Some(dt) if dt > limit => {
-            return Err(IntegrateError::Run(crate::run::RunError::UnstableTimeStep {
-                given: dt,
-                limit,
-                integrator: params.integrator.name(),
-            }))
-        }
-        Some(dt) => (dt, (params.end_time / dt).round().max(1.0) as usize),
-        None => {
-            let steps = (params.end_time / (params.safety * limit)).ceil().max(1.0) as usize;
-            (params.end_time / steps as f64, steps)
-        }
-    };
+    let TimeGrid { dt, steps, stable } = grid;
     let every = (steps / params.snapshots.max(1)).max(1);
     // Energies cost one more pass over the bonds: at most about 1000 rows.
     let energy_every = steps.div_ceil(1000).max(1);
@@ -196,7 +209,6 @@ pub fn integrate<E>(
     };
     record(state, &mut energies);
     snapshot(0, state).map_err(IntegrateError::Output)?;
-    let t0 = std::time::Instant::now();
     let mut looped = 0.0;
     for step in 1..=steps {
         let ts = std::time::Instant::now();
@@ -213,7 +225,6 @@ pub fn integrate<E>(
         }
         progress.advance(step as u64, steps as u64);
     }
-    let _ = t0;
     let evaluations = 1 + steps * params.integrator.evaluations();
     let bond_updates = evaluations as f64 * system.bonds.families.bonds() as f64;
     let report = DynamicReport {
