@@ -10,7 +10,8 @@
 
 use mlsm::compare::interpolate::mls_values;
 use mlsm::dynamics::State;
-use mlsm::peridynamics::dynamics::{integrate, time_grid, PdDynamics};
+use mlsm::dynamics::driver::{integrate, time_grid};
+use mlsm::peridynamics::dynamics::PdDynamics;
 use mlsm::peridynamics::solve::{Discretisation, PdTimings};
 use mlsm::peridynamics::{loads, Kernel, PdParams, Quadrature};
 use mlsm::post::observed_order;
@@ -36,8 +37,8 @@ fn run(p: &Problem, params: &PdParams) -> Run {
     let flat = |f: &mlsm::problem::Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
     let mut s = State::new(&system, 0.0, flat(&d.initial_displacement), flat(&d.initial_velocity));
     let quiet = mlsm::problem::DynamicsParams { snapshots: 1, ..d };
-    let grid = time_grid(&system, &quiet).unwrap();
-    integrate(&system, &mut s, grid, &quiet, &Silent, |_, _| Ok::<(), ()>(())).map_err(|_| "integration failed").unwrap();
+    let grid = time_grid(system.stable_time_step(), &quiet).unwrap();
+    integrate(&system, &|s: &State| system.energies(&s.u, &s.v), &mut s, grid, &quiet, &Silent, |_, _| Ok::<(), ()>(())).map_err(|_| "integration failed").unwrap();
     let pairs = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<_>>();
     let interior = free.iter().map(|x| p.domain.signed_distance(*x) <= -params.horizon).collect();
     Run { positions: free.to_vec(), u: pairs(&s.u), v: pairs(&s.v), interior, seconds: t0.elapsed().as_secs_f64() }

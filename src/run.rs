@@ -166,93 +166,129 @@ pub fn exact_solution(problem: &Problem) -> Option<Box<dyn ExactSolution>> {
     problem.exact.as_ref().map(|k| exact::from_kind(k, problem.material).expect("validated exact solution parameters"))
 }
 
+/// The MLSM discretisation of a problem: nodes, ghosts, supports, shape functions and
+/// the boundary equations, ready for assembly.
+pub struct Discrete {
+    /// Nodes of the solid.
+    pub nodes: NodeSet,
+    /// Equations of each boundary node.
+    pub boundary_equations: Vec<[ComponentEquation; 2]>,
+    /// Ghost node of each node (`usize::MAX`: none); ghosts are nodes `n..`.
+    pub ghost: Vec<usize>,
+    /// Supports over nodes and ghosts.
+    pub supports: Supports,
+    /// Shape functions over nodes and ghosts.
+    pub shapes: Shapes,
+    /// Operators computed, with the number of nodes each was computed at.
+    pub operators_computed: Vec<(String, usize)>,
+    /// Unknown layout over nodes and ghosts.
+    pub dofs: DofMap,
+}
+
+impl Discrete {
+    /// Nodes, ghosts, supports and shapes of `problem`, each stage timed into `t`.
+    pub fn new(problem: &Problem, progress: &dyn Progress, t: &mut Timings) -> Result<Discrete, RunError> {
+        let exact = exact_solution(problem);
+        let exact = exact.as_deref();
+        let n_support = problem.approximation.support;
+        let nodes = timed(progress, Stage::Nodes, &mut t.nodes, || {
+            let nodes = domain::generate(&problem.domain, &problem.fill);
+            if nodes.len() < n_support {
+                return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
+            }
+            let note = format!("{} nodes ({} on the boundary)", nodes.len(), nodes.boundary.len());
+            Ok((nodes, note))
+        })?;
+        let n = nodes.len();
+
+        let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
+        let has_traction =
+            |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
+        // Ghost nodes (positions n..) only where both equations are tractions: on mixed
+        // (symmetry) nodes an extra Navier row made scattered-node runs unstable (measured
+        // on kirsch.toml: e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
+        // Placing them is part of building the point cloud, so it is timed with the supports.
+        let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
+        let (positions, ghost, supports) = timed(progress, Stage::Supports, &mut t.supports, || {
+            let candidates: Vec<usize> =
+                if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
+            let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
+            let mut positions = nodes.positions.clone();
+            positions.extend(ghosts.iter().map(|g| g.1));
+            let mut ghost = vec![usize::MAX; n];
+            for (k, g) in ghosts.iter().enumerate() {
+                ghost[g.0] = n + k;
+            }
+            let supports = Supports::nearest(&positions, n_support);
+            let note = format!("{n_support} nearest, {} ghost nodes", ghosts.len());
+            Ok(((positions, ghost, supports), note))
+        })?;
+        let n_all = positions.len();
+
+        let gradient_needed = problem.outputs.needs_gradient();
+        let needs: Vec<OpSet> = (0..n_all)
+            .map(|i| {
+                if i >= n {
+                    return OpSet::EMPTY;
+                }
+                let mut ops = if gradient_needed { OpSet::D1 } else { OpSet::EMPTY };
+                if has_traction(i) {
+                    ops |= OpSet::D1;
+                }
+                if i >= nodes.boundary.len() || ghost[i] != usize::MAX {
+                    ops |= OpSet::D2;
+                }
+                ops
+            })
+            .collect();
+
+        let shapes = timed(progress, Stage::Shapes, &mut t.shapes, || {
+            let s = compute_shapes(&positions, &supports, &problem.approximation, &needs)?;
+            let note = format!("{} shape functions", s.count());
+            Ok((s, note))
+        })?;
+        let operators_computed = crate::mlsm::Op::ALL
+            .iter()
+            .filter(|op| shapes.operators().contains(**op))
+            .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
+            .collect();
+
+        let dofs = DofMap::new(n_all);
+        Ok(Discrete { nodes, boundary_equations, ghost, supports, shapes, operators_computed, dofs })
+    }
+
+    /// The rows of every equation (see [`System::assemble`]).
+    pub fn system<'a>(&'a self, problem: &'a Problem, exact: Option<&'a dyn ExactSolution>) -> System<'a> {
+        System {
+            problem,
+            nodes: &self.nodes,
+            supports: &self.supports,
+            shapes: &self.shapes,
+            equations: &self.boundary_equations,
+            ghost: &self.ghost,
+            exact,
+            dofs: self.dofs,
+        }
+    }
+}
+
 /// Run every stage of `problem`.
 pub fn solve(problem: &Problem, progress: &dyn Progress) -> Result<Solution, RunError> {
     let mut t = Timings::default();
     let exact = exact_solution(problem);
     let exact = exact.as_deref();
-    let n_support = problem.approximation.support;
-
-    let nodes = timed(progress, Stage::Nodes, &mut t.nodes, || {
-        let nodes = domain::generate(&problem.domain, &problem.fill);
-        if nodes.len() < n_support {
-            return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
-        }
-        let note = format!("{} nodes ({} on the boundary)", nodes.len(), nodes.boundary.len());
-        Ok((nodes, note))
-    })?;
-    let n = nodes.len();
-
-    let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
-    let has_traction =
-        |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
-    // Ghost nodes (positions n..) only where both equations are tractions: on mixed
-    // (symmetry) nodes an extra Navier row made scattered-node runs unstable (measured
-    // on kirsch.toml: e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
-    // Placing them is part of building the point cloud, so it is timed with the supports.
-    let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
-    let (positions, ghost, supports) = timed(progress, Stage::Supports, &mut t.supports, || {
-        let candidates: Vec<usize> =
-            if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
-        let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
-        let mut positions = nodes.positions.clone();
-        positions.extend(ghosts.iter().map(|g| g.1));
-        let mut ghost = vec![usize::MAX; n];
-        for (k, g) in ghosts.iter().enumerate() {
-            ghost[g.0] = n + k;
-        }
-        let supports = Supports::nearest(&positions, n_support);
-        let note = format!("{n_support} nearest, {} ghost nodes", ghosts.len());
-        Ok(((positions, ghost, supports), note))
-    })?;
-    let n_all = positions.len();
-    let ghost_count = n_all - n;
-
+    let disc = Discrete::new(problem, progress, &mut t)?;
     let gradient_needed = problem.outputs.needs_gradient();
-    let needs: Vec<OpSet> = (0..n_all)
-        .map(|i| {
-            if i >= n {
-                return OpSet::EMPTY;
-            }
-            let mut ops = if gradient_needed { OpSet::D1 } else { OpSet::EMPTY };
-            if has_traction(i) {
-                ops |= OpSet::D1;
-            }
-            if i >= nodes.boundary.len() || ghost[i] != usize::MAX {
-                ops |= OpSet::D2;
-            }
-            ops
-        })
-        .collect();
-
-    let shapes = timed(progress, Stage::Shapes, &mut t.shapes, || {
-        let s = compute_shapes(&positions, &supports, &problem.approximation, &needs)?;
-        let note = format!("{} shape functions", s.count());
-        Ok((s, note))
-    })?;
-    let operators_computed = crate::mlsm::Op::ALL
-        .iter()
-        .filter(|op| shapes.operators().contains(**op))
-        .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
-        .collect();
-
-    let dofs = DofMap::new(n_all);
     let (matrix, rhs) = timed(progress, Stage::Assembly, &mut t.assembly, || {
-        let system = System {
-            problem,
-            nodes: &nodes,
-            supports: &supports,
-            shapes: &shapes,
-            equations: &boundary_equations,
-            ghost: &ghost,
-            exact,
-            dofs,
-        };
+        let system = disc.system(problem, exact);
         let (triplets, rhs) = system.assemble()?;
         let m = linalg::assemble(&triplets)?;
-        let note = format!("{} unknowns, {} nonzeros", dofs.len(), m.compute_nnz());
+        let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.compute_nnz());
         Ok(((m, rhs), note))
     })?;
+    let Discrete { nodes, boundary_equations, ghost: _, supports, shapes, operators_computed, dofs } = disc;
+    let n = nodes.len();
+    let ghost_count = dofs.len() / 2 - n;
     let nonzeros = matrix.compute_nnz();
 
     let (x, report) = timed(progress, Stage::Solve, &mut t.solve, || {

@@ -604,7 +604,7 @@ fn dynamic_run_writes_series_energies_and_summary() {
     let steps = count(&s["integration"], "steps");
     assert!(steps > 10, "{s}");
     assert!(num(&s["integration"], "time_step") <= std::f64::consts::SQRT_2 * num(&s["integration"], "stable_time_step"));
-    assert!(num(&s["integration"], "bond_updates_per_second_per_thread") > 0.0);
+    assert!(num(&s, "bond_updates_per_second_per_thread") > 0.0);
     let pvd = std::fs::read_to_string(res.join("series.pvd")).unwrap();
     let files: Vec<&str> = pvd.split("file=\"").skip(1).map(|s| s.split('"').next().unwrap()).collect();
     assert!(files.len() >= 5, "{pvd}");

@@ -6,7 +6,8 @@ mod common;
 
 use common::*;
 use mlsm::dynamics::{Integrator, State};
-use mlsm::peridynamics::dynamics::{integrate, time_grid, IntegrateError, PdDynamics};
+use mlsm::dynamics::driver::{integrate, time_grid, IntegrateError};
+use mlsm::peridynamics::dynamics::PdDynamics;
 use mlsm::peridynamics::solve::{Discretisation, PdTimings};
 use mlsm::peridynamics::{loads, BondForce};
 use mlsm::problem::{Affine, Problem};
@@ -21,8 +22,8 @@ fn run(p: &Problem) -> Result<(State, Vec<[f64; 4]>), RunError> {
     let free = &disc.nodes.positions[..disc.nodes.free];
     let flat = |f: &Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
     let mut s = State::new(&system, 0.0, flat(&d.initial_displacement), flat(&d.initial_velocity));
-    let grid = time_grid(&system, &d)?;
-    match integrate(&system, &mut s, grid, &d, &Silent, |_, _| Ok::<(), ()>(())) {
+    let grid = time_grid(system.stable_time_step(), &d)?;
+    match integrate(&system, &|s: &State| system.energies(&s.u, &s.v), &mut s, grid, &d, &Silent, |_, _| Ok::<(), ()>(())) {
         Ok((_, energies)) => Ok((s, energies)),
         Err(IntegrateError::Run(e)) => Err(e),
         Err(IntegrateError::Output(())) => unreachable!("no output"),

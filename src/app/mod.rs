@@ -1,6 +1,7 @@
 //! Orchestration of the commands; the only module that prints.
 
 mod compare;
+mod dynamics;
 mod peridynamics;
 
 use crate::cli::{Cli, Command, ModelArg};
@@ -142,11 +143,12 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 let dir = out.clone().unwrap_or_else(|| default_out(&p));
                 return peridynamics::run_pd_dynamic(&p, &params, &dynamics, &dir, &term, cli.quiet);
             }
-            if p.model == Model::Navier && p.dynamics.is_some() {
-                return Err(AppError::Usage(format!(
-                    "{}: time-dependent runs are available for the peridynamic model only so far (--model peridynamics)",
-                    scene.display()
-                )));
+            if let (Model::Navier, Some(dynamics)) = (p.model, p.dynamics) {
+                if let Some(h) = *spacing {
+                    p = p.with_spacing(h)?;
+                }
+                let dir = out.clone().unwrap_or_else(|| default_out(&p));
+                return dynamics::run_navier_dynamic(&p, &dynamics, &dir, &term, cli.quiet);
             }
             if p.model == Model::Peridynamics {
                 let Some(mut params) = p.peridynamics else {

@@ -3,7 +3,9 @@
 use super::{create_dir, scalar, stress_fields, vector, write_points_vtu, AppError, MaterialSummary, Terminal};
 use crate::dynamics::State;
 use crate::output::{self, FieldValues, PointField};
-use crate::peridynamics::dynamics::{integrate, time_grid, DynamicReport, EnergyRow, IntegrateError, PdDynamics};
+use super::dynamics::Series;
+use crate::dynamics::driver::{time_grid, DynamicReport, EnergyRow};
+use crate::peridynamics::dynamics::PdDynamics;
 use crate::peridynamics::loads;
 use crate::peridynamics::solve::Discretisation;
 use crate::peridynamics::solve::{PdSolution, PdTimings, WeightsSummary};
@@ -11,7 +13,7 @@ use crate::peridynamics::{Micromodulus, PdParams};
 use crate::post::ErrorNorms;
 use crate::problem::DynamicsParams;
 use crate::problem::Problem;
-use crate::run::{Progress, Stage};
+
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -141,6 +143,7 @@ struct DynamicSummary<'a> {
     weights: WeightsSummary,
     dynamics: crate::problem::DynamicsParams,
     integration: &'a DynamicReport,
+    bond_updates_per_second_per_thread: f64,
     energy_first: EnergyRow,
     energy_last: EnergyRow,
     material: MaterialSummary,
@@ -184,41 +187,15 @@ pub(super) fn run_pd_dynamic(
     let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let flat = |f: &crate::problem::Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
-    let grid = time_grid(&system, dynamics)?;
+    let grid = time_grid(system.stable_time_step(), dynamics)?;
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
-    create_dir(&dir.join("snapshots"))?;
-    let tris = output::triangulate(free, |c| p.domain.contains(c));
-    let write = |path: &Path, s: &State| -> Result<(), AppError> {
-        let pairs = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<[f64; 2]>>();
-        let fields = vec![vector("displacement", pairs(&s.u).into_iter()), vector("velocity", pairs(&s.v).into_iter())];
-        Ok(output::write_vtu(path, free, &tris, &fields)?)
-    };
-    let mut series = Vec::new();
-    term.start(Stage::Integrate);
+    let mut series = Series::new(dir, free, &p.domain)?;
     let started = Instant::now();
-    let (report, energies) = integrate(&system, &mut state, grid, dynamics, term, |step, s| {
-        let name = format!("snapshots/step_{step:06}.vtu");
-        write(&dir.join(&name), s)?;
-        series.push((s.t, name));
-        Ok::<(), AppError>(())
-    })
-    .map_err(|e| match e {
-        IntegrateError::Run(r) => AppError::Run(r),
-        IntegrateError::Output(o) => o,
-    })?;
+    let energy = |s: &State| system.energies(&s.u, &s.v);
+    let pairs = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<[f64; 2]>>();
+    let (report, energies) = series.run(&system, &energy, &mut state, grid, dynamics, term, |s| (pairs(&s.u), pairs(&s.v)))?;
     let integrate_seconds = started.elapsed().as_secs_f64();
-    term.finish(
-        Stage::Integrate,
-        integrate_seconds,
-        &format!(
-            "{} steps of {:.3e} s (stable {:.3e} s), {:.2e} bond updates/s/thread",
-            report.steps, report.time_step, report.stable_time_step, report.bond_updates_per_second_per_thread
-        ),
-    );
-    output::write_pvd(&dir.join("series.pvd"), &series)?;
-    let rows: Vec<Vec<f64>> = energies.iter().map(|e| vec![e[0], e[1], e[2], e[3], e[1] + e[2] + e[3]]).collect();
-    output::write_csv(&dir.join("energies.csv"), &["t", "kinetic", "elastic", "external", "total"], &rows)?;
-    write(&dir.join("solution.vtu"), &state)?;
+    let throughput = report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
     let summary = DynamicSummary {
         scene: &p.name,
         source: p.source.display().to_string(),
@@ -237,6 +214,7 @@ pub(super) fn run_pd_dynamic(
         },
         dynamics: *dynamics,
         integration: &report,
+        bond_updates_per_second_per_thread: throughput,
         energy_first: energies[0],
         energy_last: *energies.last().expect("initial energy recorded"),
         material: MaterialSummary::of(&p.material),
@@ -266,7 +244,7 @@ pub(super) fn run_pd_dynamic(
         );
         println!(
             "throughput {:.2e} bond updates per second per thread; written: {}",
-            report.bond_updates_per_second_per_thread,
+            throughput,
             dir.display()
         );
     }

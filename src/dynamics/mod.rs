@@ -7,7 +7,9 @@
 //! EMU the one at the start of the step, which is why its order in `a` is 1, as in the
 //! seed's table 4.3.1).
 
+pub mod driver;
 pub mod integrators;
+pub mod navier;
 pub mod rod;
 
 pub use integrators::Integrator;

@@ -1,0 +1,112 @@
+//! The time loop shared by every model: step size from the stability limit,
+//! snapshots, the energy history and a throughput report.
+
+use super::{Integrator, SecondOrderSystem, State};
+use crate::problem::DynamicsParams;
+use crate::run::{Progress, RunError};
+use serde::Serialize;
+
+/// What a dynamic run did.
+#[derive(Debug, Clone, Serialize)]
+pub struct DynamicReport {
+    /// Scheme.
+    pub integrator: Integrator,
+    /// Step used.
+    pub time_step: f64,
+    /// Stable step of the central-difference schemes.
+    pub stable_time_step: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// Force evaluations (including the initial one).
+    pub force_evaluations: usize,
+    /// Wall-clock seconds of the stepping (energies and snapshots excluded).
+    pub seconds: f64,
+}
+
+/// One line of the energy history: `(t, E_kin, E_el, E_ext)`.
+pub type EnergyRow = [f64; 4];
+
+/// The step and step count of a run, checked against the stability limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeGrid {
+    /// Step.
+    pub dt: f64,
+    /// Number of steps to `end_time`.
+    pub steps: usize,
+    /// Stable step of the central-difference schemes.
+    pub stable: f64,
+}
+
+/// The step of `params` (fixed, or `safety` times the scheme's limit `stable x
+/// stability_factor`), refused when a fixed step exceeds the limit.
+pub fn time_grid(stable: f64, params: &DynamicsParams) -> Result<TimeGrid, RunError> {
+    let limit = stable * params.integrator.stability_factor();
+    match params.time_step {
+        Some(dt) if dt > limit => Err(RunError::UnstableTimeStep { given: dt, limit, integrator: params.integrator.name() }),
+        Some(dt) => Ok(TimeGrid { dt, steps: (params.end_time / dt).round().max(1.0) as usize, stable }),
+        None => {
+            let steps = (params.end_time / (params.safety * limit)).ceil().max(1.0) as usize;
+            Ok(TimeGrid { dt: params.end_time / steps as f64, steps, stable })
+        }
+    }
+}
+
+/// A failed integration: numerical, or the snapshot writer's own error.
+#[derive(Debug)]
+pub enum IntegrateError<E> {
+    /// Unstable step or divergence.
+    Run(RunError),
+    /// The snapshot callback failed.
+    Output(E),
+}
+
+/// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
+/// `snapshot` at `params.snapshots` evenly spaced steps (and at the start and the end)
+/// and recording `energies` (kinetic, elastic, external) at every step (every
+/// `ceil(steps / 1000)`-th step for longer runs). Returns the report and the history.
+pub fn integrate<E>(
+    system: &dyn SecondOrderSystem,
+    energies: &dyn Fn(&State) -> (f64, f64, f64),
+    state: &mut State,
+    grid: TimeGrid,
+    params: &DynamicsParams,
+    progress: &dyn Progress,
+    mut snapshot: impl FnMut(usize, &State) -> Result<(), E>,
+) -> Result<(DynamicReport, Vec<EnergyRow>), IntegrateError<E>> {
+    let TimeGrid { dt, steps, stable } = grid;
+    let every = (steps / params.snapshots.max(1)).max(1);
+    // Energies cost one more pass over the operator: at most about 1000 rows.
+    let energy_every = steps.div_ceil(1000).max(1);
+    let mut history = Vec::with_capacity(steps.min(1000) + 2);
+    let record = |s: &State, history: &mut Vec<EnergyRow>| {
+        let (k, e, x) = energies(s);
+        history.push([s.t, k, e, x]);
+    };
+    record(state, &mut history);
+    snapshot(0, state).map_err(IntegrateError::Output)?;
+    let mut looped = 0.0;
+    for step in 1..=steps {
+        let ts = std::time::Instant::now();
+        params.integrator.step(system, state, dt);
+        looped += ts.elapsed().as_secs_f64();
+        if state.u.iter().any(|v| !v.is_finite()) {
+            return Err(IntegrateError::Run(RunError::Diverged { step, t: state.t }));
+        }
+        if step % energy_every == 0 || step == steps {
+            record(state, &mut history);
+        }
+        if step % every == 0 || step == steps {
+            snapshot(step, state).map_err(IntegrateError::Output)?;
+        }
+        progress.advance(step as u64, steps as u64);
+    }
+    let report = DynamicReport {
+        integrator: params.integrator,
+        time_step: dt,
+        stable_time_step: stable,
+        steps,
+        force_evaluations: 1 + steps * params.integrator.evaluations(),
+        seconds: looped,
+    };
+    Ok((report, history))
+}
