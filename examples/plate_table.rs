@@ -9,11 +9,8 @@
 //!     [--rules full-area,gauss2x2,triangle-p2] [--kernels plain,-2,0,1]
 
 use mlsm::compare::interpolate::mls_values;
-use mlsm::dynamics::State;
-use mlsm::dynamics::driver::{integrate, time_grid};
-use mlsm::peridynamics::dynamics::PdDynamics;
-use mlsm::peridynamics::solve::{Discretisation, PdTimings};
-use mlsm::peridynamics::{loads, Kernel, PdParams, Quadrature};
+use mlsm::peridynamics::dynamics::simulate;
+use mlsm::peridynamics::{Kernel, PdParams, Quadrature};
 use mlsm::post::observed_order;
 use mlsm::problem::Problem;
 use mlsm::run::Silent;
@@ -29,19 +26,11 @@ struct Run {
 
 fn run(p: &Problem, params: &PdParams) -> Run {
     let t0 = std::time::Instant::now();
-    let d = p.dynamics.unwrap();
-    let disc = Discretisation::new(p, params, &Silent, &mut PdTimings::default()).unwrap();
-    let (b, _) = loads::body_forces(&p.domain, &p.conditions, p.body_force, None, &disc.nodes);
-    let system = PdDynamics { bonds: disc.bonds(), body_force: &b, density: d.density, force: params.force };
-    let free = &disc.nodes.positions[..disc.nodes.free];
-    let flat = |f: &mlsm::problem::Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
-    let mut s = State::new(&system, 0.0, flat(&d.initial_displacement), flat(&d.initial_velocity));
-    let quiet = mlsm::problem::DynamicsParams { snapshots: 1, ..d };
-    let grid = time_grid(system.stable_time_step(), &quiet).unwrap();
-    integrate(&system, &|s: &State| system.energies(&s.u, &s.v), &mut s, grid, &quiet, &Silent, |_, _| Ok::<(), ()>(())).map_err(|_| "integration failed").unwrap();
-    let pairs = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<_>>();
-    let interior = free.iter().map(|x| p.domain.signed_distance(*x) <= -params.horizon).collect();
-    Run { positions: free.to_vec(), u: pairs(&s.u), v: pairs(&s.v), interior, seconds: t0.elapsed().as_secs_f64() }
+    let quiet = Problem { dynamics: p.dynamics.map(|d| mlsm::problem::DynamicsParams { snapshots: 1, ..d }), ..p.clone() };
+    let sim = simulate(&quiet, params, &Silent, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|_| "integration failed").unwrap();
+    let positions = sim.discretisation.nodes.positions[..sim.discretisation.nodes.free].to_vec();
+    let interior = positions.iter().map(|x| p.domain.signed_distance(*x) <= -params.horizon).collect();
+    Run { positions, u: sim.u, v: sim.v, interior, seconds: t0.elapsed().as_secs_f64() }
 }
 
 fn max_error(run: &Run, field: &[[f64; 2]], reference: &Run, reference_field: &[[f64; 2]]) -> f64 {

@@ -201,7 +201,8 @@ impl Discrete {
         })?;
         let n = nodes.len();
 
-        let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
+        let boundary_equations: Vec<[ComponentEquation; 2]> =
+            nodes.boundary.iter().map(|b| resolve(b, &problem.conditions, exact)).collect();
         let has_traction =
             |i: usize| i < nodes.boundary.len() && boundary_equations[i].iter().any(|e| matches!(e, ComponentEquation::Traction { .. }));
         // Ghost nodes (positions n..) only where both equations are tractions: on mixed
@@ -210,8 +211,11 @@ impl Discrete {
         // Placing them is part of building the point cloud, so it is timed with the supports.
         let all_traction = |i: usize| boundary_equations[i].iter().all(|e| matches!(e, ComponentEquation::Traction { .. }));
         let (positions, ghost, supports) = timed(progress, Stage::Supports, &mut t.supports, || {
-            let candidates: Vec<usize> =
-                if problem.approximation.ghost_nodes { (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect() } else { Vec::new() };
+            let candidates: Vec<usize> = if problem.approximation.ghost_nodes {
+                (0..nodes.boundary.len()).filter(|&i| all_traction(i)).collect()
+            } else {
+                Vec::new()
+            };
             let ghosts = crate::domain::ghost::place_ghosts(&problem.domain, &nodes, &candidates);
             let mut positions = nodes.positions.clone();
             positions.extend(ghosts.iter().map(|g| g.1));

@@ -127,7 +127,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                     ModelArg::Peridynamics => Model::Peridynamics,
                 };
             }
-            if let (Model::Peridynamics, Some(dynamics), Some(params)) = (p.model, p.dynamics, p.peridynamics) {
+            if let (Model::Peridynamics, Some(_), Some(params)) = (p.model, p.dynamics, p.peridynamics) {
                 if spacing.is_some() {
                     return Err(AppError::Usage(
                         "--spacing sets the MLSM node spacing; for peridynamics use --horizon (h = delta / m)".into(),
@@ -141,14 +141,14 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                     None => params,
                 };
                 let dir = out.clone().unwrap_or_else(|| default_out(&p));
-                return peridynamics::run_pd_dynamic(&p, &params, &dynamics, &dir, &term, cli.quiet);
+                return dynamics::run_pd_dynamic(&p, &params, &dir, &term, cli.quiet);
             }
-            if let (Model::Navier, Some(dynamics)) = (p.model, p.dynamics) {
+            if let (Model::Navier, Some(_)) = (p.model, p.dynamics) {
                 if let Some(h) = *spacing {
                     p = p.with_spacing(h)?;
                 }
                 let dir = out.clone().unwrap_or_else(|| default_out(&p));
-                return dynamics::run_navier_dynamic(&p, &dynamics, &dir, &term, cli.quiet);
+                return dynamics::run_navier_dynamic(&p, &dir, &term, cli.quiet);
             }
             if p.model == Model::Peridynamics {
                 let Some(mut params) = p.peridynamics else {

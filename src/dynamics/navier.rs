@@ -168,3 +168,102 @@ impl SecondOrderSystem for NavierDynamics {
         self.operator(u, a, false);
     }
 }
+
+/// The result of a time-dependent MLSM run.
+pub struct NavierSimulation {
+    /// Node positions (ghosts excluded).
+    pub positions: Vec<[f64; 2]>,
+    /// Final displacement and velocity at the nodes.
+    pub u: Vec<[f64; 2]>,
+    /// Final velocity at the nodes.
+    pub v: Vec<[f64; 2]>,
+    /// Integration report.
+    pub report: super::driver::DynamicReport,
+    /// Energy history.
+    pub energies: Vec<super::driver::EnergyRow>,
+    /// Ghost nodes.
+    pub ghost_nodes: usize,
+    /// Dynamic and algebraic unknowns.
+    pub unknowns: (usize, usize),
+    /// Stage timings (assembly includes the split and the boundary factorisation).
+    pub timings: crate::run::Timings,
+}
+
+/// Lumped nodal areas: a third of every Delaunay triangle (inside the solid) at each corner.
+pub fn nodal_areas(points: &[[f64; 2]], triangles: &[[usize; 3]]) -> Vec<f64> {
+    let mut a = vec![0.0; points.len()];
+    for t in triangles {
+        let (p, q, r) = (points[t[0]], points[t[1]], points[t[2]]);
+        let area = 0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1])).abs();
+        for &k in t {
+            a[k] += area / 3.0;
+        }
+    }
+    a
+}
+
+/// Run `problem` (with a `[dynamics]` table) by explicit MLSM elastodynamics, calling
+/// `snapshot(step, t, positions, u, v)` at the snapshot steps. Energies:
+/// `E_kin = sum rho A_i |v_i|^2 / 2`, `E_el = sum A_i sigma : eps / 2`,
+/// `E_ext = -sum A_i f . u_i` (constant body force), `A_i` lumped Delaunay areas.
+pub fn simulate<E>(
+    problem: &crate::problem::Problem,
+    progress: &dyn crate::run::Progress,
+    mut snapshot: impl FnMut(usize, f64, &[[f64; 2]], &[[f64; 2]], &[[f64; 2]]) -> Result<(), E>,
+) -> Result<NavierSimulation, super::driver::IntegrateError<E>> {
+    use super::driver::{integrate, time_grid, IntegrateError};
+    use crate::elasticity::stress;
+    use crate::run::RunError;
+    let dynamics = problem.dynamics.expect("a [dynamics] table");
+    let run_err = |e: RunError| IntegrateError::Run(e);
+    // Energies need the displacement gradient at every node.
+    let mut q = problem.clone();
+    q.outputs.stress = true;
+    let mut timings = crate::run::Timings::default();
+    let disc = crate::run::Discrete::new(&q, progress, &mut timings).map_err(run_err)?;
+    let exact = crate::run::exact_solution(&q);
+    let (n, nb) = (disc.nodes.len(), disc.nodes.boundary.len());
+    let started = std::time::Instant::now();
+    let (triplets, rhs) = disc.system(&q, exact.as_deref()).assemble().map_err(run_err)?;
+    let matrix = crate::linalg::assemble(&triplets).map_err(|e| run_err(e.into()))?;
+    let is_dynamic: Vec<bool> = (0..rhs.len()).map(|g| g / 2 < n && (g / 2 >= nb || disc.ghost[g / 2] != usize::MAX)).collect();
+    let system = NavierDynamics::new(&matrix, &rhs, &is_dynamic, dynamics.density).map_err(|e| run_err(e.into()))?;
+    drop(matrix);
+    timings.assembly = started.elapsed().as_secs_f64();
+    let grid = time_grid(system.stable_time_step(), &dynamics).map_err(run_err)?;
+    let points = &disc.nodes.positions;
+    let init = |f: &crate::problem::Affine| -> Vec<f64> { system.dynamic.iter().map(|&g| f.at(points[g / 2])[g % 2]).collect() };
+    let mut state = super::State::new(&system, 0.0, init(&dynamics.initial_displacement), init(&dynamics.initial_velocity));
+    let areas = nodal_areas(points, &crate::output::triangulate(points, |c| problem.domain.contains(c)));
+    let lame = q.material.lame();
+    let body = match q.body_force {
+        crate::problem::Value::Constant(f) => f,
+        crate::problem::Value::Exact => [0.0, 0.0],
+    };
+    let nodal = |x: &[f64]| -> Vec<[f64; 2]> { (0..n).map(|i| [x[2 * i], x[2 * i + 1]]).collect() };
+    let energy = |s: &super::State| {
+        let (u, v) = (system.expand(&s.u, false), system.expand(&s.v, true));
+        let grads = stress::gradients(&disc.dofs, &disc.supports, &disc.shapes, &u, n);
+        let (mut kin, mut el, mut ext) = (0.0, 0.0, 0.0);
+        for i in 0..n {
+            kin += 0.5 * dynamics.density * areas[i] * (v[2 * i].powi(2) + v[2 * i + 1].powi(2));
+            let (sg, e) = (lame.stress(grads[i]), stress::strain(grads[i]));
+            el += 0.5 * areas[i] * (sg[0] * e[0] + sg[1] * e[1] + 2.0 * sg[2] * e[2]);
+            ext -= areas[i] * (body[0] * u[2 * i] + body[1] * u[2 * i + 1]);
+        }
+        (kin, el, ext)
+    };
+    let (report, energies) = integrate(&system, &energy, &mut state, grid, &dynamics, progress, |step, s| {
+        snapshot(step, s.t, points, &nodal(&system.expand(&s.u, false)), &nodal(&system.expand(&s.v, true)))
+    })?;
+    Ok(NavierSimulation {
+        positions: points.clone(),
+        u: nodal(&system.expand(&state.u, false)),
+        v: nodal(&system.expand(&state.v, true)),
+        report,
+        energies,
+        ghost_nodes: disc.dofs.len() / 2 - n,
+        unknowns: (system.dynamic.len(), system.algebraic.len()),
+        timings,
+    })
+}

@@ -135,3 +135,52 @@ impl SecondOrderSystem for PdDynamics<'_> {
     }
 }
 
+/// The result of a time-dependent peridynamic run.
+pub struct PdSimulation {
+    /// The discretisation (nodes, families, weights).
+    pub discretisation: super::solve::Discretisation,
+    /// Final displacement of the free nodes.
+    pub u: Vec<[f64; 2]>,
+    /// Final velocity of the free nodes.
+    pub v: Vec<[f64; 2]>,
+    /// Integration report.
+    pub report: crate::dynamics::driver::DynamicReport,
+    /// Energy history.
+    pub energies: Vec<crate::dynamics::driver::EnergyRow>,
+    /// Bond updates per second per thread in the time loop.
+    pub bond_updates_per_second_per_thread: f64,
+    /// Stage timings.
+    pub timings: super::solve::PdTimings,
+}
+
+/// Run `problem` (with a `[dynamics]` table) with peridynamics `params`, calling
+/// `snapshot(step, t, positions, u, v)` (free nodes) at the snapshot steps.
+pub fn simulate<E>(
+    problem: &crate::problem::Problem,
+    params: &super::PdParams,
+    progress: &dyn crate::run::Progress,
+    mut snapshot: impl FnMut(usize, f64, &[[f64; 2]], &[[f64; 2]], &[[f64; 2]]) -> Result<(), E>,
+) -> Result<PdSimulation, crate::dynamics::driver::IntegrateError<E>> {
+    use crate::dynamics::driver::{integrate, time_grid, IntegrateError};
+    use crate::dynamics::State;
+    let dynamics = problem.dynamics.expect("a [dynamics] table");
+    let mut timings = super::solve::PdTimings::default();
+    let disc = super::solve::Discretisation::new(problem, params, progress, &mut timings).map_err(IntegrateError::Run)?;
+    let exact = crate::run::exact_solution(problem);
+    let (body_force, _) =
+        super::loads::body_forces(&problem.domain, &problem.conditions, problem.body_force, exact.as_deref(), &disc.nodes);
+    let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };
+    let free = &disc.nodes.positions[..disc.nodes.free];
+    let flat = |f: &crate::problem::Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
+    let grid = time_grid(system.stable_time_step(), &dynamics).map_err(IntegrateError::Run)?;
+    let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
+    let pairs = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<[f64; 2]>>();
+    let energy = |s: &State| system.energies(&s.u, &s.v);
+    let (report, energies) = integrate(&system, &energy, &mut state, grid, &dynamics, progress, |step, s| {
+        snapshot(step, s.t, free, &pairs(&s.u), &pairs(&s.v))
+    })?;
+    let throughput =
+        report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
+    let (u, v) = (pairs(&state.u), pairs(&state.v));
+    Ok(PdSimulation { discretisation: disc, u, v, report, energies, bond_updates_per_second_per_thread: throughput, timings })
+}
