@@ -59,6 +59,47 @@ struct Table<'a> {
     orders: Vec<Orders>,
 }
 
+/// One peridynamic run of a comparison: the static solve, or the state at `end_time`.
+struct PdResult {
+    positions: Vec<[f64; 2]>,
+    displacement: Vec<[f64; 2]>,
+    interior: Vec<bool>,
+    bonds: usize,
+    /// Solver iterations (static) or time steps (dynamic).
+    iterations: usize,
+}
+
+impl PdResult {
+    fn solve(problem: &Problem, params: &PdParams, term: &Terminal) -> Result<PdResult, AppError> {
+        if problem.dynamics.is_some() {
+            let sim = crate::peridynamics::dynamics::simulate(problem, params, term, |_, _, _, _, _| Ok::<(), AppError>(())).map_err(
+                |e| match e {
+                    crate::dynamics::driver::IntegrateError::Run(r) => AppError::Run(r),
+                    crate::dynamics::driver::IntegrateError::Output(o) => o,
+                },
+            )?;
+            let nodes = &sim.discretisation.nodes;
+            let positions = nodes.positions[..nodes.free].to_vec();
+            let interior = positions.iter().map(|x| problem.domain.signed_distance(*x) <= -params.horizon).collect();
+            return Ok(PdResult {
+                positions,
+                displacement: sim.u,
+                interior,
+                bonds: sim.discretisation.families.bonds(),
+                iterations: sim.report.steps,
+            });
+        }
+        let sol = crate::peridynamics::solve::solve(problem, params, term)?;
+        Ok(PdResult {
+            positions: sol.nodes.positions[..sol.nodes.free].to_vec(),
+            displacement: sol.displacement[..sol.nodes.free].to_vec(),
+            interior: sol.interior,
+            bonds: sol.bonds,
+            iterations: sol.solver.iterations,
+        })
+    }
+}
+
 pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
     let Some(base) = p.peridynamics else {
         return Err(AppError::Usage(format!("{}: compare needs a [peridynamics] table (horizon, quadrature, ...)", p.source.display())));
@@ -106,15 +147,15 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
             eprintln!("{} delta = {:.4e} (h = {:.4e})", params.quadrature.name(), params.horizon, params.spacing());
         }
         let t0 = Instant::now();
-        let sol = crate::peridynamics::solve::solve(problem, params, term)?;
-        let free = &sol.nodes.positions[..sol.nodes.free];
+        let sol = PdResult::solve(problem, params, term)?;
+        let free = &sol.positions[..];
         let local = reference.displacement_at(free)?;
         let whole = masked_errors(&sol.displacement, &local, |_| true).expect("free nodes exist");
         let interior = masked_errors(&sol.displacement, &local, |i| sol.interior[i]);
         let name = format!("{}_delta{}.vtu", params.quadrature.name(), k % deltas.len());
         let diff: Vec<[f64; 2]> = sol.displacement.iter().zip(&local).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
         let fields = vec![
-            vector("peridynamic_displacement", sol.displacement[..free.len()].iter().copied()),
+            vector("peridynamic_displacement", sol.displacement.iter().copied()),
             vector("local_displacement", local.iter().copied()),
             vector("difference", diff.iter().copied()),
             scalar("difference_magnitude", diff.iter().map(|d| d[0].hypot(d[1]))),
@@ -135,14 +176,14 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
             quadrature: params.quadrature.name(),
             delta: params.horizon,
             h: params.spacing(),
-            nodes: sol.nodes.free,
+            nodes: sol.positions.len(),
             interior_nodes: sol.interior.iter().filter(|&&b| b).count(),
             bonds: sol.bonds,
             e_inf_interior: interior.e_inf_u,
             rel_l2_interior: interior.rel_l2_u,
             e_inf_whole: whole.e_inf_u,
             rel_l2_whole: whole.rel_l2_u,
-            solver_iterations: sol.solver.iterations,
+            solver_iterations: sol.iterations,
             seconds: t0.elapsed().as_secs_f64(),
             vtu: name,
         });

@@ -9,22 +9,49 @@ pub mod interpolate;
 use crate::domain::Point;
 use crate::exact::ExactSolution;
 use crate::problem::Problem;
-use crate::run::{self, Progress, RunError, Solution};
+use crate::run::{self, Progress, RunError};
 
 /// The local solution the peridynamic runs are compared with.
 pub enum LocalReference {
-    /// The scene's closed-form solution.
+    /// The scene's closed-form solution (static scenes).
     Exact(Box<dyn ExactSolution>),
-    /// An MLSM solution of the scene, interpolated with value shapes.
-    Mlsm(Box<Solution>),
+    /// An MLSM solution of the scene (static, or at `end_time` of a dynamic scene),
+    /// interpolated with value shapes.
+    Mlsm {
+        /// What it is.
+        description: String,
+        /// MLSM nodes.
+        positions: Vec<Point>,
+        /// Nodal displacement.
+        displacement: Vec<[f64; 2]>,
+    },
 }
 
 impl LocalReference {
-    /// The exact solution if the scene has one, else an MLSM solve of `problem`.
+    /// The exact solution if a static scene has one, else an MLSM run of `problem`
+    /// (explicit elastodynamics to `end_time` when the scene has a `[dynamics]` table).
     pub fn build(problem: &Problem, progress: &dyn Progress) -> Result<LocalReference, RunError> {
+        if problem.dynamics.is_some() {
+            let sim = crate::dynamics::navier::simulate(problem, progress, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|e| match e {
+                crate::dynamics::driver::IntegrateError::Run(r) => r,
+                crate::dynamics::driver::IntegrateError::Output(()) => unreachable!("no output"),
+            })?;
+            let t = sim.energies.last().map_or(0.0, |e| e[0]);
+            let description = format!(
+                "MLSM elastodynamics at t = {t:.3e} s ({} nodes, spacing {:.3e}, {} steps)",
+                sim.positions.len(),
+                problem.fill.spacing,
+                sim.report.steps
+            );
+            return Ok(LocalReference::Mlsm { description, positions: sim.positions, displacement: sim.u });
+        }
         match run::exact_solution(problem) {
             Some(e) => Ok(LocalReference::Exact(e)),
-            None => Ok(LocalReference::Mlsm(Box::new(run::solve(problem, progress)?))),
+            None => {
+                let s = run::solve(problem, progress)?;
+                let description = format!("MLSM solution ({} nodes, spacing {:.3e})", s.nodes.len(), s.nodes.spacing);
+                Ok(LocalReference::Mlsm { description, positions: s.nodes.positions, displacement: s.displacement })
+            }
         }
     }
 
@@ -32,7 +59,7 @@ impl LocalReference {
     pub fn describe(&self) -> String {
         match self {
             LocalReference::Exact(e) => format!("exact solution ({})", e.name()),
-            LocalReference::Mlsm(s) => format!("MLSM solution ({} nodes, spacing {:.3e})", s.nodes.len(), s.nodes.spacing),
+            LocalReference::Mlsm { description, .. } => description.clone(),
         }
     }
 
@@ -40,7 +67,7 @@ impl LocalReference {
     pub fn displacement_at(&self, points: &[Point]) -> Result<Vec<[f64; 2]>, RunError> {
         match self {
             LocalReference::Exact(e) => Ok(points.iter().map(|p| e.displacement(*p)).collect()),
-            LocalReference::Mlsm(s) => Ok(interpolate::mls_values(&s.nodes.positions, &s.displacement, points)?),
+            LocalReference::Mlsm { positions, displacement, .. } => Ok(interpolate::mls_values(positions, displacement, points)?),
         }
     }
 }
