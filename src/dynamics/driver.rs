@@ -61,7 +61,8 @@ pub enum IntegrateError<E> {
 }
 
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
-/// `snapshot` at `params.snapshots` evenly spaced steps (and at the start and the end)
+/// `snapshot` every `params.snapshot_every` steps, or at `params.snapshots` evenly
+/// spaced steps (and always at the start and the end)
 /// and recording `energies` (kinetic, elastic, external) at every step (every
 /// `ceil(steps / 1000)`-th step for longer runs). Returns the report and the history.
 pub fn integrate<E>(
@@ -74,7 +75,7 @@ pub fn integrate<E>(
     mut snapshot: impl FnMut(usize, &State) -> Result<(), E>,
 ) -> Result<(DynamicReport, Vec<EnergyRow>), IntegrateError<E>> {
     let TimeGrid { dt, steps, stable } = grid;
-    let every = (steps / params.snapshots.max(1)).max(1);
+    let every = params.snapshot_every.unwrap_or((steps / params.snapshots.max(1)).max(1));
     // Energies cost one more pass over the operator: at most about 1000 rows.
     let energy_every = steps.div_ceil(1000).max(1);
     let mut history = Vec::with_capacity(steps.min(1000) + 2);

@@ -174,6 +174,8 @@ pub struct DynamicsParams {
     pub initial_velocity: Affine,
     /// Snapshots in the .pvd series.
     pub snapshots: usize,
+    /// A snapshot every k steps, when given (instead of `snapshots`).
+    pub snapshot_every: Option<usize>,
 }
 
 impl Problem {

@@ -72,6 +72,8 @@ pub struct DynamicsSpec {
     pub initial_velocity: Option<AffineSpec>,
     /// Number of snapshots written to the .pvd series (default 10).
     pub snapshots: Option<usize>,
+    /// Write a snapshot every k steps instead (exclusive with `snapshots`).
+    pub snapshot_every: Option<usize>,
 }
 
 /// `[peridynamics]`.

@@ -255,6 +255,12 @@ fn dynamics(c: &Ctx, s: &DynamicsSpec) -> Result<DynamicsParams, ProblemError> {
             }
         }
     };
+    if s.snapshots.is_some() && s.snapshot_every.is_some() {
+        return c.err("dynamics.snapshot_every", "give either snapshots (a count) or snapshot_every (steps), not both");
+    }
+    if s.snapshot_every == Some(0) {
+        return c.err("dynamics.snapshot_every", "must be at least 1");
+    }
     let snapshots = s.snapshots.unwrap_or(10);
     if snapshots > 10_000 {
         return c.err("dynamics.snapshots", format!("{snapshots} snapshots; at most 10000"));
@@ -268,6 +274,7 @@ fn dynamics(c: &Ctx, s: &DynamicsSpec) -> Result<DynamicsParams, ProblemError> {
         initial_displacement: affine("initial_displacement", s.initial_displacement)?,
         initial_velocity: affine("initial_velocity", s.initial_velocity)?,
         snapshots,
+        snapshot_every: s.snapshot_every,
     })
 }
 
