@@ -73,17 +73,22 @@ pub fn truncated_moments(x: Point, contains: &dyn Fn(Point) -> bool, kernel: &Mi
             let dir = [theta.cos(), theta.sin()];
             let at = |r: f64| contains([x[0] + r * dir[0], x[1] + r * dir[1]]);
             let reach = first_exit(&at, delta);
+            // The radial integral depends on the degree n = a + b only: once per degree.
+            let radial = |n: i32| match kernel.kernel {
+                super::Kernel::Plain => kernel.constant * reach.powi(n - 1) / ((n - 1) as f64 * delta.powi(n)),
+                super::Kernel::Regularised { .. } => {
+                    let f = |r: f64| kernel.value(r) * (r / delta).powi(n) * r;
+                    (0..16).map(|q| radial_rule.integrate(reach * q as f64 / 16.0, reach * (q + 1) as f64 / 16.0, f)).sum()
+                }
+            };
+            let mut radial_of = [f64::NAN; 8];
             for (slot, &(a, b)) in out.iter_mut().zip(moments) {
-                let n = a + b;
-                let angular = dir[0].powi(a) * dir[1].powi(b);
-                let radial = match kernel.kernel {
-                    super::Kernel::Plain => kernel.constant * reach.powi(n - 1) / ((n - 1) as f64 * delta.powi(n)),
-                    super::Kernel::Regularised { .. } => {
-                        let f = |r: f64| kernel.value(r) * (r / delta).powi(n) * r;
-                        (0..16).map(|q| radial_rule.integrate(reach * q as f64 / 16.0, reach * (q + 1) as f64 / 16.0, f)).sum()
-                    }
-                };
-                *slot += wt * angular * radial;
+                let n = (a + b) as usize;
+                if radial_of[n].is_nan() {
+                    radial_of[n] = radial(a + b);
+                }
+                let radial = radial_of[n];
+                *slot += wt * dir[0].powi(a) * dir[1].powi(b) * radial;
             }
         }
     }
