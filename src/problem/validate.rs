@@ -40,7 +40,8 @@ pub fn default_support(m: usize, fill: FillKind) -> usize {
 /// Largest node count a run may ask for (a sparse LU of 1e8 unknowns does not fit in memory).
 pub const MAX_NODES: f64 = 5e7;
 
-/// Ghost nodes outside traction boundaries unless the scene says otherwise.
+/// Ghost nodes outside traction boundaries unless the scene says otherwise (static
+/// scenes; time-dependent ones default to none).
 pub const DEFAULT_GHOST_NODES: bool = true;
 
 /// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
@@ -135,7 +136,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         return c.err("domain.region", "the regions leave no material (empty intersection or everything subtracted)");
     }
     let fill = nodes(&c, &spec.nodes, &domain, area)?;
-    let approximation = approximation(&c, &spec.approximation, fill.kind)?;
+    let approximation = approximation(&c, &spec.approximation, fill.kind, spec.dynamics.is_some())?;
     let expected_nodes = area / fill.spacing.powi(2) * packing(fill.kind);
     if expected_nodes < 2.0 * approximation.support as f64 {
         return c.err(
@@ -575,7 +576,7 @@ fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Result<FillParam
     Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
 }
 
-fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind) -> Result<Approximation, ProblemError> {
+fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dynamic: bool) -> Result<Approximation, ProblemError> {
     let kind = s.basis.as_deref().unwrap_or("monomials");
     let poly = |deg: Option<u32>| -> Result<u32, ProblemError> {
         let d = deg.unwrap_or(2);
@@ -641,7 +642,10 @@ fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind) -> Result<Appro
             ),
         );
     }
-    Ok(Approximation { basis, weight, support, ghost_nodes: s.ghost_nodes.unwrap_or(DEFAULT_GHOST_NODES) })
+    // Ghost nodes gave growing modes in explicit MLSM dynamics (README, known limits):
+    // off by default for time-dependent scenes.
+    let ghost_nodes = s.ghost_nodes.unwrap_or(DEFAULT_GHOST_NODES && !dynamic);
+    Ok(Approximation { basis, weight, support, ghost_nodes })
 }
 
 fn material(c: &Ctx, s: &MaterialSpec) -> Result<Material, ProblemError> {
