@@ -46,6 +46,10 @@ pub enum Quadrature {
     /// Each cell split into two triangles, three interior nodes
     /// `(2/3, 1/6, 1/6)` (barycentric) per triangle with a third of its area each (P2).
     TriangleP2,
+    /// Each cell split into two triangles, the seven-point rule per triangle (vertices
+    /// 3, edge midpoints 8, centroid 27, times `|T|/60`; P3, the seed's "type 3"); the
+    /// vertices and edge midpoints are shared with the neighbouring cells.
+    TriangleP3,
     /// Cell-centre nodes; at nodes with a complete family the bond weights are
     /// corrected to reproduce the continuum moments exactly ([`compatible`]).
     Compatible,
@@ -53,12 +57,13 @@ pub enum Quadrature {
 
 impl Quadrature {
     /// Every rule with its scene name.
-    pub const ALL: [(&'static str, Quadrature); 6] = [
+    pub const ALL: [(&'static str, Quadrature); 7] = [
         ("full-area", Quadrature::FullArea),
         ("partial-area", Quadrature::PartialArea),
         ("gauss2x2", Quadrature::Gauss2x2),
         ("triangle-p1", Quadrature::TriangleP1),
         ("triangle-p2", Quadrature::TriangleP2),
+        ("triangle-p3", Quadrature::TriangleP3),
         ("ac", Quadrature::Compatible),
     ];
 

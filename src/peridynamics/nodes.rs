@@ -3,7 +3,9 @@
 //! the lower-left corner of the solid's bounding box.
 //!
 //! A rule point inside the solid (signed distance <= 0) is a free node with volume
-//! `weight * h^2`. A rule point outside, within the collar `delta + 0.75 h` of a
+//! `weight * h^2`. The seven-point triangle rule shares vertices and edge midpoints
+//! between cells: a shared point gets the sum of the shares of the cells that hold
+//! material, and a point on the boundary is free with the shares of the inner cells. A rule point outside, within the collar `delta + 0.75 h` of a
 //! boundary part with a displacement condition, is a constrained node: the
 //! Dirichlet volume constraint gives it the prescribed displacement (the constant of
 //! the part, or the exact solution evaluated at the node itself). The extra `0.75 h`
@@ -30,6 +32,12 @@ pub fn rule(q: Quadrature) -> Vec<(Point, f64)> {
             vec![([a, a], 0.25), ([b, a], 0.25), ([a, b], 0.25), ([b, b], 0.25)]
         }
         Quadrature::TriangleP1 => vec![([2.0 / 3.0, 1.0 / 3.0], 0.5), ([1.0 / 3.0, 2.0 / 3.0], 0.5)],
+        Quadrature::TriangleP3 => {
+            // The periodic unit of the 7-point rule on the two triangles of every cell:
+            // a vertex (shared by 6 triangles, 6 x 3/120), three edge midpoints (2 x 8/120
+            // each) and the two centroids (27/120 each).
+            vec![([0.0, 0.0], 0.15), ([0.5, 0.0], 2.0 / 15.0), ([0.0, 0.5], 2.0 / 15.0), ([0.5, 0.5], 2.0 / 15.0), ([2.0 / 3.0, 1.0 / 3.0], 0.225), ([1.0 / 3.0, 2.0 / 3.0], 0.225)]
+        }
         Quadrature::TriangleP2 => {
             // Triangles (0,0),(1,0),(1,1) and (0,0),(1,1),(0,1); points 2/3 A + 1/6 B + 1/6 C.
             let tris = [[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]];
@@ -43,6 +51,33 @@ pub fn rule(q: Quadrature) -> Vec<(Point, f64)> {
             }
             pts
         }
+    }
+}
+
+/// What one cell adds to its points: `(point in [0, 1]^2, share of the cell area,
+/// index of the point in the periodic unit `rule(q)`)`. Only the 7-point triangle rule
+/// puts points on cell edges and corners, shared with the neighbouring cells: there
+/// every triangle gives `|T|/60 (3 at each vertex, 8 at each edge midpoint, 27 at the
+/// centroid)` (seed 000, ch. 1, P3).
+fn contributions(q: Quadrature) -> Vec<(Point, f64, u8)> {
+    match q {
+        Quadrature::TriangleP3 => {
+            let (v, e, c) = (3.0 / 120.0, 8.0 / 120.0, 27.0 / 120.0);
+            vec![
+                ([0.0, 0.0], 2.0 * v, 0),
+                ([1.0, 1.0], 2.0 * v, 0),
+                ([1.0, 0.0], v, 0),
+                ([0.0, 1.0], v, 0),
+                ([0.5, 0.0], e, 1),
+                ([0.5, 1.0], e, 1),
+                ([0.0, 0.5], e, 2),
+                ([1.0, 0.5], e, 2),
+                ([0.5, 0.5], 2.0 * e, 3),
+                ([2.0 / 3.0, 1.0 / 3.0], c, 4),
+                ([1.0 / 3.0, 2.0 / 3.0], c, 5),
+            ]
+        }
+        _ => rule(q).into_iter().enumerate().map(|(k, (p, w))| (p, w, k as u8)).collect(),
     }
 }
 
@@ -132,51 +167,80 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
     let pad = (collar / h).ceil() as i64 + 1;
     let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
     let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
-    let rule = rule(params.quadrature);
-    let constraint_of = |p: Point| body.constraint(p);
-
-    // Row by row in parallel, then free nodes first, constrained after, each in lattice order.
-    type Free = (Point, f64, u8);
-    type Fixed = (Point, f64, u8, [f64; 2]);
-    let rows: Vec<(Vec<Free>, Vec<Fixed>)> = (-pad..ny + pad)
+    let cell = contributions(params.quadrature);
+    let shared = params.quadrature == Quadrature::TriangleP3;
+    // A point is keyed by its lattice position in units of h/12 (every rule's points are
+    // at distinct keys), so that a point shared by several cells is one node whose weight
+    // is the sum of their shares.
+    let key = |p: Point| (((p[1] - lo[1]) * 12.0 / h).round() as i64, ((p[0] - lo[0]) * 12.0 / h).round() as i64);
+    // Per contribution: key, point, share, unit index, whether the cell is inside the solid.
+    type Share = ((i64, i64), Point, f64, u8, bool);
+    let rows: Vec<Vec<Share>> = (-pad..ny + pad)
         .into_par_iter()
         .map(|j| {
-            let mut free = Vec::new();
-            let mut fixed = Vec::new();
+            let mut out = Vec::new();
             for i in -pad..nx + pad {
                 let corner = [lo[0] + i as f64 * h, lo[1] + j as f64 * h];
-                for (k, (q, w)) in rule.iter().enumerate() {
+                // With shared points, a cell adds its shares only if it is material (its
+                // centre inside the solid or in the constrained collar), so that points on a
+                // free edge get the weight of the inner cells only.
+                let c = [corner[0] + 0.5 * h, corner[1] + 0.5 * h];
+                let inside = domain.signed_distance(c) <= 0.0;
+                if shared && !inside && !body.contains(c) {
+                    continue;
+                }
+                for (q, w, k) in &cell {
                     let p = [corner[0] + q[0] * h, corner[1] + q[1] * h];
-                    let d = domain.signed_distance(p);
-                    if d <= 0.0 {
-                        free.push((p, w * h * h, k as u8));
-                    } else if d <= collar {
-                        if let Some(u) = constraint_of(p) {
-                            fixed.push((p, w * h * h, k as u8, u));
-                        }
-                    }
+                    // Rules with points strictly inside cells keep every point inside the
+                    // solid (a cell cut by a curved edge keeps its inner points).
+                    let inner = if shared { inside } else { domain.signed_distance(p) <= 0.0 };
+                    out.push((key(p), p, w * h * h, *k, inner));
                 }
             }
-            (free, fixed)
+            out
         })
         .collect();
-    let mut positions = Vec::new();
-    let mut volumes = Vec::new();
-    let mut rule_point = Vec::new();
-    for (free, _) in &rows {
-        for (p, v, k) in free {
+    // Merged point: position, unit index, shares of inner cells and of collar cells.
+    let mut merged: std::collections::BTreeMap<(i64, i64), (Point, u8, f64, f64)> = std::collections::BTreeMap::new();
+    for (k, p, w, r, inside) in rows.into_iter().flatten() {
+        let e = merged.entry(k).or_insert((p, r, 0.0, 0.0));
+        if inside {
+            e.2 += w;
+        } else {
+            e.3 += w;
+        }
+    }
+    // Free nodes first, constrained after, each in lattice (row-major) order. A point on
+    // the boundary (shared rules only) is free and carries the shares of the inner cells.
+    let classified: Vec<(Point, f64, u8, Option<Option<[f64; 2]>>)> = merged
+        .into_values()
+        .collect::<Vec<_>>()
+        .into_par_iter()
+        .map(|(p, r, w_in, w_out)| {
+            let d = domain.signed_distance(p);
+            if d <= 1e-9 * h && w_in > 0.0 {
+                (p, w_in, r, Some(None))
+            } else if d > 1e-9 * h && d <= collar {
+                (p, w_in + w_out, r, body.constraint(p).map(Some))
+            } else {
+                (p, 0.0, r, None)
+            }
+        })
+        .collect();
+    let (mut positions, mut volumes, mut rule_point, mut prescribed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for (p, w, r, class) in &classified {
+        if let Some(None) = class {
             positions.push(*p);
-            volumes.push(*v);
-            rule_point.push(*k);
+            volumes.push(*w);
+            rule_point.push(*r);
         }
     }
     let free = positions.len();
-    let mut prescribed = Vec::new();
-    for (_, fixed) in &rows {
-        for (p, v, k, u) in fixed {
+    for (p, w, r, class) in &classified {
+        if let Some(Some(u)) = class {
             positions.push(*p);
-            volumes.push(*v);
-            rule_point.push(*k);
+            volumes.push(*w);
+            rule_point.push(*r);
             prescribed.push(*u);
         }
     }
