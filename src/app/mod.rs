@@ -105,6 +105,15 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                     p.approximation.support,
                     p.approximation.basis.describe()
                 );
+                if let Some(d) = &p.dynamics {
+                    println!(
+                        "  dynamics: rho {:.4e}, t_end {:.4e} s, {}, step {}",
+                        d.density,
+                        d.end_time,
+                        d.integrator.name(),
+                        d.time_step.map_or(format!("{} of the stable step", d.safety), |dt| format!("{dt:.4e} s"))
+                    );
+                }
                 if let Some(pd) = &p.peridynamics {
                     println!(
                         "  peridynamics: horizon {:.4e}, m = {}, h = {:.4e}, {} nodes per cell, quadrature {}, kernel {}",
