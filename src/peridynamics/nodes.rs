@@ -36,7 +36,14 @@ pub fn rule(q: Quadrature) -> Vec<(Point, f64)> {
             // The periodic unit of the 7-point rule on the two triangles of every cell:
             // a vertex (shared by 6 triangles, 6 x 3/120), three edge midpoints (2 x 8/120
             // each) and the two centroids (27/120 each).
-            vec![([0.0, 0.0], 0.15), ([0.5, 0.0], 2.0 / 15.0), ([0.0, 0.5], 2.0 / 15.0), ([0.5, 0.5], 2.0 / 15.0), ([2.0 / 3.0, 1.0 / 3.0], 0.225), ([1.0 / 3.0, 2.0 / 3.0], 0.225)]
+            vec![
+                ([0.0, 0.0], 0.15),
+                ([0.5, 0.0], 2.0 / 15.0),
+                ([0.0, 0.5], 2.0 / 15.0),
+                ([0.5, 0.5], 2.0 / 15.0),
+                ([2.0 / 3.0, 1.0 / 3.0], 0.225),
+                ([1.0 / 3.0, 2.0 / 3.0], 0.225),
+            ]
         }
         Quadrature::TriangleP2 => {
             // Triangles (0,0),(1,0),(1,1) and (0,0),(1,1),(0,1); points 2/3 A + 1/6 B + 1/6 C.
