@@ -16,7 +16,7 @@
 //!    quadrature points, families, calibrated kernels, static solve);
 //! 9. [`dynamics`]: explicit time integrators (EMU, Stormer-Verlet, RK4);
 //! 10. [`compare`]: the nonlocal-to-local comparison (PD at a sequence of horizons
-//!    against the Navier solution).
+//!     against the Navier solution).
 //!
 //! [`run`] strings the stages together; [`app`] and [`cli`] are the command line.
 

@@ -18,6 +18,10 @@ pub use integrators::Integrator;
 pub trait SecondOrderSystem: Sync {
     /// Number of scalar unknowns.
     fn len(&self) -> usize;
+    /// True for a system without unknowns.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
     /// Write `a(t, u)` into `a`.
     fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]);
 }
