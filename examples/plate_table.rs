@@ -1,12 +1,12 @@
 //! The analogue of table 6.1.1 of seed 000: the steel plate set in motion
-//! (problems/steel_plate_dynamic.toml, delta = 0.1), refined in h at the fixed horizon,
+//! (problems/steel_plate_dynamic.toml, delta = 0.1 or --horizon), refined in h at the fixed horizon,
 //! for several quadrature rules and kernels. Error = max |u_h - u_ref| (and the same
 //! for v) at t_end over the free nodes at distance >= delta from the boundary, with the
 //! reference (midpoint rule, m = --reference) interpolated at the coarse nodes by
 //! degree-2 MLS; order = least-squares slope of log e against log h.
 //!
-//! cargo run --release --example plate_table -- [--reference 24] [--ratios 3,4,6,8]
-//!     [--rules full-area,gauss2x2,triangle-p2] [--kernels plain,-2,0,1]
+//! cargo run --release --example plate_table -- [--horizon 0.1] [--reference 24]
+//!     [--ratios 3,4,6,8] [--rules full-area,gauss2x2,triangle-p2] [--kernels plain,-2,0,1]
 
 use mlsm::compare::interpolate::mls_values;
 use mlsm::peridynamics::dynamics::simulate;
@@ -53,7 +53,8 @@ fn main() {
     let kernels = list(&args, "--kernels", "plain,-2,0,1");
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml");
     let p = Problem::from_file(&path).unwrap();
-    let base = p.peridynamics.unwrap();
+    let mut base = p.peridynamics.unwrap();
+    base.horizon = list(&args, "--horizon", "0.1")[0].parse().unwrap();
     println!("| rule | kernel | h | nodes | e_inf(u) | e_inf(v) | seconds |");
     println!("|---|---|---|---|---|---|---|");
     let mut summary = Vec::new();
