@@ -15,7 +15,8 @@
 //! volume surface correction and the asymptotically compatible weights of
 //! [`compatible`]), [`loads`] (body force and tractions as a boundary-layer body
 //! force), [`operator`] (internal force and stiffness), [`strain`] (nonlocal strain
-//! for output) and [`solve`] (the static run).
+//! for output), [`solve`] (the static run) and [`dynamics`] (bond forces, energies,
+//! stable step and the time-dependent run).
 
 pub mod compatible;
 pub mod dynamics;
