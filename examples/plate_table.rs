@@ -10,6 +10,7 @@
 
 use mlsm::compare::interpolate::mls_values;
 use mlsm::peridynamics::dynamics::simulate;
+use mlsm::peridynamics::solve::interior_flags;
 use mlsm::peridynamics::{Kernel, PdParams, Quadrature};
 use mlsm::post::observed_order;
 use mlsm::problem::Problem;
@@ -29,7 +30,7 @@ fn run(p: &Problem, params: &PdParams) -> Run {
     let quiet = Problem { dynamics: p.dynamics.map(|d| mlsm::problem::DynamicsParams { snapshots: 1, ..d }), ..p.clone() };
     let sim = simulate(&quiet, params, &Silent, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|_| "integration failed").unwrap();
     let positions = sim.discretisation.nodes.positions[..sim.discretisation.nodes.free].to_vec();
-    let interior = positions.iter().map(|x| p.domain.signed_distance(*x) <= -params.horizon).collect();
+    let interior = interior_flags(&p.domain, &positions, params.horizon);
     Run { positions, u: sim.u, v: sim.v, interior, seconds: t0.elapsed().as_secs_f64() }
 }
 

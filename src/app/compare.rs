@@ -4,6 +4,7 @@
 use super::{create_dir, scalar, vector, write_points_vtu, AppError, Terminal};
 use crate::compare::LocalReference;
 use crate::output::{self, FieldValues, PointField, Series};
+use crate::peridynamics::solve::interior_flags;
 use crate::peridynamics::{PdParams, Quadrature};
 use crate::post::{masked_errors, observed_order};
 use crate::problem::Problem;
@@ -72,15 +73,11 @@ struct PdResult {
 impl PdResult {
     fn solve(problem: &Problem, params: &PdParams, term: &Terminal) -> Result<PdResult, AppError> {
         if problem.dynamics.is_some() {
-            let sim = crate::peridynamics::dynamics::simulate(problem, params, term, |_, _, _, _, _| Ok::<(), AppError>(())).map_err(
-                |e| match e {
-                    crate::dynamics::driver::IntegrateError::Run(r) => AppError::Run(r),
-                    crate::dynamics::driver::IntegrateError::Output(o) => o,
-                },
-            )?;
+            let sim = crate::peridynamics::dynamics::simulate(problem, params, term, |_, _, _, _, _| Ok::<(), AppError>(()))
+                .map_err(super::dynamics::app_error)?;
             let nodes = &sim.discretisation.nodes;
             let positions = nodes.positions[..nodes.free].to_vec();
-            let interior = positions.iter().map(|x| problem.domain.signed_distance(*x) <= -params.horizon).collect();
+            let interior = interior_flags(&problem.domain, &positions, params.horizon);
             return Ok(PdResult {
                 positions,
                 displacement: sim.u,

@@ -53,7 +53,8 @@ impl<'a> Series<'a> {
     }
 }
 
-fn app_error(e: IntegrateError<AppError>) -> AppError {
+/// The error of a time loop whose snapshot writer returns [`AppError`].
+pub(super) fn app_error(e: IntegrateError<AppError>) -> AppError {
     match e {
         IntegrateError::Run(r) => AppError::Run(r),
         IntegrateError::Output(o) => o,

@@ -50,38 +50,54 @@ impl PdDynamics<'_> {
         }
     }
 
-    /// Force density and micropotential sum of the bonds of free node `i`.
-    fn bond_sums(&self, u: &[f64], i: usize) -> ([f64; 2], f64) {
-        let x = &self.nodes().positions;
-        let ui = self.displacement(u, i);
-        let (mut f, mut w) = ([0.0, 0.0], 0.0);
-        let families = self.bonds.families;
-        for (b, &j) in families.range(i).zip(families.of(i)) {
-            let j = j as usize;
-            let c = self.bonds.coefficients[b];
-            let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
-            let uj = self.displacement(u, j);
-            let eta = [uj[0] - ui[0], uj[1] - ui[1]];
-            match self.force {
-                BondForce::Linear => {
-                    let p = xi[0] * eta[0] + xi[1] * eta[1];
-                    f[0] += c * p * xi[0];
-                    f[1] += c * p * xi[1];
-                    w += 0.5 * c * p * p;
-                }
-                BondForce::BondStretch => {
-                    let r = xi[0].hypot(xi[1]);
-                    let y = [xi[0] + eta[0], xi[1] + eta[1]];
-                    let ry = y[0].hypot(y[1]);
-                    let s = (ry - r) / r;
+    /// Bond force density at free node `i` (the linear law is [`Bonds::force_at`]).
+    fn force(&self, u: &[f64], i: usize) -> [f64; 2] {
+        match self.force {
+            BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, j)),
+            BondForce::BondStretch => {
+                let mut f = [0.0, 0.0];
+                self.stretches(u, i, |c, r, s, y, ry| {
                     let k = c * r * r * r * s / ry;
                     f[0] += k * y[0];
                     f[1] += k * y[1];
-                    w += 0.5 * c * r.powi(4) * s * s;
-                }
+                });
+                f
             }
         }
-        (f, w)
+    }
+
+    /// Sum of the micropotentials `w_ij` of the bonds of free node `i` (module docs).
+    fn micropotential(&self, u: &[f64], i: usize) -> f64 {
+        let mut w = 0.0;
+        match self.force {
+            BondForce::Linear => {
+                let x = &self.nodes().positions;
+                let ui = self.displacement(u, i);
+                for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
+                    let j = j as usize;
+                    let uj = self.displacement(u, j);
+                    let p = (x[j][0] - x[i][0]) * (uj[0] - ui[0]) + (x[j][1] - x[i][1]) * (uj[1] - ui[1]);
+                    w += 0.5 * self.bonds.coefficients[b] * p * p;
+                }
+            }
+            BondForce::BondStretch => self.stretches(u, i, |c, r, s, _, _| w += 0.5 * c * r.powi(4) * s * s),
+        }
+        w
+    }
+
+    /// For every bond of free node `i`: `(c_ij, |xi|, stretch s, xi + eta, |xi + eta|)`.
+    fn stretches(&self, u: &[f64], i: usize, mut visit: impl FnMut(f64, f64, f64, [f64; 2], f64)) {
+        let x = &self.nodes().positions;
+        let ui = self.displacement(u, i);
+        for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
+            let j = j as usize;
+            let uj = self.displacement(u, j);
+            let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
+            let r = xi[0].hypot(xi[1]);
+            let y = [xi[0] + uj[0] - ui[0], xi[1] + uj[1] - ui[1]];
+            let ry = y[0].hypot(y[1]);
+            visit(self.bonds.coefficients[b], r, (ry - r) / r, y, ry);
+        }
     }
 
     /// Largest stable time step of the central-difference schemes (module docs).
@@ -112,7 +128,7 @@ impl PdDynamics<'_> {
             .map(|i| {
                 let vol = nodes.volumes[i];
                 let kin = 0.5 * self.density * vol * (v[2 * i].powi(2) + v[2 * i + 1].powi(2));
-                let (_, w) = self.bond_sums(u, i);
+                let w = self.micropotential(u, i);
                 let b = self.body_force[i];
                 (kin, 0.5 * vol * w, -vol * (b[0] * u[2 * i] + b[1] * u[2 * i + 1]))
             })
@@ -127,7 +143,7 @@ impl SecondOrderSystem for PdDynamics<'_> {
 
     fn acceleration(&self, _t: f64, u: &[f64], a: &mut [f64]) {
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
-            let (f, _) = self.bond_sums(u, i);
+            let f = self.force(u, i);
             let b = self.body_force[i];
             a[0] = (f[0] + b[0]) / self.density;
             a[1] = (f[1] + b[1]) / self.density;
@@ -165,8 +181,8 @@ pub fn simulate<E>(
     use crate::dynamics::State;
     let dynamics = problem.dynamics.expect("a [dynamics] table");
     let mut timings = super::solve::PdTimings::default();
-    let disc = super::solve::Discretisation::new(problem, params, progress, &mut timings).map_err(IntegrateError::Run)?;
     let exact = crate::run::exact_solution(problem);
+    let disc = super::solve::Discretisation::new(problem, params, exact.as_deref(), progress, &mut timings).map_err(IntegrateError::Run)?;
     let (body_force, _) =
         super::loads::body_forces(&problem.domain, &problem.conditions, problem.body_force, exact.as_deref(), &disc.nodes);
     let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };

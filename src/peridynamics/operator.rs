@@ -36,21 +36,23 @@ impl Bonds<'_> {
         (j as usize, self.coefficients[b], outer([q[0] - p[0], q[1] - p[1]]))
     }
 
+    /// `(L_h u)_i` at free node `i`, with `u_of(j)` the displacement of node `j`.
+    pub fn force_at(&self, i: usize, u_of: impl Fn(usize) -> [f64; 2]) -> [f64; 2] {
+        let ui = u_of(i);
+        let mut f = [0.0, 0.0];
+        for (b, &j) in self.families.range(i).zip(self.families.of(i)) {
+            let (j, c, [xx, xy, yy]) = self.bond(i, b, j);
+            let uj = u_of(j);
+            let d = [uj[0] - ui[0], uj[1] - ui[1]];
+            f[0] += c * (xx * d[0] + xy * d[1]);
+            f[1] += c * (xy * d[0] + yy * d[1]);
+        }
+        f
+    }
+
     /// `(L_h u)_i` for every free node; `u` holds all nodes (constrained ones too).
     pub fn apply(&self, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
-        (0..self.nodes.free)
-            .into_par_iter()
-            .map(|i| {
-                let mut f = [0.0, 0.0];
-                for (b, &j) in self.families.range(i).zip(self.families.of(i)) {
-                    let (j, c, [xx, xy, yy]) = self.bond(i, b, j);
-                    let d = [u[j][0] - u[i][0], u[j][1] - u[i][1]];
-                    f[0] += c * (xx * d[0] + xy * d[1]);
-                    f[1] += c * (xy * d[0] + yy * d[1]);
-                }
-                f
-            })
-            .collect()
+        (0..self.nodes.free).into_par_iter().map(|i| self.force_at(i, |j| u[j])).collect()
     }
 
     /// The stiffness over the free unknowns, built row by row directly in compressed

@@ -9,6 +9,7 @@ use super::operator::Bonds;
 use super::weights::{bond_coefficients, search_radius, BondWeights};
 use super::{loads, strain, PdParams};
 use crate::elasticity::stress;
+use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport};
 use crate::post::{masked_errors, ErrorNorms};
 use crate::problem::Problem;
@@ -97,11 +98,16 @@ pub struct Discretisation {
 }
 
 impl Discretisation {
-    /// Build the nodes, families and bond weights of `problem` with `params`, timing
-    /// each stage into `t`.
-    pub fn new(problem: &Problem, params: &PdParams, progress: &dyn Progress, t: &mut PdTimings) -> Result<Self, RunError> {
-        let exact = exact_solution(problem);
-        let body = Body::new(&problem.domain, &problem.conditions, exact.as_deref(), params);
+    /// Build the nodes, families and bond weights of `problem` with `params` (`exact`:
+    /// the scene's exact solution, for prescribed values), timing each stage into `t`.
+    pub fn new(
+        problem: &Problem,
+        params: &PdParams,
+        exact: Option<&dyn ExactSolution>,
+        progress: &dyn Progress,
+        t: &mut PdTimings,
+    ) -> Result<Self, RunError> {
+        let body = Body::new(&problem.domain, &problem.conditions, exact, params);
         let nodes = timed(progress, Stage::Nodes, &mut t.nodes, || {
             let n = nodes::generate(&body, params);
             let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
@@ -128,13 +134,19 @@ impl Discretisation {
     }
 }
 
+/// Whether each point lies in the interior region, at distance >= `horizon` from the
+/// boundary (where the comparisons and errors are also reported separately).
+pub fn interior_flags(domain: &crate::domain::Domain, points: &[crate::domain::Point], horizon: f64) -> Vec<bool> {
+    points.par_iter().map(|p| domain.signed_distance(*p) <= -horizon).collect()
+}
+
 /// Solve the static peridynamic problem of `problem` with `params`.
 pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> Result<PdSolution, RunError> {
     let mut t = PdTimings::default();
     let exact = exact_solution(problem);
     let exact = exact.as_deref();
     let mut slot = 0.0;
-    let Discretisation { nodes, families, weights, micromodulus } = Discretisation::new(problem, params, progress, &mut t)?;
+    let Discretisation { nodes, families, weights, micromodulus } = Discretisation::new(problem, params, exact, progress, &mut t)?;
     let bonds = Bonds { nodes: &nodes, families: &families, coefficients: &weights.coefficients };
 
     let (matrix, rhs, body_force, layer_nodes) = timed(progress, Stage::Assembly, &mut slot, || {
@@ -159,8 +171,7 @@ pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> R
     let (displacement, interior, gradient, stress, exact_u, errors) = timed(progress, Stage::Post, &mut slot, || {
         let mut u: Vec<[f64; 2]> = (0..nodes.free).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
         u.extend_from_slice(&nodes.prescribed);
-        let interior: Vec<bool> =
-            nodes.positions[..nodes.free].par_iter().map(|p| problem.domain.signed_distance(*p) <= -params.horizon).collect();
+        let interior = interior_flags(&problem.domain, &nodes.positions[..nodes.free], params.horizon);
         let gradient = problem.outputs.needs_gradient().then(|| strain::gradients(&nodes, &families, &u));
         let stress = gradient.as_ref().map(|g| stress::stresses(&problem.material, g));
         let exact_u: Option<Vec<[f64; 2]>> = exact.map(|e| nodes.positions[..nodes.free].par_iter().map(|p| e.displacement(*p)).collect());
