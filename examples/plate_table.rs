@@ -9,12 +9,12 @@
 //!     [--ratios 3,4,6,8] [--rules full-area,gauss2x2,triangle-p2] [--kernels plain,-2,0,1]
 
 use mlsm::compare::interpolate::mls_values;
-use mlsm::peridynamics::dynamics::simulate;
+use mlsm::peridynamics::simulate;
 use mlsm::peridynamics::solve::interior_flags;
 use mlsm::peridynamics::{Kernel, PdParams, Quadrature};
 use mlsm::post::observed_order;
 use mlsm::problem::Problem;
-use mlsm::run::Silent;
+use mlsm::pipeline::Silent;
 use std::path::Path;
 
 struct Run {
@@ -27,10 +27,10 @@ struct Run {
 
 fn run(p: &Problem, params: &PdParams) -> Run {
     let t0 = std::time::Instant::now();
-    let quiet = Problem { dynamics: p.dynamics.map(|d| mlsm::problem::DynamicsParams { snapshots: 1, ..d }), ..p.clone() };
-    let sim = simulate(&quiet, params, &Silent, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|_| "integration failed").unwrap();
+    let dynamics = p.case.dynamics.expect("a [dynamics] table");
+    let sim = simulate(&p.case, params, &dynamics, &Silent, |_| Ok(())).map_err(|_| "integration failed").unwrap();
     let positions = sim.discretisation.nodes.positions[..sim.discretisation.nodes.free].to_vec();
-    let interior = interior_flags(&p.domain, &positions, params.horizon);
+    let interior = interior_flags(&p.case.domain, &positions, params.horizon);
     Run { positions, u: sim.u, v: sim.v, interior, seconds: t0.elapsed().as_secs_f64() }
 }
 

@@ -1,25 +1,25 @@
 //! # mlsm-elasticity
 //!
 //! 2D linear elasticity (plane stress / plane strain Navier equation) solved in strong
-//! form by meshless shape functions (MLSM), verified against closed-form solutions.
+//! form by meshless shape functions (MLSM), verified against closed-form solutions and
+//! cross-checked against linear bond-based peridynamics on the same plate.
 //!
-//! The pipeline of one run, module by module:
-//! 1. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
-//! 2. [`domain`]: CSG geometry with named boundary parts -> nodes, normals, supports;
-//! 3. [`mlsm`]: weighted least-squares shape functions for the operators each node needs;
-//! 4. [`elasticity`]: material, unknown layout, boundary equations, Navier / traction /
-//!    displacement rows, stresses;
-//! 5. [`linalg`]: sparse assembly, sparse LU or preconditioned BiCGSTAB;
-//! 6. [`post`]: error norms and observed orders; [`exact`]: closed-form solutions;
-//! 7. [`output`]: `solution.vtu`, `summary.json`, CSV tables (atomic writes);
-//! 8. [`peridynamics`]: the linear bond-based model on the same plate (nodes as
-//!    quadrature points, families, calibrated kernels, static solve);
-//! 9. [`dynamics`]: explicit time integrators (EMU, Stormer-Verlet, RK4);
-//! 10. [`compare`]: the nonlocal-to-local comparison (PD at a sequence of horizons
-//!     against the Navier solution).
-//!
-//! [`run`] strings the stages together; [`app`] and [`cli`] are the command line.
+//! The modules from the bottom up (each uses only those listed before it):
+//! 1. [`output`], [`linalg`], [`domain`]: files, sparse solvers, geometry and nodes;
+//! 2. [`mlsm`]: weighted least-squares shape functions for the operators each node needs;
+//! 3. [`pipeline`]: stage names, timing, progress, run errors;
+//! 4. [`elasticity`]: material, boundary conditions, unknown layout, stress;
+//! 5. [`exact`]: closed-form and manufactured solutions; [`post`]: error norms, orders;
+//! 6. [`dynamics`]: explicit time integrators and the shared time loop;
+//! 7. [`case`]: the physical problem of a scene, independent of any discretisation;
+//! 8. the models: [`navier`] (MLSM collocation, static and elastodynamic) and
+//!    [`peridynamics`] (linear bond-based, static and dynamic);
+//! 9. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
+//! 10. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
+//! 11. [`compare`]: the nonlocal-to-local comparison;
+//! 12. [`app`] and [`cli`]: the command line (the only printing).
 
+pub mod case;
 pub mod compare;
 pub mod domain;
 pub mod dynamics;
@@ -27,11 +27,13 @@ pub mod elasticity;
 pub mod exact;
 pub mod linalg;
 pub mod mlsm;
+pub mod model;
+pub mod navier;
 pub mod output;
 pub mod peridynamics;
+pub mod pipeline;
 pub mod post;
 pub mod problem;
-pub mod run;
 
 pub mod app;
 pub mod cli;

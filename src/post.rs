@@ -3,7 +3,29 @@
 //! components `(sigma_xx, sigma_yy, sigma_xy)`, and discrete relative L2 norms
 //! `sqrt(sum |u_h - u|^2 / sum |u|^2)` over the nodes.
 
+use crate::domain::Point;
+use crate::elasticity::stress::StressField;
+use crate::exact::ExactSolution;
+use rayon::prelude::*;
 use serde::Serialize;
+
+/// The exact displacement (and stress, when asked for) at a set of points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExactFields {
+    /// `u(x_i)`.
+    pub displacement: Vec<[f64; 2]>,
+    /// `[sigma_xx, sigma_yy, sigma_xy](x_i)`.
+    pub stress: Option<Vec<[f64; 3]>>,
+}
+
+impl ExactFields {
+    /// `exact` evaluated at `points` (in parallel).
+    pub fn at(exact: &dyn ExactSolution, points: &[Point], with_stress: bool) -> Self {
+        let displacement = points.par_iter().map(|p| exact.displacement(*p)).collect();
+        let stress = with_stress.then(|| points.par_iter().map(|p| exact.stress(*p)).collect());
+        ExactFields { displacement, stress }
+    }
+}
 
 /// Errors of one run.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -16,6 +38,18 @@ pub struct ErrorNorms {
     pub rel_l2_u: f64,
     /// Relative discrete L2 error of the stress components.
     pub rel_l2_sigma: Option<f64>,
+}
+
+impl ErrorNorms {
+    /// Norms of `displacement` and, where both exist, of `stress` against `exact`.
+    pub fn against(displacement: &[[f64; 2]], stress: Option<&StressField>, exact: &ExactFields) -> Self {
+        let (e_inf_u, rel_l2_u) = relative_errors(displacement, &exact.displacement);
+        let sigma = match (stress, &exact.stress) {
+            (Some(s), Some(se)) => Some(relative_errors(&s.sigma, se)),
+            _ => None,
+        };
+        ErrorNorms { e_inf_u, e_inf_sigma: sigma.map(|s| s.0), rel_l2_u, rel_l2_sigma: sigma.map(|s| s.1) }
+    }
 }
 
 /// `(max |a - b| / max |b|, sqrt(sum |a - b|^2 / sum |b|^2))` over all components.

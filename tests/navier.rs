@@ -84,17 +84,17 @@ fn plane_stress_and_plane_strain_are_consistent() {
     // Plane stress with nu = 1/4 is not a bond-based PD material: drop the [peridynamics] table.
     let stress = scene("steel_plate", &[("material.plane", s("stress")), ("nodes.spacing", f(0.02)), ("peridynamics", None)]);
     let mut strain = stress.clone();
-    strain.material = stress.material.as_plane_strain();
-    assert_eq!(strain.material.plane, PlaneModel::Strain);
+    strain.case.material = stress.case.material.as_plane_strain();
+    assert_eq!(strain.case.material.plane, PlaneModel::Strain);
     let (a, b) = (solve(&stress), solve(&strain));
     let umax = a.displacement.iter().flat_map(|u| u.iter().map(|v| v.abs())).fold(0.0, f64::max);
     let diff = a.displacement.iter().zip(&b.displacement).flat_map(|(x, y)| [(x[0] - y[0]).abs(), (x[1] - y[1]).abs()]).fold(0.0, f64::max);
     assert!(diff <= 1e-10 * umax, "max difference {diff:e} of max |u| {umax:e}");
     // ... and the plane-strain run has a nonzero sigma_zz = nu (sxx + syy), the plane-stress one none.
-    let (s_strain, szz, _) = b.stress.as_ref().unwrap();
-    let nu = strain.material.elastic.poisson;
+    let (s_strain, szz) = (&b.stress.as_ref().unwrap().sigma, &b.stress.as_ref().unwrap().sigma_zz);
+    let nu = strain.case.material.elastic.poisson;
     assert!(szz.iter().zip(s_strain).all(|(z, s)| (z - nu * (s[0] + s[1])).abs() <= 1e-12 * (s[0].abs() + s[1].abs() + 1.0)));
-    assert!(a.stress.as_ref().unwrap().1.iter().all(|z| *z == 0.0));
+    assert!(a.stress.as_ref().unwrap().sigma_zz.iter().all(|z| *z == 0.0));
 }
 
 /// LU and BiCGSTAB + ILU(0) solve the same discrete system: they agree to 1e-8 relative
@@ -137,8 +137,8 @@ fn thread_count_does_not_change_results() {
 #[test]
 fn degenerate_support_is_reported() {
     let p = scene("cantilever", &[("approximation.support", i(9)), ("nodes.spacing", f(0.5))]);
-    match mlsm::run::solve(&p, &mlsm::run::Silent) {
-        Err(mlsm::run::RunError::Shape(e)) => {
+    match mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent) {
+        Err(mlsm::pipeline::RunError::Shape(e)) => {
             let msg = e.to_string();
             assert!(msg.contains("node") && msg.contains("degenerate support"), "{msg}");
         }

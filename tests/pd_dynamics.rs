@@ -5,19 +5,18 @@
 mod common;
 
 use common::*;
-use mlsm::dynamics::driver::IntegrateError;
 use mlsm::dynamics::Integrator;
-use mlsm::peridynamics::dynamics::simulate;
+use mlsm::peridynamics::simulate;
 use mlsm::problem::Problem;
-use mlsm::run::{RunError, Silent};
+use mlsm::pipeline::{RunError, Silent};
+
+/// Final time, displacement (flat) and energy history of a run.
+type Run = (f64, Vec<f64>, Vec<[f64; 4]>);
 
 /// Final time, displacement and energy history of a run of `p`.
-fn run(p: &Problem) -> Result<(f64, Vec<f64>, Vec<[f64; 4]>), RunError> {
-    match simulate(p, p.peridynamics.as_ref().unwrap(), &Silent, |_, _, _, _, _| Ok::<(), ()>(())) {
-        Ok(sim) => Ok((sim.energies.last().unwrap()[0], sim.u.iter().flatten().copied().collect(), sim.energies)),
-        Err(IntegrateError::Run(e)) => Err(e),
-        Err(IntegrateError::Output(())) => unreachable!("no output"),
-    }
+fn run(p: &Problem) -> Result<Run, RunError> {
+    let sim = simulate(&p.case, p.peridynamics.as_ref().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()))?;
+    Ok((sim.energies.last().unwrap()[0], sim.u.iter().flatten().copied().collect(), sim.energies))
 }
 
 fn plate(edits: &[(&str, Option<toml::Value>)]) -> Problem {
@@ -112,11 +111,11 @@ fn unstable_time_step_is_refused() {
 /// h = 0.02, 0.01 and 0.005 (README, known limits); that is asserted too.
 #[test]
 fn mlsm_elastodynamics_is_stable_and_conserves_energy() {
-    use mlsm::dynamics::navier::simulate as navier;
+    let navier = |p: &Problem| mlsm::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()));
     let total = |e: &[f64; 4]| e[1] + e[2] + e[3];
     for integrator in ["verlet", "rk4"] {
         let p = scene("steel_plate_dynamic", &[("nodes.spacing", f(0.02)), ("dynamics.integrator", s(integrator))]);
-        let sim = navier(&p, &Silent, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|_| "failed").unwrap();
+        let sim = navier(&p).unwrap();
         let e0 = total(&sim.energies[0]);
         let drift = sim.energies.iter().map(|e| (total(e) - e0).abs() / e0).fold(0.0, f64::max);
         eprintln!("MLSM plate, {integrator}: {} steps, max |E - E0| / E0 = {drift:.2e}", sim.report.steps);
@@ -126,8 +125,8 @@ fn mlsm_elastodynamics_is_stable_and_conserves_energy() {
         "steel_plate_dynamic",
         &[("nodes.spacing", f(0.02)), ("dynamics.integrator", s("verlet")), ("approximation.ghost_nodes", b(true))],
     );
-    match navier(&ghosts, &Silent, |_, _, _, _, _| Ok::<(), ()>(())) {
-        Err(IntegrateError::Run(RunError::Diverged { .. })) => {}
+    match navier(&ghosts) {
+        Err(RunError::Diverged { .. }) => {}
         Ok(sim) => {
             let e0 = total(&sim.energies[0]);
             let grown = total(sim.energies.last().unwrap()) / e0;
@@ -137,7 +136,7 @@ fn mlsm_elastodynamics_is_stable_and_conserves_energy() {
     }
     let v0 = toml::Value::try_from(std::collections::BTreeMap::from([("x", vec![3.0, 0.0, 0.0]), ("y", vec![-2.0, 0.0, 0.0])])).unwrap();
     let p = scene("steel_plate_dynamic", &[("nodes.spacing", f(0.02)), ("dynamics.initial_velocity", Some(v0))]);
-    let sim = navier(&p, &Silent, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|_| "failed").unwrap();
+    let sim = navier(&p).unwrap();
     let t = sim.energies.last().unwrap()[0];
     let worst = sim.u.iter().map(|u| (u[0] - 3.0 * t).abs().max((u[1] + 2.0 * t).abs())).fold(0.0, f64::max);
     eprintln!("MLSM rigid motion: max |u - v0 t| = {worst:.1e}");

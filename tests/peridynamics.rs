@@ -10,10 +10,10 @@ mod common;
 
 use common::*;
 use mlsm::exact::{ExactSolution, Polynomial};
-use mlsm::peridynamics::solve::{Discretisation, PdTimings};
+use mlsm::peridynamics::solve::Discretisation;
 use mlsm::peridynamics::{Kernel, Micromodulus};
 use mlsm::problem::Problem;
-use mlsm::run::Silent;
+use mlsm::pipeline::{Silent, StageTimer};
 
 const RULES: [&str; 7] = ["full-area", "partial-area", "gauss2x2", "triangle-p1", "triangle-p2", "triangle-p3", "ac"];
 
@@ -38,8 +38,8 @@ fn cubic_scene(rule: &str, kernel: Option<f64>, horizon: f64) -> Problem {
 }
 
 fn discretise(p: &Problem) -> Discretisation {
-    let exact = mlsm::run::exact_solution(p);
-    Discretisation::new(p, p.peridynamics.as_ref().unwrap(), exact.as_deref(), &Silent, &mut PdTimings::default()).unwrap()
+    let exact = p.case.exact_solution();
+    Discretisation::new(&p.case, p.peridynamics.as_ref().unwrap(), exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap()
 }
 
 /// `u` evaluated at every node (free and constrained).
@@ -137,7 +137,7 @@ fn cubic_fields_are_reproduced_by_the_compatible_weights() {
     for kernel in [None, Some(-3.0), Some(-2.0), Some(0.0), Some(1.0)] {
         for rule in ["ac", "full-area", "partial-area"] {
             let p = cubic_scene(rule, kernel, 0.1);
-            let exact = mlsm::run::exact_solution(&p).unwrap();
+            let exact = p.case.exact_solution().unwrap();
             let d = discretise(&p);
             let u = nodal(&d, |x| exact.displacement(x));
             let navier = |i: usize| {
@@ -162,7 +162,7 @@ fn cubic_fields_are_reproduced_by_the_compatible_weights() {
 #[test]
 fn cubic_solution_is_exact_with_the_compatible_weights() {
     let p = cubic_scene("ac", None, 0.1);
-    let sol = mlsm::peridynamics::solve::solve(&p, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
+    let sol = mlsm::peridynamics::solve(&p.case, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
     let (whole, interior) = sol.errors.unwrap();
     eprintln!("cubic: e_inf {:.2e}, interior {:.2e}", whole.e_inf_u, interior.unwrap().e_inf_u);
     assert!(whole.e_inf_u < 1e-12, "{}", whole.e_inf_u);
@@ -177,8 +177,8 @@ fn continuum_operator_of_calibrated_kernels_is_navier_on_cubics() {
     use gauss_quad::GaussLegendre;
     use std::num::NonZeroUsize;
     let p = cubic_scene("ac", None, 0.1);
-    let poly = Polynomial::new(UX, UY, p.material).unwrap();
-    let moment = mlsm::peridynamics::kernel::fourth_moment(&p.material);
+    let poly = Polynomial::new(UX, UY, p.case.material).unwrap();
+    let moment = mlsm::peridynamics::kernel::fourth_moment(&p.case.material);
     let x = [0.37, 0.61];
     let r_rule = GaussLegendre::new(NonZeroUsize::new(20).unwrap());
     let t_rule = GaussLegendre::new(NonZeroUsize::new(64).unwrap());
@@ -222,13 +222,8 @@ fn continuum_operator_of_calibrated_kernels_is_navier_on_cubics() {
 fn dense_stiffness(d: &Discretisation) -> Vec<Vec<f64>> {
     let n = 2 * d.nodes.free;
     let (m, _) = d.bonds().stiffness(&vec![[0.0, 0.0]; d.nodes.free]).unwrap();
-    let mut k = vec![vec![0.0; n]; n];
-    for col in 0..n {
-        for (&row, &v) in m.symbolic().row_idx_of_col_raw(col).iter().zip(m.val_of_col(col)) {
-            k[row][col] += v;
-        }
-    }
-    k
+    let dense = m.to_dense();
+    (0..n).map(|r| (0..n).map(|c| dense[(r, c)]).collect()).collect()
 }
 
 /// The assembled stiffness equals the central finite-difference Jacobian of the
@@ -285,7 +280,7 @@ fn local_limit(rule: &str) -> (f64, Vec<f64>) {
                 "pd_manufactured",
                 &[("peridynamics.horizon", f(delta)), ("peridynamics.quadrature", s(rule)), ("peridynamics.solver.kind", s("lu"))],
             );
-            let sol = mlsm::peridynamics::solve::solve(&p, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
+            let sol = mlsm::peridynamics::solve(&p.case, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
             sol.errors.unwrap().0.e_inf_u
         })
         .collect();
@@ -323,7 +318,7 @@ fn free_edges_converge_at_first_order() {
         .iter()
         .map(|&delta| {
             let p = scene("pd_tension", &[("peridynamics.horizon", f(delta))]);
-            let sol = mlsm::peridynamics::solve::solve(&p, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
+            let sol = mlsm::peridynamics::solve(&p.case, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
             let (w, i) = sol.errors.unwrap();
             (w.rel_l2_u, i.unwrap().e_inf_u)
         })

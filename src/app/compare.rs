@@ -1,16 +1,26 @@
 //! `mlsm compare`: peridynamics at a sequence of horizons (fixed m = delta / h) against
 //! the local solution; tables (CSV, JSON), a log-log plot (SVG) and one .vtu per run.
 
-use super::{create_dir, scalar, vector, write_points_vtu, AppError, Terminal};
+use super::fields::{integer, scalar, vector, write_points_vtu};
+use super::summary::Header;
+use super::terminal::Terminal;
+use super::{create_dir, AppError};
 use crate::compare::LocalReference;
-use crate::output::{self, FieldValues, PointField, Series};
+use crate::model;
+use crate::output::{self, Series};
 use crate::peridynamics::solve::interior_flags;
 use crate::peridynamics::{PdParams, Quadrature};
+use crate::pipeline::{Stage, StageTimings, OUTPUT};
 use crate::post::{masked_errors, observed_order};
-use crate::problem::Problem;
+use crate::problem::{Model, Problem};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
+
+/// The local reference solve.
+const REFERENCE: Stage = Stage::new("reference");
+/// The peridynamic runs (each with its difference norms and .vtu).
+const RUNS: Stage = Stage::new("runs");
 
 /// What `compare` was asked for, after the command line was read.
 pub(super) struct CompareRequest {
@@ -51,7 +61,8 @@ struct Orders {
 
 #[derive(Serialize)]
 struct Table<'a> {
-    scene: &'a str,
+    #[serde(flatten)]
+    header: Header<'a>,
     reference: String,
     m: f64,
     kernel: String,
@@ -60,49 +71,10 @@ struct Table<'a> {
     orders: Vec<Orders>,
 }
 
-/// One peridynamic run of a comparison: the static solve, or the state at `end_time`.
-struct PdResult {
-    positions: Vec<[f64; 2]>,
-    displacement: Vec<[f64; 2]>,
-    interior: Vec<bool>,
-    bonds: usize,
-    /// Solver iterations (static) or time steps (dynamic).
-    iterations: usize,
-}
-
-impl PdResult {
-    fn solve(problem: &Problem, params: &PdParams, term: &Terminal) -> Result<PdResult, AppError> {
-        if problem.dynamics.is_some() {
-            let sim = crate::peridynamics::dynamics::simulate(problem, params, term, |_, _, _, _, _| Ok::<(), AppError>(()))
-                .map_err(super::dynamics::app_error)?;
-            let nodes = &sim.discretisation.nodes;
-            let positions = nodes.positions[..nodes.free].to_vec();
-            let interior = interior_flags(&problem.domain, &positions, params.horizon);
-            return Ok(PdResult {
-                positions,
-                displacement: sim.u,
-                interior,
-                bonds: sim.discretisation.families.bonds(),
-                iterations: sim.report.steps,
-            });
-        }
-        let sol = crate::peridynamics::solve::solve(problem, params, term)?;
-        Ok(PdResult {
-            positions: sol.nodes.positions[..sol.nodes.free].to_vec(),
-            displacement: sol.displacement[..sol.nodes.free].to_vec(),
-            interior: sol.interior,
-            bonds: sol.bonds,
-            iterations: sol.solver.iterations,
-        })
-    }
-}
-
-pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
-    let Some(base) = p.peridynamics else {
-        return Err(AppError::Usage(format!("{}: compare needs a [peridynamics] table (horizon, quadrature, ...)", p.source.display())));
-    };
-    let quadratures: Vec<Quadrature> = match &req.quadratures {
-        None => vec![base.quadrature],
+/// The rules of `--quadratures` (default: the scene's).
+fn quadratures(req: &CompareRequest, base: &PdParams) -> Result<Vec<Quadrature>, AppError> {
+    match &req.quadratures {
+        None => Ok(vec![base.quadrature]),
         Some(names) => names
             .iter()
             .map(|n| {
@@ -111,8 +83,25 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
                     AppError::Usage(format!("--quadratures: unknown rule \"{n}\" (expected one of {})", known.join(", ")))
                 })
             })
-            .collect::<Result<_, _>>()?,
+            .collect(),
+    }
+}
+
+/// The runs of a comparison.
+struct Plan {
+    quadratures: Vec<Quadrature>,
+    deltas: Vec<f64>,
+    m: f64,
+    /// One problem per rule and horizon, rule by rule.
+    runs: Vec<Problem>,
+}
+
+/// Every peridynamic run of the comparison, each checked before the first solve.
+fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
+    let Some(base) = p.peridynamics else {
+        return Err(AppError::Usage(format!("{}: compare needs a [peridynamics] table (horizon, quadrature, ...)", p.source.display())));
     };
+    let quadratures = quadratures(req, &base)?;
     if req.levels > 6 && req.deltas.is_none() {
         return Err(AppError::Usage(format!("--levels {}: at most 6 halvings (each multiplies the node count by 4)", req.levels)));
     }
@@ -121,71 +110,64 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
         return Err(AppError::Usage("compare needs at least two horizons to measure an order".into()));
     }
     let m = req.m.unwrap_or(base.ratio);
-    // Every run is checked before the first solve.
     let mut runs = Vec::new();
     for &q in &quadratures {
         for &delta in &deltas {
             let params = PdParams { horizon: delta, ratio: m, quadrature: q, ..base };
-            runs.push((p.with_peridynamics(params)?, params));
+            runs.push(Problem { model: Model::Peridynamics, ..p.with_peridynamics(params)? });
         }
     }
-    let reference_problem = match req.reference_spacing {
-        Some(h) if p.exact.is_none() => p.with_spacing(h)?,
-        _ => p.clone(),
+    Ok(Plan { quadratures, deltas, m, runs })
+}
+
+/// Solve run `k` and compare it with the reference; writes its .vtu.
+fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference, dir: &Path, term: &Terminal) -> Result<Row, AppError> {
+    let params = run.peridynamics.expect("a peridynamic run");
+    let t0 = Instant::now();
+    let outcome = model::solve(run, term, |_| Ok(()))?;
+    let (free, displacement) = (outcome.positions(), outcome.displacement());
+    let interior = interior_flags(&p.case.domain, free, params.horizon);
+    let local = reference.displacement_at(free)?;
+    let whole = masked_errors(displacement, &local, |_| true).expect("free nodes exist");
+    let inner = masked_errors(displacement, &local, |i| interior[i]);
+    let name = format!("{}_delta{k}.vtu", params.quadrature.name());
+    let diff: Vec<[f64; 2]> = displacement.iter().zip(&local).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
+    let fields = vec![
+        vector("peridynamic_displacement", displacement.iter().copied()),
+        vector("local_displacement", local.iter().copied()),
+        vector("difference", diff.iter().copied()),
+        scalar("difference_magnitude", diff.iter().map(|d| d[0].hypot(d[1]))),
+        integer("interior", interior.iter().map(|&b| b as i32)),
+    ];
+    write_points_vtu(&dir.join(&name), free, &p.case.domain, &fields)?;
+    let inner = inner.ok_or_else(|| {
+        AppError::Usage(format!("delta = {}: no node lies at distance >= delta from the boundary; use smaller horizons", params.horizon))
+    })?;
+    let bonds = match &outcome {
+        model::Outcome::PdStatic(s) => s.bonds,
+        model::Outcome::PdDynamic(s) => s.discretisation.families.bonds(),
+        _ => unreachable!("a peridynamic run"),
     };
-    create_dir(dir)?;
-    if !quiet {
-        eprintln!("{}: local reference", p.name);
-    }
-    let reference = LocalReference::build(&reference_problem, term)?;
-    let mut rows = Vec::new();
-    for (k, (problem, params)) in runs.iter().enumerate() {
-        if !quiet {
-            eprintln!("{} delta = {:.4e} (h = {:.4e})", params.quadrature.name(), params.horizon, params.spacing());
-        }
-        let t0 = Instant::now();
-        let sol = PdResult::solve(problem, params, term)?;
-        let free = &sol.positions[..];
-        let local = reference.displacement_at(free)?;
-        let whole = masked_errors(&sol.displacement, &local, |_| true).expect("free nodes exist");
-        let interior = masked_errors(&sol.displacement, &local, |i| sol.interior[i]);
-        let name = format!("{}_delta{}.vtu", params.quadrature.name(), k % deltas.len());
-        let diff: Vec<[f64; 2]> = sol.displacement.iter().zip(&local).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
-        let fields = vec![
-            vector("peridynamic_displacement", sol.displacement.iter().copied()),
-            vector("local_displacement", local.iter().copied()),
-            vector("difference", diff.iter().copied()),
-            scalar("difference_magnitude", diff.iter().map(|d| d[0].hypot(d[1]))),
-            PointField {
-                name: "interior".into(),
-                components: 1,
-                values: FieldValues::I32(sol.interior.iter().map(|&b| b as i32).collect()),
-            },
-        ];
-        write_points_vtu(&dir.join(&name), free, &p.domain, &fields)?;
-        let interior = interior.ok_or_else(|| {
-            AppError::Usage(format!(
-                "delta = {}: no node lies at distance >= delta from the boundary; use smaller horizons",
-                params.horizon
-            ))
-        })?;
-        rows.push(Row {
-            quadrature: params.quadrature.name(),
-            delta: params.horizon,
-            h: params.spacing(),
-            nodes: sol.positions.len(),
-            interior_nodes: sol.interior.iter().filter(|&&b| b).count(),
-            bonds: sol.bonds,
-            e_inf_interior: interior.e_inf_u,
-            rel_l2_interior: interior.rel_l2_u,
-            e_inf_whole: whole.e_inf_u,
-            rel_l2_whole: whole.rel_l2_u,
-            solver_iterations: sol.iterations,
-            seconds: t0.elapsed().as_secs_f64(),
-            vtu: name,
-        });
-    }
-    let orders: Vec<Orders> = quadratures
+    Ok(Row {
+        quadrature: params.quadrature.name(),
+        delta: params.horizon,
+        h: params.spacing(),
+        nodes: free.len(),
+        interior_nodes: interior.iter().filter(|&&b| b).count(),
+        bonds,
+        e_inf_interior: inner.e_inf_u,
+        rel_l2_interior: inner.rel_l2_u,
+        e_inf_whole: whole.e_inf_u,
+        rel_l2_whole: whole.rel_l2_u,
+        solver_iterations: outcome.iterations(),
+        seconds: t0.elapsed().as_secs_f64(),
+        vtu: name,
+    })
+}
+
+/// Least-squares orders in delta of each rule.
+fn orders(quadratures: &[Quadrature], rows: &[Row]) -> Vec<Orders> {
+    quadratures
         .iter()
         .map(|q| {
             let r: Vec<&Row> = rows.iter().filter(|r| r.quadrature == q.name()).collect();
@@ -199,28 +181,61 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
                 rel_l2_whole: fit(|r| r.rel_l2_whole),
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Run the comparison of `p` and write its tables, plot and fields into `dir`.
+pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
+    let Plan { quadratures, deltas, m, runs } = planned_runs(p, &req)?;
+    let base = p.peridynamics.expect("checked");
+    let reference_problem = match req.reference_spacing {
+        Some(h) if p.case.exact.is_none() => p.with_spacing(h)?,
+        _ => p.clone(),
+    };
+    create_dir(dir)?;
+    if !quiet {
+        eprintln!("{}: local reference", p.name);
+    }
+    let t0 = Instant::now();
+    let mut timings = StageTimings::default();
+    let reference = LocalReference::build(&reference_problem, term)?;
+    timings.record(REFERENCE, t0.elapsed().as_secs_f64());
+    let mut rows = Vec::new();
+    for (k, run) in runs.iter().enumerate() {
+        let params = run.peridynamics.expect("a peridynamic run");
+        if !quiet {
+            eprintln!("{} delta = {:.4e} (h = {:.4e})", params.quadrature.name(), params.horizon, params.spacing());
+        }
+        let t = Instant::now();
+        rows.push(compare_run(p, run, k % deltas.len(), &reference, dir, term)?);
+        timings.record(RUNS, t.elapsed().as_secs_f64());
+    }
+    let orders = orders(&quadratures, &rows);
+    let t_out = Instant::now();
+    let kernel = base.kernel.label();
+    write_tables(&format!("{}: peridynamics vs local, m = {m}, kernel {kernel}", p.name), &rows, &orders, dir)?;
+    timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
     let table = Table {
-        scene: &p.name,
+        header: Header::new(p, &timings, t0),
         reference: reference.describe(),
         m,
-        kernel: base.kernel.label(),
+        kernel,
         correction: base.correction,
         rows,
         orders,
     };
-    write_tables(&table, dir)?;
+    output::write_json(&dir.join("compare.json"), &table)?;
     if !quiet {
         print_table(&table, dir);
     }
     Ok(())
 }
 
-fn write_tables(t: &Table, dir: &Path) -> Result<(), AppError> {
-    output::write_json(&dir.join("compare.json"), t)?;
+/// `compare_<rule>.csv` and `compare.svg` (`compare.json` is written last).
+fn write_tables(title: &str, rows: &[Row], orders: &[Orders], dir: &Path) -> Result<(), AppError> {
     let mut series = Vec::new();
-    for o in &t.orders {
-        let r: Vec<&Row> = t.rows.iter().filter(|r| r.quadrature == o.quadrature).collect();
+    for o in orders {
+        let r: Vec<&Row> = rows.iter().filter(|r| r.quadrature == o.quadrature).collect();
         let csv: Vec<Vec<f64>> = r
             .iter()
             .map(|r| {
@@ -254,13 +269,7 @@ fn write_tables(t: &Table, dir: &Path) -> Result<(), AppError> {
             dashed: true,
         });
     }
-    output::write_loglog_svg(
-        &dir.join("compare.svg"),
-        &format!("{}: peridynamics vs local, m = {}, kernel {}", t.scene, t.m, t.kernel),
-        "horizon delta (m)",
-        "max |u_PD - u_local| / max |u_local|",
-        &series,
-    )?;
+    output::write_loglog_svg(&dir.join("compare.svg"), title, "horizon delta (m)", "max |u_PD - u_local| / max |u_local|", &series)?;
     Ok(())
 }
 

@@ -8,8 +8,9 @@ pub mod interpolate;
 
 use crate::domain::Point;
 use crate::exact::ExactSolution;
-use crate::problem::Problem;
-use crate::run::{self, Progress, RunError};
+use crate::model::{self, Outcome};
+use crate::pipeline::{Progress, RunError};
+use crate::problem::{Model, Problem};
 
 /// The local solution the peridynamic runs are compared with.
 pub enum LocalReference {
@@ -28,31 +29,24 @@ pub enum LocalReference {
 }
 
 impl LocalReference {
-    /// The exact solution if a static scene has one, else an MLSM run of `problem`
-    /// (explicit elastodynamics to `end_time` when the scene has a `[dynamics]` table).
+    /// The exact solution if a static scene has one, else the Navier model's run of
+    /// `problem` (explicit elastodynamics to `end_time` when the scene has a
+    /// `[dynamics]` table).
     pub fn build(problem: &Problem, progress: &dyn Progress) -> Result<LocalReference, RunError> {
-        if problem.dynamics.is_some() {
-            let sim = crate::dynamics::navier::simulate(problem, progress, |_, _, _, _, _| Ok::<(), ()>(())).map_err(|e| match e {
-                crate::dynamics::driver::IntegrateError::Run(r) => r,
-                crate::dynamics::driver::IntegrateError::Output(()) => unreachable!("no output"),
-            })?;
-            let t = sim.energies.last().map_or(0.0, |e| e[0]);
-            let description = format!(
-                "MLSM elastodynamics at t = {t:.3e} s ({} nodes, spacing {:.3e}, {} steps)",
-                sim.positions.len(),
-                problem.fill.spacing,
-                sim.report.steps
-            );
-            return Ok(LocalReference::Mlsm { description, positions: sim.positions, displacement: sim.u });
-        }
-        match run::exact_solution(problem) {
-            Some(e) => Ok(LocalReference::Exact(e)),
-            None => {
-                let s = run::solve(problem, progress)?;
-                let description = format!("MLSM solution ({} nodes, spacing {:.3e})", s.nodes.len(), s.nodes.spacing);
-                Ok(LocalReference::Mlsm { description, positions: s.nodes.positions, displacement: s.displacement })
+        if problem.case.dynamics.is_none() {
+            if let Some(e) = problem.case.exact_solution() {
+                return Ok(LocalReference::Exact(e));
             }
         }
+        let navier = Problem { model: Model::Navier, ..problem.clone() };
+        let outcome = model::solve(&navier, progress, |_| Ok(()))?;
+        let description = outcome.describe(&navier);
+        let (positions, displacement) = match outcome {
+            Outcome::NavierStatic(s) => (s.nodes.positions, s.displacement),
+            Outcome::NavierDynamic(s) => (s.positions, s.u),
+            Outcome::PdStatic(_) | Outcome::PdDynamic(_) => unreachable!("the reference runs the Navier model"),
+        };
+        Ok(LocalReference::Mlsm { description, positions, displacement })
     }
 
     /// Short description for tables.

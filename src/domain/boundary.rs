@@ -11,7 +11,7 @@
 //!
 //! Corner rule: a node touching several parts carries the normalised sum of their
 //! normals (the bisector at a rectangle corner); how the boundary conditions of the
-//! parts are combined there is decided in `elasticity::conditions`.
+//! parts are combined there is decided in `navier::equations`.
 
 use super::shape::{BoundaryCurve, Domain, Point};
 

@@ -6,6 +6,7 @@
 //! unit normal of each (corner rule in [`boundary`]).
 
 pub mod boundary;
+pub mod cells;
 pub mod fill;
 pub mod ghost;
 pub mod neighbors;

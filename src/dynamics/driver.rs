@@ -1,10 +1,12 @@
 //! The time loop shared by every model: step size from the stability limit,
 //! snapshots, the energy history and a throughput report.
 
-use super::{Integrator, SecondOrderSystem, State};
-use crate::problem::DynamicsParams;
-use crate::run::{Progress, RunError};
+use super::{DynamicsParams, Integrator, SecondOrderSystem, State};
+use crate::pipeline::{RunError, Stage, StageTimer};
 use serde::Serialize;
+
+/// The stage of the time loop (shown with a progress bar).
+pub const INTEGRATE: Stage = Stage::new("integrate");
 
 /// What a dynamic run did.
 #[derive(Debug, Clone, Serialize)]
@@ -21,6 +23,22 @@ pub struct DynamicReport {
     pub force_evaluations: usize,
     /// Wall-clock seconds of the stepping (energies and snapshots excluded).
     pub seconds: f64,
+}
+
+/// The state handed to a snapshot writer: nodal displacement and velocity at step
+/// `step`, time `t`.
+#[derive(Debug, Clone, Copy)]
+pub struct Snapshot<'a> {
+    /// Step number (0: the initial state).
+    pub step: usize,
+    /// Time.
+    pub t: f64,
+    /// Node positions.
+    pub positions: &'a [[f64; 2]],
+    /// Displacement of each node.
+    pub u: &'a [[f64; 2]],
+    /// Velocity of each node.
+    pub v: &'a [[f64; 2]],
 }
 
 /// One line of the energy history: `(t, E_kin, E_el, E_ext)`.
@@ -51,29 +69,21 @@ pub fn time_grid(stable: f64, params: &DynamicsParams) -> Result<TimeGrid, RunEr
     }
 }
 
-/// A failed integration: numerical, or the snapshot writer's own error.
-#[derive(Debug)]
-pub enum IntegrateError<E> {
-    /// Unstable step or divergence.
-    Run(RunError),
-    /// The snapshot callback failed.
-    Output(E),
-}
-
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
 /// `snapshot` every `params.snapshot_every` steps, or at `params.snapshots` evenly
 /// spaced steps (and always at the start and the end)
 /// and recording `energies` (kinetic, elastic, external) at every step (every
-/// `ceil(steps / 1000)`-th step for longer runs). Returns the report and the history.
-pub fn integrate<E>(
+/// `ceil(steps / 1000)`-th step for longer runs). The loop is the [`INTEGRATE`] stage
+/// of `timer`. Returns the report and the history.
+pub fn integrate(
     system: &dyn SecondOrderSystem,
     energies: &dyn Fn(&State) -> (f64, f64, f64),
     state: &mut State,
     grid: TimeGrid,
     params: &DynamicsParams,
-    progress: &dyn Progress,
-    mut snapshot: impl FnMut(usize, &State) -> Result<(), E>,
-) -> Result<(DynamicReport, Vec<EnergyRow>), IntegrateError<E>> {
+    timer: &mut StageTimer,
+    mut snapshot: impl FnMut(usize, &State) -> Result<(), RunError>,
+) -> Result<(DynamicReport, Vec<EnergyRow>), RunError> {
     let TimeGrid { dt, steps, stable } = grid;
     let every = params.snapshot_every.unwrap_or((steps / params.snapshots.max(1)).max(1));
     // Energies cost one more pass over the operator: at most about 1000 rows.
@@ -84,23 +94,27 @@ pub fn integrate<E>(
         history.push([s.t, k, e, x]);
     };
     record(state, &mut history);
-    snapshot(0, state).map_err(IntegrateError::Output)?;
-    let mut looped = 0.0;
-    for step in 1..=steps {
-        let ts = std::time::Instant::now();
-        params.integrator.step(system, state, dt);
-        looped += ts.elapsed().as_secs_f64();
-        if state.u.iter().any(|v| !v.is_finite()) {
-            return Err(IntegrateError::Run(RunError::Diverged { step, t: state.t }));
+    snapshot(0, state)?;
+    let progress = timer.progress();
+    let looped = timer.run(INTEGRATE, || {
+        let mut looped = 0.0;
+        for step in 1..=steps {
+            let ts = std::time::Instant::now();
+            params.integrator.step(system, state, dt);
+            looped += ts.elapsed().as_secs_f64();
+            if state.u.iter().any(|v| !v.is_finite()) {
+                return Err(RunError::Diverged { step, t: state.t });
+            }
+            if step % energy_every == 0 || step == steps {
+                record(state, &mut history);
+            }
+            if step % every == 0 || step == steps {
+                snapshot(step, state)?;
+            }
+            progress.advance(step as u64, steps as u64);
         }
-        if step % energy_every == 0 || step == steps {
-            record(state, &mut history);
-        }
-        if step % every == 0 || step == steps {
-            snapshot(step, state).map_err(IntegrateError::Output)?;
-        }
-        progress.advance(step as u64, steps as u64);
-    }
+        Ok((looped, format!("{steps} steps")))
+    })?;
     let report = DynamicReport {
         integrator: params.integrator,
         time_step: dt,

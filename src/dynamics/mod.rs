@@ -1,5 +1,6 @@
 //! Explicit time integration of `rho u_tt = F(u) + b` (seed 000, sec. 4.3) for any
-//! semi-discrete system: the peridynamic force, or a one-dimensional model problem.
+//! semi-discrete system: the peridynamic force, the condensed MLSM operator, or a
+//! one-dimensional model problem.
 //!
 //! A [`SecondOrderSystem`] gives the acceleration `a(t, u) = (F(u) + b(t)) / rho` of a
 //! flat vector of unknowns; [`Integrator`] advances a [`State`] `(t, u, v, a)` by one
@@ -9,10 +10,12 @@
 
 pub mod driver;
 pub mod integrators;
-pub mod navier;
+pub mod params;
 pub mod rod;
 
+pub use driver::INTEGRATE;
 pub use integrators::Integrator;
+pub use params::{Affine, DynamicsParams};
 
 /// A semi-discrete second-order system `u_tt = a(t, u)`.
 pub trait SecondOrderSystem: Sync {

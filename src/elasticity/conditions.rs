@@ -1,62 +1,45 @@
-//! The two boundary equations of a boundary node, resolved from the conditions of
-//! the parts it touches.
-//!
-//! Per component `c`:
-//! * if any touching part prescribes the displacement of `c`, the node gets the
-//!   displacement equation `u_c = g_c` (Dirichlet wins at corners);
-//! * otherwise it gets a traction equation. At a corner of parts `k` with normals
-//!   `n_k` and prescribed tractions `t_k`, the equation is
-//!   `(sigma(u) n)_c = sum_k t_{k,c} / |sum_k n_k|` with `n = sum_k n_k / |sum_k n_k|`:
-//!   since `sigma n` is linear in `n`, this is exactly the sum of the parts'
-//!   equations, so it holds for any stress field that satisfies both.
+//! Boundary conditions of a boundary part and where their values come from: the
+//! vocabulary both models read (the Navier model turns them into equations at its
+//! boundary nodes, peridynamics into volume constraints and layer loads).
 
-use crate::domain::BoundarySample;
-use crate::exact::ExactSolution;
-use crate::problem::{BoundaryCondition, ComponentCondition, Value};
+use serde::Serialize;
 
-/// One scalar boundary equation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum ComponentEquation {
-    /// `u_c = value`.
-    Displacement { value: f64 },
-    /// `(sigma(u) normal)_c = value`.
-    Traction { normal: [f64; 2], value: f64 },
+/// How a displacement component is constrained on a boundary part.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ComponentCondition {
+    /// Prescribed displacement component.
+    Displacement,
+    /// Prescribed traction component `(sigma n)_c`.
+    Traction,
 }
 
-fn value_of(v: Value, exact: Option<&dyn ExactSolution>, f: impl Fn(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
-    match v {
-        Value::Constant(c) => c,
-        Value::Exact => f(exact.expect("validated: exact values need an exact solution")),
+/// Where a boundary or body-force value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Value {
+    /// A constant vector.
+    Constant([f64; 2]),
+    /// The scene's exact solution (displacement, traction `sigma n`, or body force).
+    Exact,
+}
+
+/// The condition imposed on one boundary part.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BoundaryCondition {
+    /// Condition on the x and y components.
+    pub components: [ComponentCondition; 2],
+    /// Prescribed displacement or traction.
+    pub value: Value,
+}
+
+impl BoundaryCondition {
+    /// A free edge: zero traction on both components.
+    pub const FREE: BoundaryCondition =
+        BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Constant([0.0, 0.0]) };
+
+    /// Whether both components are prescribed by `kind`.
+    pub fn is_all(&self, kind: ComponentCondition) -> bool {
+        self.components == [kind; 2]
     }
-}
-
-/// Equations for components x and y of a boundary node.
-pub fn resolve(sample: &BoundarySample, conditions: &[BoundaryCondition], exact: Option<&dyn ExactSolution>) -> [ComponentEquation; 2] {
-    let p = sample.position;
-    let eq = |c: usize| {
-        for &(part, _) in &sample.touches {
-            let bc = &conditions[part];
-            if bc.components[c] == ComponentCondition::Displacement {
-                let g = value_of(bc.value, exact, |e| e.displacement(p));
-                return ComponentEquation::Displacement { value: g[c] };
-            }
-        }
-        let mut n = [0.0; 2];
-        let mut t = 0.0;
-        for &(part, normal) in &sample.touches {
-            let bc = &conditions[part];
-            n[0] += normal[0];
-            n[1] += normal[1];
-            t += value_of(bc.value, exact, |e| e.traction(p, normal))[c];
-        }
-        let len = n[0].hypot(n[1]);
-        if len < 1e-8 {
-            // Opposite normals (a zero-thickness slit): use the first part alone.
-            let (part, normal) = sample.touches[0];
-            let t = value_of(conditions[part].value, exact, |e| e.traction(p, normal))[c];
-            return ComponentEquation::Traction { normal, value: t };
-        }
-        ComponentEquation::Traction { normal: [n[0] / len, n[1] / len], value: t / len }
-    };
-    [eq(0), eq(1)]
 }

@@ -1,8 +1,8 @@
-//! Linear elasticity on the node set: material, unknown layout, boundary equations,
-//! equation rows, and stresses.
+//! Linear elasticity, independent of any discretisation: material and planar model,
+//! boundary conditions of the boundary parts, the layout of the unknowns, and
+//! strain, stress and von Mises stress from a displacement gradient.
 
 pub mod conditions;
 pub mod dofs;
 pub mod material;
-pub mod rows;
 pub mod stress;

@@ -36,7 +36,9 @@ mod tests;
 
 use std::fmt;
 
+use crate::elasticity::conditions::Value;
 use crate::elasticity::material::{self, Material, PlaneModel};
+use serde::Serialize;
 
 pub use cantilever::Cantilever;
 pub use kirsch::Kirsch;
@@ -135,9 +137,36 @@ impl Check {
     }
 }
 
+/// A closed-form solution named in the scene (built by [`from_kind`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum ExactKind {
+    /// Timoshenko cantilever, variant A (verification.md 1).
+    Cantilever { load: f64, length: f64, depth: f64 },
+    /// Kirsch plate with a hole (verification.md 2).
+    Kirsch { tension: f64, radius: f64 },
+    /// Lame thick cylinder under internal pressure (verification.md 3).
+    Lame { pressure: f64, inner: f64, outer: f64 },
+    /// `u = (sin(pi x) cos(pi y), x^2 y^3)` with its body force (verification.md 6).
+    Manufactured,
+    /// Uniform uniaxial stress `sigma_xx = tension` (a linear field, zero at the origin).
+    Tension { tension: f64 },
+    /// A polynomial field of degree <= 3 with its body force (patch tests).
+    Polynomial { ux: [f64; 10], uy: [f64; 10] },
+}
+
+/// The vector a boundary or body-force [`Value`] stands for: the constant, or `pick`
+/// applied to the exact solution (validation makes sure one exists).
+pub fn value(value: Value, exact: Option<&dyn ExactSolution>, pick: impl FnOnce(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
+    match value {
+        Value::Constant(c) => c,
+        Value::Exact => pick(exact.expect("validated: \"exact\" values need an exact solution")),
+    }
+}
+
 /// Build the solution a scene names, for the scene's material.
-pub fn from_kind(kind: &crate::problem::ExactKind, material: Material) -> Result<Box<dyn ExactSolution>, ParameterError> {
-    use crate::problem::ExactKind as K;
+pub fn from_kind(kind: &ExactKind, material: Material) -> Result<Box<dyn ExactSolution>, ParameterError> {
+    use ExactKind as K;
     Ok(match *kind {
         K::Cantilever { load, length, depth } => Box::new(Cantilever::new(load, length, depth, material)?),
         K::Kirsch { tension, radius } => Box::new(Kirsch::new(tension, radius, material)?),

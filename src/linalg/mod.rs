@@ -21,6 +21,7 @@
 pub mod bicgstab;
 pub mod lu;
 pub mod precond;
+pub mod rowmat;
 pub mod scaling;
 pub mod triplets;
 
@@ -29,6 +30,7 @@ mod tests;
 
 use std::time::Instant;
 
+pub use rowmat::{mul_add, row_matrix, RowMatrix};
 pub use triplets::{assemble, Triplets};
 
 /// Square sparse matrix in compressed sparse column (CSC) form, `usize`

@@ -225,7 +225,10 @@ impl Ilut {
             keep_largest(&mut upper, nu0 + fill, |j| w[j].abs());
 
             let piv = w[i];
-            if !(piv.abs() > ILUT_PIVOT_RTOL * row_norm) || !piv.is_finite() {
+            // A NaN threshold or pivot fails this test too.
+            let threshold = ILUT_PIVOT_RTOL * row_norm;
+            let usable = piv.is_finite() && threshold.is_finite() && piv.abs() > threshold;
+            if !usable {
                 let a_ii = cols.binary_search(&i).map_or(0.0, |p| vals[p]);
                 let cause = if a_ii.abs() <= ILUT_PIVOT_RTOL * row_norm {
                     format!(

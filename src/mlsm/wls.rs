@@ -65,7 +65,7 @@ pub fn shape_functions(
     let diag_max = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
     let diag_min = (0..m).map(|k| r[(k, k)].abs()).fold(f64::INFINITY, f64::min);
     let ratio = if diag_max > 0.0 { diag_min / diag_max } else { 0.0 };
-    if !(ratio > rank_tolerance(basis)) {
+    if ratio.is_nan() || ratio <= rank_tolerance(basis) {
         return Err(RankDeficient { ratio, basis_size: m });
     }
     // All operators at once: Y = R^-T L (m x k), then phi = W Q Y (n x k).

@@ -5,8 +5,6 @@
 //! * [`write_atomic`], [`write_json`], [`write_csv`]: crash-safe file output (temp file in the
 //!   target directory, `fsync`, `rename`), so a reader never sees a half-written file and a
 //!   failed write leaves an earlier file intact.
-//! * [`triangulate()`]: a Delaunay triangulation of the (meshless) nodes, used **only** so that
-//!   ParaView has cells to draw; the solver never sees it.
 //! * [`write_vtu`] / [`read_vtu`]: XML unstructured grid with triangle cells and point data,
 //!   written with `vtkio` (inline base64, Float64/Int32 arrays, so values are bit-exact).
 //! * [`write_pvd`]: a ParaView collection (time series) file, written by hand.
@@ -23,13 +21,11 @@ use std::path::PathBuf;
 mod atomic;
 mod memory;
 mod plot;
-mod triangulate;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
 pub use memory::peak_memory_bytes;
 pub use plot::{write_loglog_svg, Series};
-pub use triangulate::triangulate;
 pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};
 
 /// Error returned by every fallible function of this module.

@@ -1,7 +1,7 @@
 //! Tests of `vtk.rs` (kept in a separate file to keep `vtk.rs` short).
 
-use super::super::triangulate;
 use super::*;
+use crate::domain::cells::triangulate;
 
 /// Asserts that two `f64` slices are identical bit for bit (NaN payloads included).
 fn assert_bits_eq(name: &str, a: &[f64], b: &[f64]) {

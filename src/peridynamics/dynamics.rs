@@ -18,9 +18,15 @@
 //! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
 //! [`crate::dynamics::Integrator::stability_factor`].
 
+use super::nodes::PdNodes;
 use super::operator::Bonds;
-use super::BondForce;
-use crate::dynamics::SecondOrderSystem;
+use super::solve::Discretisation;
+use super::{loads, BondForce, PdParams};
+use crate::case::Case;
+use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::dynamics::{Affine, DynamicsParams, SecondOrderSystem, State};
+use crate::elasticity::dofs::DofMap;
+use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
 use rayon::prelude::*;
 
 /// The semi-discrete peridynamic system of one discretisation.
@@ -36,15 +42,19 @@ pub struct PdDynamics<'a> {
 }
 
 impl PdDynamics<'_> {
-    fn nodes(&self) -> &super::nodes::PdNodes {
+    fn nodes(&self) -> &PdNodes {
         self.bonds.nodes
+    }
+
+    fn dofs(&self) -> DofMap {
+        self.nodes().dofs()
     }
 
     /// Displacement of node `j` (free: from `u`, constrained: prescribed).
     fn displacement(&self, u: &[f64], j: usize) -> [f64; 2] {
         let free = self.nodes().free;
         if j < free {
-            [u[2 * j], u[2 * j + 1]]
+            self.dofs().displacement(u, j)
         } else {
             self.nodes().prescribed[j - free]
         }
@@ -122,15 +132,16 @@ impl PdDynamics<'_> {
 
     /// `(E_kin, E_el, E_ext)` of a state.
     pub fn energies(&self, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
-        let nodes = self.nodes();
+        let (nodes, dofs) = (self.nodes(), self.dofs());
         (0..nodes.free)
             .into_par_iter()
             .map(|i| {
                 let vol = nodes.volumes[i];
-                let kin = 0.5 * self.density * vol * (v[2 * i].powi(2) + v[2 * i + 1].powi(2));
+                let (ui, vi) = (dofs.displacement(u, i), dofs.displacement(v, i));
+                let kin = 0.5 * self.density * vol * (vi[0].powi(2) + vi[1].powi(2));
                 let w = self.micropotential(u, i);
                 let b = self.body_force[i];
-                (kin, 0.5 * vol * w, -vol * (b[0] * u[2 * i] + b[1] * u[2 * i + 1]))
+                (kin, 0.5 * vol * w, -vol * (b[0] * ui[0] + b[1] * ui[1]))
             })
             .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
     }
@@ -138,7 +149,7 @@ impl PdDynamics<'_> {
 
 impl SecondOrderSystem for PdDynamics<'_> {
     fn len(&self) -> usize {
-        2 * self.nodes().free
+        self.dofs().len()
     }
 
     fn acceleration(&self, _t: f64, u: &[f64], a: &mut [f64]) {
@@ -152,51 +163,49 @@ impl SecondOrderSystem for PdDynamics<'_> {
 }
 
 /// The result of a time-dependent peridynamic run.
-pub struct PdSimulation {
+pub struct Simulation {
     /// The discretisation (nodes, families, weights).
-    pub discretisation: super::solve::Discretisation,
+    pub discretisation: Discretisation,
     /// Final displacement of the free nodes.
     pub u: Vec<[f64; 2]>,
     /// Final velocity of the free nodes.
     pub v: Vec<[f64; 2]>,
     /// Integration report.
-    pub report: crate::dynamics::driver::DynamicReport,
+    pub report: DynamicReport,
     /// Energy history.
-    pub energies: Vec<crate::dynamics::driver::EnergyRow>,
+    pub energies: Vec<EnergyRow>,
     /// Bond updates per second per thread in the time loop.
     pub bond_updates_per_second_per_thread: f64,
     /// Stage timings.
-    pub timings: super::solve::PdTimings,
+    pub timings: StageTimings,
 }
 
-/// Run `problem` (with a `[dynamics]` table) with peridynamics `params`, calling
-/// `snapshot(step, t, positions, u, v)` (free nodes) at the snapshot steps.
-pub fn simulate<E>(
-    problem: &crate::problem::Problem,
-    params: &super::PdParams,
-    progress: &dyn crate::run::Progress,
-    mut snapshot: impl FnMut(usize, f64, &[[f64; 2]], &[[f64; 2]], &[[f64; 2]]) -> Result<(), E>,
-) -> Result<PdSimulation, crate::dynamics::driver::IntegrateError<E>> {
-    use crate::dynamics::driver::{integrate, time_grid, IntegrateError};
-    use crate::dynamics::State;
-    let dynamics = problem.dynamics.expect("a [dynamics] table");
-    let mut timings = super::solve::PdTimings::default();
-    let exact = crate::run::exact_solution(problem);
-    let disc = super::solve::Discretisation::new(problem, params, exact.as_deref(), progress, &mut timings).map_err(IntegrateError::Run)?;
-    let (body_force, _) =
-        super::loads::body_forces(&problem.domain, &problem.conditions, problem.body_force, exact.as_deref(), &disc.nodes);
+/// Run `case` (with `dynamics`) with peridynamics `params`, calling `snapshot` (free
+/// nodes) at the snapshot steps.
+pub fn simulate(
+    case: &Case,
+    params: &PdParams,
+    dynamics: &DynamicsParams,
+    progress: &dyn Progress,
+    mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
+    let mut timer = StageTimer::new(progress);
+    let exact = case.exact_solution();
+    let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
+    let (body_force, _) = loads::body_forces(&case.domain, &case.conditions, case.body_force, exact.as_deref(), &disc.nodes);
     let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };
     let free = &disc.nodes.positions[..disc.nodes.free];
-    let flat = |f: &crate::problem::Affine| -> Vec<f64> { free.iter().flat_map(|x| f.at(*x)).collect() };
-    let grid = time_grid(system.stable_time_step(), &dynamics).map_err(IntegrateError::Run)?;
+    let dofs = disc.nodes.dofs();
+    let flat = |f: &Affine| dofs.from_displacements(|i| f.at(free[i]));
+    let grid = time_grid(system.stable_time_step(), dynamics)?;
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
-    let pairs = |v: &[f64]| v.chunks_exact(2).map(|c| [c[0], c[1]]).collect::<Vec<[f64; 2]>>();
+    let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
     let energy = |s: &State| system.energies(&s.u, &s.v);
-    let (report, energies) = integrate(&system, &energy, &mut state, grid, &dynamics, progress, |step, s| {
-        snapshot(step, s.t, free, &pairs(&s.u), &pairs(&s.v))
+    let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
+        snapshot(Snapshot { step, t: s.t, positions: free, u: &nodal(&s.u), v: &nodal(&s.v) })
     })?;
     let throughput =
         report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
-    let (u, v) = (pairs(&state.u), pairs(&state.v));
-    Ok(PdSimulation { discretisation: disc, u, v, report, energies, bond_updates_per_second_per_thread: throughput, timings })
+    let (u, v) = (nodal(&state.u), nodal(&state.v));
+    Ok(Simulation { discretisation: disc, u, v, report, energies, bond_updates_per_second_per_thread: throughput, timings: timer.finish() })
 }

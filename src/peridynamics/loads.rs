@@ -14,8 +14,8 @@
 
 use super::nodes::PdNodes;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
-use crate::exact::ExactSolution;
-use crate::problem::{BoundaryCondition, ComponentCondition, Value};
+use crate::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
+use crate::exact::{self, ExactSolution};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
@@ -29,8 +29,7 @@ pub fn body_forces(
 ) -> (Vec<[f64; 2]>, usize) {
     let h = nodes.spacing;
     let loaded: Vec<bool> =
-        conditions.iter().map(|bc| bc.components == [ComponentCondition::Traction; 2] && bc.value != Value::Constant([0.0, 0.0])).collect();
-    let exact_or = || exact.expect("validated: \"exact\" values need an exact solution");
+        conditions.iter().map(|bc| bc.is_all(ComponentCondition::Traction) && bc.value != Value::Constant([0.0, 0.0])).collect();
     // Samples every h/16 locate the nearest point of a part to within h/32.
     let samples = if loaded.iter().any(|&l| l) { discretise_boundary(domain, h / 16.0) } else { Vec::new() };
     let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
@@ -39,10 +38,7 @@ pub fn body_forces(
         .into_par_iter()
         .map(|i| {
             let x = nodes.positions[i];
-            let mut b = match body_force {
-                Value::Constant(f) => f,
-                Value::Exact => exact_or().body_force(x),
-            };
+            let mut b = exact::value(body_force, exact, |e| e.body_force(x));
             let mut in_layer = false;
             if let Some(tree) = &tree {
                 // Nearest sample of each loaded part within h.
@@ -64,10 +60,7 @@ pub fn body_forces(
                     if d2 >= h * h {
                         continue;
                     }
-                    let t = match conditions[part].value {
-                        Value::Constant(t) => t,
-                        Value::Exact => exact_or().traction(p, normal),
-                    };
+                    let t = exact::value(conditions[part].value, exact, |e| e.traction(p, normal));
                     b[0] += t[0] / h;
                     b[1] += t[1] / h;
                     in_layer = true;

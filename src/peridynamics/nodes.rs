@@ -14,55 +14,17 @@
 //!
 //! Cells cut by a curved or unaligned boundary keep their points' full weights.
 
+use super::{PdParams, Quadrature};
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
-use crate::exact::ExactSolution;
-use crate::problem::{BoundaryCondition, ComponentCondition, Value};
+use crate::elasticity::conditions::{BoundaryCondition, ComponentCondition};
+use crate::elasticity::dofs::DofMap;
+use crate::exact::{self, ExactSolution};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
-
-use super::{PdParams, Quadrature};
-
-/// Points of one unit cell `[0, 1]^2` with their share of the cell area.
-pub fn rule(q: Quadrature) -> Vec<(Point, f64)> {
-    match q {
-        Quadrature::FullArea | Quadrature::PartialArea | Quadrature::Compatible => vec![([0.5, 0.5], 1.0)],
-        Quadrature::Gauss2x2 => {
-            let g = 3f64.sqrt() / 6.0;
-            let (a, b) = (0.5 - g, 0.5 + g);
-            vec![([a, a], 0.25), ([b, a], 0.25), ([a, b], 0.25), ([b, b], 0.25)]
-        }
-        Quadrature::TriangleP1 => vec![([2.0 / 3.0, 1.0 / 3.0], 0.5), ([1.0 / 3.0, 2.0 / 3.0], 0.5)],
-        Quadrature::TriangleP3 => {
-            // The periodic unit of the 7-point rule on the two triangles of every cell:
-            // a vertex (shared by 6 triangles, 6 x 3/120), three edge midpoints (2 x 8/120
-            // each) and the two centroids (27/120 each).
-            vec![
-                ([0.0, 0.0], 0.15),
-                ([0.5, 0.0], 2.0 / 15.0),
-                ([0.0, 0.5], 2.0 / 15.0),
-                ([0.5, 0.5], 2.0 / 15.0),
-                ([2.0 / 3.0, 1.0 / 3.0], 0.225),
-                ([1.0 / 3.0, 2.0 / 3.0], 0.225),
-            ]
-        }
-        Quadrature::TriangleP2 => {
-            // Triangles (0,0),(1,0),(1,1) and (0,0),(1,1),(0,1); points 2/3 A + 1/6 B + 1/6 C.
-            let tris = [[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]]];
-            let mut pts = Vec::new();
-            for t in tris {
-                for k in 0..3 {
-                    let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-                    let p = [(4.0 * a[0] + b[0] + c[0]) / 6.0, (4.0 * a[1] + b[1] + c[1]) / 6.0];
-                    pts.push((p, 1.0 / 6.0));
-                }
-            }
-            pts
-        }
-    }
-}
+use std::collections::BTreeMap;
 
 /// What one cell adds to its points: `(point in [0, 1]^2, share of the cell area,
-/// index of the point in the periodic unit `rule(q)`)`. Only the 7-point triangle rule
+/// index of the point in the periodic unit `q.unit_cell()`)`. Only the 7-point triangle rule
 /// puts points on cell edges and corners, shared with the neighbouring cells: there
 /// every triangle gives `|T|/60 (3 at each vertex, 8 at each edge midpoint, 27 at the
 /// centroid)` (seed 000, ch. 1, P3).
@@ -84,7 +46,7 @@ fn contributions(q: Quadrature) -> Vec<(Point, f64, u8)> {
                 ([1.0 / 3.0, 2.0 / 3.0], c, 5),
             ]
         }
-        _ => rule(q).into_iter().enumerate().map(|(k, (p, w))| (p, w, k as u8)).collect(),
+        _ => q.unit_cell().into_iter().enumerate().map(|(k, (p, w))| (p, w, k as u8)).collect(),
     }
 }
 
@@ -114,6 +76,11 @@ impl PdNodes {
     /// True when there are no nodes.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
+    }
+
+    /// Layout of the unknowns: the displacements of the free nodes.
+    pub fn dofs(&self) -> DofMap {
+        DofMap::displacement_only(self.free)
     }
 
     /// Number of constrained (collar) nodes.
@@ -150,12 +117,11 @@ impl<'a> Body<'a> {
     pub fn constraint(&self, p: Point) -> Option<[f64; 2]> {
         let nearest = self.tree.query(&p).nearest_one::<SquaredEuclidean<f64>>().execute();
         let s = &self.samples[nearest.item as usize];
-        s.touches.iter().map(|(part, _)| self.conditions[*part]).find(|bc| bc.components == [ComponentCondition::Displacement; 2]).map(
-            |bc| match bc.value {
-                Value::Constant(v) => v,
-                Value::Exact => self.exact.expect("validated: exact values need an exact solution").displacement(p),
-            },
-        )
+        s.touches
+            .iter()
+            .map(|(part, _)| self.conditions[*part])
+            .find(|bc| bc.is_all(ComponentCondition::Displacement))
+            .map(|bc| exact::value(bc.value, self.exact, |e| e.displacement(p)))
     }
 
     /// Whether `p` carries material: inside the solid or in the constrained collar.
@@ -165,13 +131,67 @@ impl<'a> Body<'a> {
     }
 }
 
-/// Lay out the nodes of `params.quadrature` over the body (solid and collar).
+/// A lattice point after merging the cells that share it: position, index in the
+/// unit cell, shares of the cells inside the solid and of the cells outside.
+type Merged = (Point, u8, f64, f64);
+
+/// What a lattice point becomes.
+enum Role {
+    /// A free node.
+    Free,
+    /// A node of the Dirichlet collar with its prescribed displacement.
+    Constrained([f64; 2]),
+    /// Not a node (outside the solid and its collar, or without material).
+    Dropped,
+}
+
+/// Lay out the nodes of `params.quadrature` over the body (solid and collar): free
+/// nodes first, constrained after, each in lattice (row-major) order.
 pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
+    let h = params.spacing();
+    let classified: Vec<(Point, f64, u8, Role)> = merged_points(body, params).into_par_iter().map(|m| classify(body, h, m)).collect();
+    let mut nodes =
+        PdNodes { positions: Vec::new(), volumes: Vec::new(), free: 0, prescribed: Vec::new(), rule_point: Vec::new(), spacing: h };
+    for (p, w, r, role) in &classified {
+        if let Role::Free = role {
+            nodes.positions.push(*p);
+            nodes.volumes.push(*w);
+            nodes.rule_point.push(*r);
+        }
+    }
+    nodes.free = nodes.positions.len();
+    for (p, w, r, role) in &classified {
+        if let Role::Constrained(u) = role {
+            nodes.positions.push(*p);
+            nodes.volumes.push(*w);
+            nodes.rule_point.push(*r);
+            nodes.prescribed.push(*u);
+        }
+    }
+    nodes
+}
+
+/// A point on the boundary (shared rules only) is free and carries the shares of the
+/// inner cells; a point in the collar carries every share and the constraint of its
+/// nearest displacement part.
+fn classify(body: &Body, h: f64, (p, r, w_in, w_out): Merged) -> (Point, f64, u8, Role) {
+    let d = body.domain.signed_distance(p);
+    if d <= 1e-9 * h && w_in > 0.0 {
+        (p, w_in, r, Role::Free)
+    } else if d > 1e-9 * h && d <= body.collar {
+        (p, w_in + w_out, r, body.constraint(p).map_or(Role::Dropped, Role::Constrained))
+    } else {
+        (p, 0.0, r, Role::Dropped)
+    }
+}
+
+/// Every rule point of every lattice cell over the body, merged where cells share a
+/// point, in lattice (row-major) order.
+fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
     let domain = body.domain;
     let h = params.spacing();
-    let collar = body.collar;
     let (lo, hi) = domain.bounding_box();
-    let pad = (collar / h).ceil() as i64 + 1;
+    let pad = (body.collar / h).ceil() as i64 + 1;
     let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
     let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
     let cell = contributions(params.quadrature);
@@ -207,8 +227,7 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
             out
         })
         .collect();
-    // Merged point: position, unit index, shares of inner cells and of collar cells.
-    let mut merged: std::collections::BTreeMap<(i64, i64), (Point, u8, f64, f64)> = std::collections::BTreeMap::new();
+    let mut merged: BTreeMap<(i64, i64), Merged> = BTreeMap::new();
     for (k, p, w, r, inside) in rows.into_iter().flatten() {
         let e = merged.entry(k).or_insert((p, r, 0.0, 0.0));
         if inside {
@@ -217,39 +236,5 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
             e.3 += w;
         }
     }
-    // Free nodes first, constrained after, each in lattice (row-major) order. A point on
-    // the boundary (shared rules only) is free and carries the shares of the inner cells.
-    let classified: Vec<(Point, f64, u8, Option<Option<[f64; 2]>>)> = merged
-        .into_values()
-        .collect::<Vec<_>>()
-        .into_par_iter()
-        .map(|(p, r, w_in, w_out)| {
-            let d = domain.signed_distance(p);
-            if d <= 1e-9 * h && w_in > 0.0 {
-                (p, w_in, r, Some(None))
-            } else if d > 1e-9 * h && d <= collar {
-                (p, w_in + w_out, r, body.constraint(p).map(Some))
-            } else {
-                (p, 0.0, r, None)
-            }
-        })
-        .collect();
-    let (mut positions, mut volumes, mut rule_point, mut prescribed) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for (p, w, r, class) in &classified {
-        if let Some(None) = class {
-            positions.push(*p);
-            volumes.push(*w);
-            rule_point.push(*r);
-        }
-    }
-    let free = positions.len();
-    for (p, w, r, class) in &classified {
-        if let Some(Some(u)) = class {
-            positions.push(*p);
-            volumes.push(*w);
-            rule_point.push(*r);
-            prescribed.push(*u);
-        }
-    }
-    PdNodes { positions, volumes, free, prescribed, rule_point, spacing: h }
+    merged.into_values().collect()
 }

@@ -6,7 +6,8 @@
 //! `j != i` and `K_ii = V_i sum_j c_ij xi ⊗ xi`, symmetric whenever
 //! `V_i c_ij = V_j c_ji` (every rule but the compatible one, see `weights`), and the
 //! constrained nodes' prescribed displacements move to the right-hand side.
-//! Unknowns are interleaved: `2 i + c` for free node `i`, component `c`.
+//! Unknowns are those of `PdNodes::dofs` (the free nodes' displacements, interleaved,
+//! so that the two rows of a node are consecutive).
 
 use super::family::Families;
 use super::nodes::PdNodes;
@@ -61,8 +62,12 @@ impl Bonds<'_> {
     /// row holding a non-finite coefficient as an error.
     pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(SparseMatrix, Vec<f64>), usize> {
         let free = self.nodes.free;
-        // Per node: the column indices of its rows and the values of rows 2i and 2i+1.
-        let rows: Vec<(Vec<usize>, Vec<f64>, Vec<f64>, [f64; 2])> = (0..free)
+        let dofs = self.nodes.dofs();
+        let node_cols = |i: usize| [dofs.dof(i, 0), dofs.dof(i, 1)];
+        // Per node: the column indices of its rows and the values of its x and y rows.
+        // Per node: columns, x-row values, y-row values, right-hand side.
+        type NodeRows = (Vec<usize>, Vec<f64>, Vec<f64>, [f64; 2]);
+        let rows: Vec<NodeRows> = (0..free)
             .into_par_iter()
             .map(|i| {
                 let v = self.nodes.volumes[i];
@@ -80,11 +85,11 @@ impl Bonds<'_> {
                     if j < free {
                         if diag_at.is_none() && j > i {
                             diag_at = Some(cols.len());
-                            cols.extend([2 * i, 2 * i + 1]);
+                            cols.extend(node_cols(i));
                             top.extend([0.0, 0.0]);
                             bottom.extend([0.0, 0.0]);
                         }
-                        cols.extend([2 * j, 2 * j + 1]);
+                        cols.extend(node_cols(j));
                         top.extend([-kb[0], -kb[1]]);
                         bottom.extend([-kb[1], -kb[2]]);
                     } else {
@@ -96,7 +101,7 @@ impl Bonds<'_> {
                 let d = match diag_at {
                     Some(d) => d,
                     None => {
-                        cols.extend([2 * i, 2 * i + 1]);
+                        cols.extend(node_cols(i));
                         top.extend([0.0, 0.0]);
                         bottom.extend([0.0, 0.0]);
                         cols.len() - 2
@@ -113,8 +118,9 @@ impl Bonds<'_> {
             return Err(bad);
         }
         let nnz: usize = rows.iter().map(|r| 2 * r.0.len()).sum();
-        let (mut row_ptr, mut col_idx, mut values) = (Vec::with_capacity(2 * free + 1), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
-        let mut rhs = Vec::with_capacity(2 * free);
+        let n = dofs.len();
+        let (mut row_ptr, mut col_idx, mut values) = (Vec::with_capacity(n + 1), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+        let mut rhs = Vec::with_capacity(n);
         row_ptr.push(0);
         for (cols, top, bottom, r) in rows {
             for vals in [top, bottom] {
@@ -124,7 +130,7 @@ impl Bonds<'_> {
             }
             rhs.extend(r);
         }
-        let symbolic = SymbolicSparseRowMat::new_checked(2 * free, 2 * free, row_ptr, None, col_idx);
+        let symbolic = SymbolicSparseRowMat::new_checked(n, n, row_ptr, None, col_idx);
         let matrix = SparseRowMat::new(symbolic, values).to_col_major().expect("allocation of the column-major copy");
         Ok((matrix, rhs))
     }

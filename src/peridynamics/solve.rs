@@ -7,34 +7,16 @@ use super::kernel::{fourth_moment, Micromodulus};
 use super::nodes::{self, Body, PdNodes};
 use super::operator::Bonds;
 use super::weights::{bond_coefficients, search_radius, BondWeights};
-use super::{loads, strain, PdParams};
-use crate::elasticity::stress;
+use super::{loads, stage, strain, PdParams};
+use crate::case::Case;
+use crate::domain::{Domain, Point};
+use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport};
-use crate::post::{masked_errors, ErrorNorms};
-use crate::problem::Problem;
-use crate::run::{exact_solution, timed, Progress, RunError, Stage};
+use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
+use crate::post::{masked_errors, ErrorNorms, ExactFields};
 use rayon::prelude::*;
 use serde::Serialize;
-
-/// Wall-clock seconds per stage of a peridynamic run.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct PdTimings {
-    /// Node layout (cells, collar).
-    pub nodes: f64,
-    /// Family search.
-    pub families: f64,
-    /// Bond weights (quadrature, correction, compatible weights).
-    pub weights: f64,
-    /// Loads and stiffness assembly.
-    pub assembly: f64,
-    /// Linear solve.
-    pub solve: f64,
-    /// Strain, stress, errors.
-    pub post: f64,
-    /// Writing files (filled by the caller).
-    pub output: f64,
-}
 
 /// Everything a static peridynamic run computed.
 pub struct PdSolution {
@@ -59,11 +41,11 @@ pub struct PdSolution {
     /// Nonzeros of the stiffness.
     pub nonzeros: usize,
     /// Nonlocal displacement gradient, when outputs need it.
-    pub gradient: Option<Vec<[[f64; 2]; 2]>>,
-    /// Stress `[sxx, syy, sxy]`, `sigma_zz`, von Mises, from the gradient.
-    pub stress: Option<(Vec<[f64; 3]>, Vec<f64>, Vec<f64>)>,
+    pub gradient: Option<Vec<Gradient>>,
+    /// Stresses from the nonlocal gradient.
+    pub stress: Option<StressField>,
     /// Exact displacement at the free nodes.
-    pub exact: Option<Vec<[f64; 2]>>,
+    pub exact: Option<ExactFields>,
     /// Errors on the whole plate and on the interior region.
     pub errors: Option<(ErrorNorms, Option<ErrorNorms>)>,
     /// Calibrated micromodulus.
@@ -71,7 +53,7 @@ pub struct PdSolution {
     /// Solver report.
     pub solver: SolveReport,
     /// Stage timings.
-    pub timings: PdTimings,
+    pub timings: StageTimings,
 }
 
 /// Counts from the weighting stage.
@@ -98,29 +80,23 @@ pub struct Discretisation {
 }
 
 impl Discretisation {
-    /// Build the nodes, families and bond weights of `problem` with `params` (`exact`:
-    /// the scene's exact solution, for prescribed values), timing each stage into `t`.
-    pub fn new(
-        problem: &Problem,
-        params: &PdParams,
-        exact: Option<&dyn ExactSolution>,
-        progress: &dyn Progress,
-        t: &mut PdTimings,
-    ) -> Result<Self, RunError> {
-        let body = Body::new(&problem.domain, &problem.conditions, exact, params);
-        let nodes = timed(progress, Stage::Nodes, &mut t.nodes, || {
+    /// Build the nodes, families and bond weights of `case` with `params` (`exact`:
+    /// the scene's exact solution, for prescribed values), each stage timed by `timer`.
+    pub fn new(case: &Case, params: &PdParams, exact: Option<&dyn ExactSolution>, timer: &mut StageTimer) -> Result<Self, RunError> {
+        let body = Body::new(&case.domain, &case.conditions, exact, params);
+        let nodes = timer.run(stage::NODES, || {
             let n = nodes::generate(&body, params);
             let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
             Ok((n, note))
         })?;
-        let families = timed(progress, Stage::Families, &mut t.families, || {
+        let families = timer.run(stage::FAMILIES, || {
             let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
             let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
             Ok((f, note))
         })?;
-        let moment = fourth_moment(&problem.material);
+        let moment = fourth_moment(&case.material);
         let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
-        let weights = timed(progress, Stage::Weights, &mut t.weights, || {
+        let weights = timer.run(stage::WEIGHTS, || {
             let w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment);
             let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
             Ok((w, note))
@@ -136,60 +112,72 @@ impl Discretisation {
 
 /// Whether each point lies in the interior region, at distance >= `horizon` from the
 /// boundary (where the comparisons and errors are also reported separately).
-pub fn interior_flags(domain: &crate::domain::Domain, points: &[crate::domain::Point], horizon: f64) -> Vec<bool> {
+pub fn interior_flags(domain: &Domain, points: &[Point], horizon: f64) -> Vec<bool> {
     points.par_iter().map(|p| domain.signed_distance(*p) <= -horizon).collect()
 }
 
-/// Solve the static peridynamic problem of `problem` with `params`.
-pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> Result<PdSolution, RunError> {
-    let mut t = PdTimings::default();
-    let exact = exact_solution(problem);
-    let exact = exact.as_deref();
-    let mut slot = 0.0;
-    let Discretisation { nodes, families, weights, micromodulus } = Discretisation::new(problem, params, exact, progress, &mut t)?;
-    let bonds = Bonds { nodes: &nodes, families: &families, coefficients: &weights.coefficients };
+/// What the post-processing of a static run computes.
+struct Post {
+    displacement: Vec<[f64; 2]>,
+    interior: Vec<bool>,
+    gradient: Option<Vec<Gradient>>,
+    stress: Option<StressField>,
+    exact: Option<ExactFields>,
+    errors: Option<(ErrorNorms, Option<ErrorNorms>)>,
+}
 
-    let (matrix, rhs, body_force, layer_nodes) = timed(progress, Stage::Assembly, &mut slot, || {
-        let (b, layer) = loads::body_forces(&problem.domain, &problem.conditions, problem.body_force, exact, &nodes);
-        let (m, rhs) = bonds.stiffness(&b).map_err(|node| {
-            let p = nodes.positions[node];
+/// Displacement of every node, nonlocal strain and stress, errors on the whole plate
+/// and on the interior region.
+fn post(case: &Case, params: &PdParams, disc: &Discretisation, exact: Option<&dyn ExactSolution>, x: &[f64]) -> Post {
+    let nodes = &disc.nodes;
+    let mut u = nodes.dofs().displacements(x, nodes.free);
+    u.extend_from_slice(&nodes.prescribed);
+    let free = &nodes.positions[..nodes.free];
+    let interior = interior_flags(&case.domain, free, params.horizon);
+    let gradient = case.outputs.needs_gradient().then(|| strain::gradients(nodes, &disc.families, &u));
+    let stress = gradient.as_ref().map(|g| StressField::from_gradients(&case.material, g));
+    let exact = exact.map(|e| ExactFields::at(e, free, false));
+    let errors = exact.as_ref().map(|ef| {
+        let whole = masked_errors(&u, &ef.displacement, |_| true).expect("at least one free node");
+        (whole, masked_errors(&u, &ef.displacement, |i| interior[i]))
+    });
+    Post { displacement: u, interior, gradient, stress, exact, errors }
+}
+
+/// Solve the static peridynamic problem of `case` with `params`.
+pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<PdSolution, RunError> {
+    let mut timer = StageTimer::new(progress);
+    let exact = case.exact_solution();
+    let exact = exact.as_deref();
+    let disc = Discretisation::new(case, params, exact, &mut timer)?;
+    let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
+        let (b, layer) = loads::body_forces(&case.domain, &case.conditions, case.body_force, exact, &disc.nodes);
+        let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| {
+            let p = disc.nodes.positions[node];
             RunError::NotFinite { node, x: p[0], y: p[1] }
         })?;
         let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.compute_nnz());
         Ok(((m, rhs, b, layer), note))
     })?;
-    t.assembly = slot;
     let nonzeros = matrix.compute_nnz();
-    let (x, report) = timed(progress, Stage::Solve, &mut slot, || {
+    let (x, report) = timer.run(stage::SOLVE, || {
         let (x, report) = linalg::solve(&matrix, &rhs, &params.solver)?;
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;
-    t.solve = slot;
     drop(matrix);
-
-    let (displacement, interior, gradient, stress, exact_u, errors) = timed(progress, Stage::Post, &mut slot, || {
-        let mut u: Vec<[f64; 2]> = (0..nodes.free).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
-        u.extend_from_slice(&nodes.prescribed);
-        let interior = interior_flags(&problem.domain, &nodes.positions[..nodes.free], params.horizon);
-        let gradient = problem.outputs.needs_gradient().then(|| strain::gradients(&nodes, &families, &u));
-        let stress = gradient.as_ref().map(|g| stress::stresses(&problem.material, g));
-        let exact_u: Option<Vec<[f64; 2]>> = exact.map(|e| nodes.positions[..nodes.free].par_iter().map(|p| e.displacement(*p)).collect());
-        let errors = exact_u.as_ref().map(|ue| {
-            let whole = masked_errors(&u, ue, |_| true).expect("at least one free node");
-            (whole, masked_errors(&u, ue, |i| interior[i]))
-        });
-        let note = match &errors {
+    let post = timer.run(stage::POST, || {
+        let post = post(case, params, &disc, exact, &x);
+        let note = match &post.errors {
             Some((w, i)) => format!("e_inf(u) = {:.3e} (interior {})", w.e_inf_u, i.map_or("-".into(), |i| format!("{:.3e}", i.e_inf_u))),
             None => String::new(),
         };
-        Ok(((u, interior, gradient, stress, exact_u, errors), note))
+        Ok((post, note))
     })?;
-    t.post = slot;
-
+    let Discretisation { nodes, families, weights, micromodulus } = disc;
     Ok(PdSolution {
         params: *params,
-        unknowns: 2 * nodes.free,
+        unknowns: nodes.dofs().len(),
         bonds: families.bonds(),
         weights: WeightsSummary {
             complete_families: weights.complete_families,
@@ -197,17 +185,17 @@ pub fn solve(problem: &Problem, params: &PdParams, progress: &dyn Progress) -> R
             compatible_failures: weights.compatible_failures,
         },
         nodes,
-        displacement,
+        displacement: post.displacement,
         body_force,
-        interior,
+        interior: post.interior,
         layer_nodes,
         nonzeros,
-        gradient,
-        stress,
-        exact: exact_u,
-        errors,
+        gradient: post.gradient,
+        stress: post.stress,
+        exact: post.exact,
+        errors: post.errors,
         micromodulus,
         solver: report,
-        timings: t,
+        timings: timer.finish(),
     })
 }

@@ -18,7 +18,7 @@
 
 use super::compatible::{compatible_weights, target_moment, truncated_moments, MOMENTS, TRUNCATED_MOMENTS};
 use super::family::Families;
-use super::nodes::{rule, Body, PdNodes};
+use super::nodes::{Body, PdNodes};
 use super::{Micromodulus, PdParams, Quadrature, SurfaceCorrection};
 use crate::domain::Point;
 use rayon::prelude::*;
@@ -66,7 +66,7 @@ fn area_fraction(params: &PdParams, xi: Point) -> f64 {
 /// Family volume and bond count of each rule point in an unbounded lattice.
 pub fn full_families(params: &PdParams) -> Vec<(f64, usize)> {
     let h = params.spacing();
-    let pts = rule(params.quadrature);
+    let pts = params.quadrature.unit_cell();
     let radius = search_radius(params);
     let k = (radius / h).ceil() as i64 + 2;
     pts.iter()

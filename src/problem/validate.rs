@@ -2,12 +2,16 @@
 //! (physics and consistency). Every error names the file, the field and the reason.
 
 use super::spec::*;
-use super::{Affine, BoundaryCondition, ComponentCondition, DynamicsParams, ExactKind, Model, Outputs, Problem, ProblemError, Value};
+use super::{Model, Problem, ProblemError};
+use crate::case::{Case, Outputs};
 use crate::domain::{CsgOp, Domain, FillKind, FillParams, Primitive, Region};
-use crate::dynamics::Integrator;
+use crate::dynamics::{Affine, DynamicsParams, Integrator};
+use crate::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
 use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
+use crate::exact::ExactKind;
 use crate::linalg::{Preconditioner, SolverKind, SolverParams};
 use crate::mlsm::{Approximation, Basis, RbfKind, Weight};
+use crate::navier::NavierParams;
 use crate::peridynamics::{BondForce, Kernel, PdParams, Quadrature, SurfaceCorrection};
 use std::path::Path;
 
@@ -108,7 +112,7 @@ impl Ctx<'_> {
         }
     }
 
-    fn word<'w, T: Copy>(&self, field: &str, got: &str, options: &[(&'w str, T)]) -> Result<T, ProblemError> {
+    fn word<T: Copy>(&self, field: &str, got: &str, options: &[(&str, T)]) -> Result<T, ProblemError> {
         match options.iter().find(|(k, _)| *k == got) {
             Some((_, v)) => Ok(*v),
             None => {
@@ -211,18 +215,10 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     Ok(Problem {
         name,
         source: path.to_path_buf(),
-        domain,
-        fill,
-        approximation,
-        material,
-        body_force,
-        conditions,
-        solver,
-        outputs,
-        exact,
-        model,
+        case: Case { domain, material, body_force, conditions, exact, outputs, dynamics },
+        navier: NavierParams { fill, approximation, solver },
         peridynamics,
-        dynamics,
+        model,
     })
 }
 

@@ -50,8 +50,8 @@ pub fn b(v: bool) -> Option<toml::Value> {
 }
 
 /// Solve a problem silently.
-pub fn solve(p: &Problem) -> mlsm::run::Solution {
-    mlsm::run::solve(p, &mlsm::run::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
+pub fn solve(p: &Problem) -> mlsm::navier::Solution {
+    mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
 }
 
 /// Errors `(e_inf_u, e_inf_sigma)` of a solved problem with an exact solution.

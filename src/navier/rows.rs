@@ -1,5 +1,5 @@
 //! Equation rows of the collocation system. Each method writes every coefficient of
-//! its equation(s) for one node; `DofMap` places them.
+//! its equation(s) for one node; [`DofMap`] places them.
 //!
 //! With shape functions `phi_L` over the support `I(i)` (seeds-digest, 002):
 //! * Navier (interior), `(lambda + mu) grad div u + mu lap u + f = 0`:
@@ -10,9 +10,9 @@
 //!   x: `sigma_xx n_x + sigma_xy n_y = t_x`, y: `sigma_xy n_x + sigma_yy n_y = t_y`;
 //! * displacement, `u_c = g_c`.
 
-use super::dofs::DofMap;
-use super::material::Lame;
 use crate::domain::neighbors::Supports;
+use crate::elasticity::dofs::DofMap;
+use crate::elasticity::material::Lame;
 use crate::mlsm::{Op, Shapes};
 
 /// Coefficients `(row, column, value)` written for one node.

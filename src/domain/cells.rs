@@ -1,8 +1,30 @@
-//! Delaunay triangulation of the solver nodes, for visualisation only.
+//! Delaunay cells of a node set: triangles inside the solid, so that ParaView has
+//! cells to draw, and the lumped nodal areas (a third of each triangle at each
+//! corner) that the explicit MLSM dynamics weighs its energies with. The collocation
+//! equations never use them.
 
+use super::Domain;
 use delaunator::Point;
 
-/// Delaunay triangulation (delaunator) of the nodes for viewing only; drops triangles for which
+/// The Delaunay triangles of `points` whose centroid lies in `domain` (see [`triangulate`]).
+pub fn cells_inside(domain: &Domain, points: &[[f64; 2]]) -> Vec<[usize; 3]> {
+    triangulate(points, |c| domain.contains(c))
+}
+
+/// Lumped nodal areas: a third of every triangle at each of its corners.
+pub fn nodal_areas(points: &[[f64; 2]], triangles: &[[usize; 3]]) -> Vec<f64> {
+    let mut a = vec![0.0; points.len()];
+    for t in triangles {
+        let (p, q, r) = (points[t[0]], points[t[1]], points[t[2]]);
+        let area = 0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1])).abs();
+        for &k in t {
+            a[k] += area / 3.0;
+        }
+    }
+    a
+}
+
+/// Delaunay triangulation (delaunator) of the nodes; drops triangles for which
 /// `keep(centroid)` is false (holes, concave parts) and degenerate ones (area < 1e-12 * bbox
 /// area).
 ///
@@ -14,7 +36,7 @@ use delaunator::Point;
 /// * The centroid test is exact only when every triangle lies entirely inside or entirely
 ///   outside the domain, e.g. when boundary nodes are dense enough along concave boundaries and
 ///   holes; a triangle straddling a concave boundary is kept or dropped as a whole by its
-///   centroid. This is a picture for ParaView, not a mesh the solver depends on.
+///   centroid. This is a picture for ParaView, not a mesh the collocation depends on.
 pub fn triangulate(points: &[[f64; 2]], keep: impl Fn([f64; 2]) -> bool) -> Vec<[usize; 3]> {
     // Map from delaunator's (finite-only) numbering back to the caller's.
     let index: Vec<usize> = (0..points.len()).filter(|&i| points[i][0].is_finite() && points[i][1].is_finite()).collect();

@@ -1,0 +1,162 @@
+//! `mlsm convergence`: the static Navier solve at K halvings of the node spacing
+//! against the scene's exact solution; errors, per-level and fitted observed orders
+//! (`convergence.csv`, `convergence.json`).
+
+use super::summary::Header;
+use super::terminal::Terminal;
+use super::{create_dir, AppError};
+use crate::navier;
+use crate::output;
+use crate::pipeline::{Stage, StageTimings, OUTPUT};
+use crate::post::observed_order;
+use crate::problem::Problem;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// The solves of all levels.
+const LEVELS: Stage = Stage::new("levels");
+
+/// One row of a convergence table.
+#[derive(Serialize)]
+struct Level {
+    nodes: usize,
+    h: f64,
+    spacing: f64,
+    e_inf_u: f64,
+    e_inf_sigma: Option<f64>,
+    rel_l2_u: f64,
+    order_e_inf_u: Option<f64>,
+    order_e_inf_sigma: Option<f64>,
+    seconds: f64,
+}
+
+#[derive(Serialize)]
+struct ConvergenceTable<'a> {
+    #[serde(flatten)]
+    header: Header<'a>,
+    levels: Vec<Level>,
+    fitted_order_e_inf_u: Option<f64>,
+    fitted_order_e_inf_sigma: Option<f64>,
+}
+
+/// Run the study of `p` over `levels` halvings and write its tables into `dir`.
+pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
+    if p.case.exact.is_none() {
+        return Err(AppError::Usage(format!("{}: convergence needs an [exact] solution in the scene", p.source.display())));
+    }
+    if p.case.dynamics.is_some() {
+        return Err(AppError::Usage(format!(
+            "{}: convergence studies the static solve; remove the [dynamics] table to study the static problem",
+            p.source.display()
+        )));
+    }
+    if levels > 8 {
+        return Err(AppError::Usage(format!("--levels {levels}: at most 8 halvings (each multiplies the node count by 4)")));
+    }
+    // Refuse an unaffordable finest level before solving the coarse ones.
+    p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?;
+    let t0 = Instant::now();
+    let mut timings = StageTimings::default();
+    let rows = solve_levels(p, levels, term, quiet)?;
+    timings.record(LEVELS, t0.elapsed().as_secs_f64());
+    let h: Vec<f64> = rows.iter().map(|r| r.h).collect();
+    let fitted_u = observed_order(&h, &rows.iter().map(|r| r.e_inf_u).collect::<Vec<_>>());
+    let es: Vec<f64> = rows.iter().map(|r| r.e_inf_sigma.unwrap_or(f64::NAN)).collect();
+    let fitted_sigma = if es.iter().all(|e| e.is_finite()) { observed_order(&h, &es) } else { None };
+    create_dir(dir)?;
+    let t_out = Instant::now();
+    write_csv(&rows, dir)?;
+    timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
+    let table = ConvergenceTable {
+        header: Header::new(p, &timings, t0),
+        levels: rows,
+        fitted_order_e_inf_u: fitted_u,
+        fitted_order_e_inf_sigma: fitted_sigma,
+    };
+    output::write_json(&dir.join("convergence.json"), &table)?;
+    if !quiet {
+        print_table(&table, dir);
+    }
+    Ok(())
+}
+
+/// Solve every level; orders between successive levels use the effective spacing
+/// `sqrt(area / N)`, so that scattered fills are compared fairly.
+fn solve_levels(p: &Problem, levels: usize, term: &Terminal, quiet: bool) -> Result<Vec<Level>, AppError> {
+    let area = p.case.domain.area_estimate(400);
+    let mut rows: Vec<Level> = Vec::new();
+    for k in 0..=levels {
+        let spacing = p.navier.fill.spacing / 2f64.powi(k as i32);
+        if !quiet {
+            eprintln!("level {k}: spacing {spacing:.4e}");
+        }
+        let t0 = Instant::now();
+        let q = p.with_spacing(spacing)?;
+        let sol = navier::solve(&q.case, &q.navier, term)?;
+        let e = sol.errors.expect("exact solution present");
+        let h = (area / sol.nodes.len() as f64).sqrt();
+        let order = |prev: Option<f64>, cur: Option<f64>| match (rows.last(), prev, cur) {
+            (Some(last), Some(a), Some(b)) if a > 0.0 && b > 0.0 => Some((a / b).ln() / (last.h / h).ln()),
+            _ => None,
+        };
+        let level = Level {
+            nodes: sol.nodes.len(),
+            h,
+            spacing,
+            e_inf_u: e.e_inf_u,
+            e_inf_sigma: e.e_inf_sigma,
+            rel_l2_u: e.rel_l2_u,
+            order_e_inf_u: order(rows.last().map(|r| r.e_inf_u), Some(e.e_inf_u)),
+            order_e_inf_sigma: order(rows.last().and_then(|r| r.e_inf_sigma), e.e_inf_sigma),
+            seconds: t0.elapsed().as_secs_f64(),
+        };
+        rows.push(level);
+    }
+    Ok(rows)
+}
+
+fn write_csv(rows: &[Level], dir: &Path) -> Result<(), AppError> {
+    let nan = |o: Option<f64>| o.unwrap_or(f64::NAN);
+    let csv: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|l| {
+            vec![
+                l.nodes as f64,
+                l.h,
+                l.spacing,
+                l.e_inf_u,
+                nan(l.e_inf_sigma),
+                l.rel_l2_u,
+                nan(l.order_e_inf_u),
+                nan(l.order_e_inf_sigma),
+                l.seconds,
+            ]
+        })
+        .collect();
+    output::write_csv(
+        &dir.join("convergence.csv"),
+        &["nodes", "h", "spacing", "e_inf_u", "e_inf_sigma", "rel_l2_u", "order_e_inf_u", "order_e_inf_sigma", "seconds"],
+        &csv,
+    )?;
+    Ok(())
+}
+
+fn print_table(table: &ConvergenceTable, dir: &Path) {
+    println!("{:>9} {:>11} {:>11} {:>11} {:>11} {:>7} {:>7}", "nodes", "h", "e_inf_u", "e_inf_sig", "rel_l2_u", "p_u", "p_sig");
+    let f = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2}"));
+    for l in &table.levels {
+        println!(
+            "{:>9} {:>11.3e} {:>11.3e} {:>11} {:>11.3e} {:>7} {:>7}",
+            l.nodes,
+            l.h,
+            l.e_inf_u,
+            l.e_inf_sigma.map_or("-".into(), |v| format!("{v:.3e}")),
+            l.rel_l2_u,
+            f(l.order_e_inf_u),
+            f(l.order_e_inf_sigma)
+        );
+    }
+    println!("fitted order: e_inf(u) {}  e_inf(sigma) {}", f(table.fitted_order_e_inf_u), f(table.fitted_order_e_inf_sigma));
+    println!("written: {}", dir.join("convergence.csv").display());
+}

@@ -1,0 +1,200 @@
+//! `mlsm run`: solve a scene with its model (or `--model`), write `solution.vtu` and
+//! `summary.json` (and the series of a time-dependent run), print a short result.
+
+use super::fields::{navier_fields, pd_fields, write_points_vtu};
+use super::series::Series;
+use super::summary::{DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
+use super::terminal::Terminal;
+use super::{create_dir, default_out, AppError};
+use crate::dynamics::driver::{DynamicReport, EnergyRow};
+use crate::model::{self, Outcome};
+use crate::output;
+use crate::peridynamics::PdParams;
+use crate::pipeline::{RunError, StageTimings, OUTPUT};
+use crate::problem::{Model, Problem};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What `run` was asked for, after the command line was read.
+pub(super) struct RunRequest {
+    pub scene: PathBuf,
+    pub out: Option<PathBuf>,
+    pub spacing: Option<f64>,
+    pub model: Option<Model>,
+    pub horizon: Option<f64>,
+}
+
+/// The scene with the command line's overrides applied and checked.
+fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
+    let mut p = Problem::from_file(&req.scene)?;
+    if let Some(m) = req.model {
+        p.model = m;
+    }
+    match p.model {
+        Model::Peridynamics => {
+            let Some(params) = p.peridynamics else {
+                return Err(AppError::Usage(format!("{}: the peridynamic model needs a [peridynamics] table", req.scene.display())));
+            };
+            if req.spacing.is_some() {
+                return Err(AppError::Usage("--spacing sets the MLSM node spacing; for peridynamics use --horizon (h = delta / m)".into()));
+            }
+            if let Some(d) = req.horizon {
+                p = p.with_peridynamics(PdParams { horizon: d, ..params })?;
+            }
+        }
+        Model::Navier => {
+            if req.horizon.is_some() {
+                return Err(AppError::Usage("--horizon belongs to the peridynamic model (--model peridynamics)".into()));
+            }
+            if let Some(h) = req.spacing {
+                p = p.with_spacing(h)?;
+            }
+        }
+    }
+    Ok(p)
+}
+
+/// The first terminal line of a run.
+fn announce(p: &Problem) -> String {
+    match (p.model, &p.case.dynamics, &p.peridynamics) {
+        (Model::Navier, None, _) => format!("{}: solving", p.name),
+        (Model::Navier, Some(d), _) => format!("{}: MLSM elastodynamics ({}, t_end = {:.3e} s)", p.name, d.integrator.name(), d.end_time),
+        (Model::Peridynamics, None, Some(pd)) => format!("{}: solving (peridynamics, {})", p.name, pd.quadrature.name()),
+        (Model::Peridynamics, Some(d), Some(pd)) => {
+            format!("{}: peridynamic dynamics ({}, {}, t_end = {:.3e} s)", p.name, pd.quadrature.name(), d.integrator.name(), d.end_time)
+        }
+        (Model::Peridynamics, _, None) => unreachable!("checked in prepare"),
+    }
+}
+
+/// Solve, write and report one scene.
+pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), AppError> {
+    let p = prepare(&req)?;
+    let dir = req.out.clone().unwrap_or_else(|| default_out(&p));
+    if !quiet {
+        eprintln!("{}", announce(&p));
+    }
+    let t0 = Instant::now();
+    let mut series = Series::new(&dir, &p.case.domain);
+    let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot))?;
+    let t_out = Instant::now();
+    match outcome {
+        Outcome::NavierStatic(mut sol) => {
+            create_dir(&dir)?;
+            write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, &navier_fields(&p.case, &sol))?;
+            sol.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
+            output::write_json(&dir.join("summary.json"), &NavierSummary::new(&p, &sol, t0))?;
+            term.line(OUTPUT, t_out.elapsed().as_secs_f64(), &dir.display().to_string());
+            if !quiet {
+                print_navier(&sol);
+            }
+        }
+        Outcome::PdStatic(mut sol) => {
+            create_dir(&dir)?;
+            write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions[..sol.nodes.free], &p.case.domain, &pd_fields(&p.case, &sol))?;
+            sol.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
+            output::write_json(&dir.join("summary.json"), &PdSummary::new(&p, &sol, t0))?;
+            term.line(OUTPUT, t_out.elapsed().as_secs_f64(), &dir.display().to_string());
+            if !quiet {
+                print_pd(&sol);
+            }
+        }
+        Outcome::NavierDynamic(mut sim) => {
+            series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
+            sim.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
+            let part = NavierDynamicPart {
+                model: "navier",
+                ghost_nodes: sim.ghost_nodes,
+                dynamic_unknowns: sim.unknowns.0,
+                algebraic_unknowns: sim.unknowns.1,
+                spacing: p.navier.fill.spacing,
+                approximation: p.navier.approximation,
+            };
+            let dynamic = Dynamic { nodes: sim.positions.len(), report: &sim.report, energies: &sim.energies, timings: &sim.timings };
+            write_dynamic(&p, &dir, dynamic, part, t0, quiet)?;
+        }
+        Outcome::PdDynamic(mut sim) => {
+            let nodes = &sim.discretisation.nodes;
+            series.finish(&sim.energies, &nodes.positions[..nodes.free], &sim.u, &sim.v)?;
+            sim.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
+            let part = PdDynamicPart {
+                model: "peridynamics",
+                constrained_nodes: nodes.constrained(),
+                bonds: sim.discretisation.families.bonds(),
+                spacing: nodes.spacing,
+                peridynamics: p.peridynamics.expect("peridynamic run"),
+                micromodulus: sim.discretisation.micromodulus,
+                bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
+            };
+            if !quiet {
+                println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
+            }
+            let dynamic = Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings };
+            write_dynamic(&p, &dir, dynamic, part, t0, quiet)?;
+        }
+    }
+    Ok(())
+}
+
+/// What every time-dependent run reports.
+struct Dynamic<'a> {
+    nodes: usize,
+    report: &'a DynamicReport,
+    energies: &'a [EnergyRow],
+    timings: &'a StageTimings,
+}
+
+/// `summary.json` of a time-dependent run, and its terminal lines.
+fn write_dynamic<M: Serialize>(p: &Problem, dir: &Path, d: Dynamic, model: M, t0: Instant, quiet: bool) -> Result<(), AppError> {
+    let summary = DynamicSummary::new(p, d.nodes, d.report, d.energies, d.timings, model, t0);
+    output::write_json(&dir.join("summary.json"), &summary)?;
+    if !quiet {
+        let (e0, e1) = (d.energies[0], d.energies.last().expect("recorded"));
+        let total = |e: &EnergyRow| e[1] + e[2] + e[3];
+        let r = d.report;
+        println!("nodes {}  steps {}  dt {:.3e} s (stable {:.3e} s)", d.nodes, r.steps, r.time_step, r.stable_time_step);
+        println!(
+            "energy at t = 0: kinetic {:.6e}; at t = {:.3e}: kinetic {:.6e}, elastic {:.6e}, total drift {:.2e}",
+            e0[1],
+            e1[0],
+            e1[1],
+            e1[2],
+            (total(e1) - total(&e0)) / total(&e0).abs().max(1e-300)
+        );
+        let per = r.seconds / r.steps.max(1) as f64 / d.nodes.max(1) as f64;
+        println!("{per:.2e} s per step per node; written: {}", dir.display());
+    }
+    Ok(())
+}
+
+fn print_navier(sol: &crate::navier::Solution) {
+    println!("nodes {}  unknowns {}  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.nonzeros);
+    println!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
+    if let Some(e) = &sol.errors {
+        print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", e.e_inf_u, e.rel_l2_u);
+        if let Some(s) = e.e_inf_sigma {
+            print!("  e_inf(sigma) = {s:.4e}");
+        }
+        println!();
+    }
+}
+
+fn print_pd(sol: &crate::peridynamics::PdSolution) {
+    println!(
+        "nodes {} (+{} constrained)  bonds {}  unknowns {}  nonzeros {}",
+        sol.nodes.free,
+        sol.nodes.constrained(),
+        sol.bonds,
+        sol.unknowns,
+        sol.nonzeros
+    );
+    println!("solver {}: relative residual {:.2e}", sol.solver.method, sol.solver.relative_residual);
+    if let Some((w, i)) = &sol.errors {
+        print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", w.e_inf_u, w.rel_l2_u);
+        if let Some(i) = i {
+            print!("  interior: e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", i.e_inf_u, i.rel_l2_u);
+        }
+        println!();
+    }
+}

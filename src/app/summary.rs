@@ -1,0 +1,240 @@
+//! `summary.json` (and the headers of `compare.json` and `convergence.json`): one
+//! [`Header`] shared by every command (version, scene, seed, threads, peak memory,
+//! timings keyed by stage), followed by what each kind of run reports.
+
+use crate::case::Outputs;
+use crate::dynamics::driver::{DynamicReport, EnergyRow};
+use crate::dynamics::DynamicsParams;
+use crate::elasticity::material::{Material, PlaneModel};
+use crate::linalg::{SolveReport, SolverKind};
+use crate::mlsm::Approximation;
+use crate::navier;
+use crate::output;
+use crate::peridynamics::solve::WeightsSummary;
+use crate::peridynamics::{Micromodulus, PdParams, PdSolution};
+use crate::pipeline::StageTimings;
+use crate::post::ErrorNorms;
+use crate::problem::Problem;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// What every summary starts with.
+#[derive(Serialize)]
+pub(super) struct Header<'a> {
+    scene: &'a str,
+    source: String,
+    version: &'static str,
+    seed: u64,
+    threads: usize,
+    peak_memory_bytes: Option<u64>,
+    timings_s: Timings<'a>,
+}
+
+/// Seconds per stage and in total.
+#[derive(Serialize)]
+struct Timings<'a> {
+    #[serde(flatten)]
+    stages: &'a StageTimings,
+    total: f64,
+}
+
+impl<'a> Header<'a> {
+    /// The header of a command on `p` that started at `t0`, with its stage timings.
+    pub(super) fn new(p: &'a Problem, timings: &'a StageTimings, t0: Instant) -> Self {
+        Header {
+            scene: &p.name,
+            source: p.source.display().to_string(),
+            version: env!("CARGO_PKG_VERSION"),
+            seed: p.navier.fill.seed,
+            threads: rayon::current_num_threads(),
+            peak_memory_bytes: output::peak_memory_bytes(),
+            timings_s: Timings { stages: timings, total: t0.elapsed().as_secs_f64() },
+        }
+    }
+}
+
+/// Elastic constants as given and as they enter the planar equations.
+#[derive(Serialize)]
+pub(super) struct MaterialSummary {
+    young: f64,
+    poisson: f64,
+    plane: PlaneModel,
+    lambda: f64,
+    mu: f64,
+}
+
+impl MaterialSummary {
+    pub(super) fn of(m: &Material) -> Self {
+        let lame = m.lame();
+        MaterialSummary { young: m.elastic.young, poisson: m.elastic.poisson, plane: m.plane, lambda: lame.lambda, mu: lame.mu }
+    }
+}
+
+#[derive(Serialize)]
+struct SolverSummary<'a> {
+    kind: &'static str,
+    #[serde(flatten)]
+    report: &'a SolveReport,
+}
+
+/// `summary.json` of a static Navier run.
+#[derive(Serialize)]
+pub(super) struct NavierSummary<'a> {
+    #[serde(flatten)]
+    header: Header<'a>,
+    nodes: usize,
+    boundary_nodes: usize,
+    ghost_nodes: usize,
+    unknowns: usize,
+    nonzeros: usize,
+    spacing: f64,
+    fill: crate::domain::FillKind,
+    relax_iterations: usize,
+    approximation: Approximation,
+    material: MaterialSummary,
+    operators_computed: BTreeMap<String, usize>,
+    solver: SolverSummary<'a>,
+    errors: Option<ErrorNorms>,
+    outputs: Outputs,
+}
+
+impl<'a> NavierSummary<'a> {
+    pub(super) fn new(p: &'a Problem, sol: &'a navier::Solution, t0: Instant) -> Self {
+        NavierSummary {
+            header: Header::new(p, &sol.timings, t0),
+            nodes: sol.nodes.len(),
+            boundary_nodes: sol.nodes.boundary.len(),
+            ghost_nodes: sol.ghost_nodes,
+            unknowns: sol.unknowns,
+            nonzeros: sol.nonzeros,
+            spacing: p.navier.fill.spacing,
+            fill: p.navier.fill.kind,
+            relax_iterations: p.navier.fill.relax_iterations,
+            approximation: p.navier.approximation,
+            material: MaterialSummary::of(&p.case.material),
+            operators_computed: sol.operators_computed.iter().cloned().collect(),
+            solver: SolverSummary {
+                kind: match p.navier.solver.kind {
+                    SolverKind::Lu => "lu",
+                    SolverKind::Bicgstab { .. } => "bicgstab",
+                },
+                report: &sol.solver,
+            },
+            errors: sol.errors,
+            outputs: p.case.outputs,
+        }
+    }
+}
+
+/// `summary.json` of a static peridynamic run.
+#[derive(Serialize)]
+pub(super) struct PdSummary<'a> {
+    #[serde(flatten)]
+    header: Header<'a>,
+    model: &'static str,
+    nodes: usize,
+    constrained_nodes: usize,
+    loaded_layer_nodes: usize,
+    unknowns: usize,
+    nonzeros: usize,
+    bonds: usize,
+    bonds_per_node: f64,
+    peridynamics: PdParams,
+    spacing: f64,
+    micromodulus: Micromodulus,
+    weights: WeightsSummary,
+    material: MaterialSummary,
+    solver: &'a SolveReport,
+    errors: Option<ErrorNorms>,
+    errors_interior: Option<ErrorNorms>,
+    outputs: Outputs,
+}
+
+impl<'a> PdSummary<'a> {
+    pub(super) fn new(p: &'a Problem, sol: &'a PdSolution, t0: Instant) -> Self {
+        PdSummary {
+            header: Header::new(p, &sol.timings, t0),
+            model: "peridynamics",
+            nodes: sol.nodes.free,
+            constrained_nodes: sol.nodes.constrained(),
+            loaded_layer_nodes: sol.layer_nodes,
+            unknowns: sol.unknowns,
+            nonzeros: sol.nonzeros,
+            bonds: sol.bonds,
+            bonds_per_node: sol.bonds as f64 / sol.nodes.free.max(1) as f64,
+            peridynamics: sol.params,
+            spacing: sol.nodes.spacing,
+            micromodulus: sol.micromodulus,
+            weights: sol.weights,
+            material: MaterialSummary::of(&p.case.material),
+            solver: &sol.solver,
+            errors: sol.errors.map(|e| e.0),
+            errors_interior: sol.errors.and_then(|e| e.1),
+            outputs: p.case.outputs,
+        }
+    }
+}
+
+/// What the peridynamic model adds to a dynamic summary.
+#[derive(Serialize)]
+pub(super) struct PdDynamicPart {
+    pub(super) model: &'static str,
+    pub(super) constrained_nodes: usize,
+    pub(super) bonds: usize,
+    pub(super) spacing: f64,
+    pub(super) peridynamics: PdParams,
+    pub(super) micromodulus: Micromodulus,
+    pub(super) bond_updates_per_second_per_thread: f64,
+}
+
+/// What the Navier model adds to a dynamic summary.
+#[derive(Serialize)]
+pub(super) struct NavierDynamicPart {
+    pub(super) model: &'static str,
+    pub(super) ghost_nodes: usize,
+    pub(super) dynamic_unknowns: usize,
+    pub(super) algebraic_unknowns: usize,
+    pub(super) spacing: f64,
+    pub(super) approximation: Approximation,
+}
+
+/// `summary.json` of a time-dependent run.
+#[derive(Serialize)]
+pub(super) struct DynamicSummary<'a, M: Serialize> {
+    #[serde(flatten)]
+    header: Header<'a>,
+    nodes: usize,
+    dynamics: DynamicsParams,
+    integration: &'a DynamicReport,
+    seconds_per_step_per_node: f64,
+    energy_first: EnergyRow,
+    energy_last: EnergyRow,
+    material: MaterialSummary,
+    #[serde(flatten)]
+    model: M,
+}
+
+impl<'a, M: Serialize> DynamicSummary<'a, M> {
+    pub(super) fn new(
+        p: &'a Problem,
+        nodes: usize,
+        report: &'a DynamicReport,
+        energies: &[EnergyRow],
+        timings: &'a StageTimings,
+        model: M,
+        t0: Instant,
+    ) -> Self {
+        DynamicSummary {
+            header: Header::new(p, timings, t0),
+            nodes,
+            dynamics: p.case.dynamics.expect("dynamic run"),
+            integration: report,
+            seconds_per_step_per_node: report.seconds / report.steps.max(1) as f64 / nodes.max(1) as f64,
+            energy_first: energies[0],
+            energy_last: *energies.last().expect("initial energy recorded"),
+            material: MaterialSummary::of(&p.case.material),
+            model,
+        }
+    }
+}

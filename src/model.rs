@@ -1,0 +1,109 @@
+//! Model dispatch: the one place that decides which pipeline runs a problem, static
+//! or time-dependent (the scene's `[dynamics]` table) × Navier or peridynamics (the
+//! scene's `model`, or `--model`). `mlsm run`, `mlsm compare` and the comparison's
+//! local reference all go through [`solve`].
+
+use crate::domain::Point;
+use crate::dynamics::driver::Snapshot;
+use crate::navier;
+use crate::peridynamics;
+use crate::pipeline::{Progress, RunError, StageTimings};
+use crate::problem::{Model, Problem};
+
+/// What a run of one problem produced.
+#[allow(clippy::large_enum_variant, reason = "one outcome per run, moved once")]
+pub enum Outcome {
+    /// A static Navier (MLSM) solve.
+    NavierStatic(navier::Solution),
+    /// MLSM elastodynamics to `end_time`.
+    NavierDynamic(navier::Simulation),
+    /// A static peridynamic solve.
+    PdStatic(peridynamics::PdSolution),
+    /// Peridynamic dynamics to `end_time`.
+    PdDynamic(peridynamics::Simulation),
+}
+
+/// Run `problem` with its model: static, or integrated in time when it has a
+/// `[dynamics]` table, then `snapshot` is called at the snapshot steps.
+pub fn solve(
+    problem: &Problem,
+    progress: &dyn Progress,
+    snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
+) -> Result<Outcome, RunError> {
+    let case = &problem.case;
+    match problem.model {
+        Model::Navier => match &case.dynamics {
+            None => navier::solve(case, &problem.navier, progress).map(Outcome::NavierStatic),
+            Some(d) => navier::simulate(case, &problem.navier, d, progress, snapshot).map(Outcome::NavierDynamic),
+        },
+        Model::Peridynamics => {
+            let params = problem.peridynamics.as_ref().expect("validated: the peridynamic model has a [peridynamics] table");
+            match &case.dynamics {
+                None => peridynamics::solve(case, params, progress).map(Outcome::PdStatic),
+                Some(d) => peridynamics::simulate(case, params, d, progress, snapshot).map(Outcome::PdDynamic),
+            }
+        }
+    }
+}
+
+impl Outcome {
+    /// The nodes the solution lives on (peridynamics: the free nodes).
+    pub fn positions(&self) -> &[Point] {
+        match self {
+            Outcome::NavierStatic(s) => &s.nodes.positions,
+            Outcome::NavierDynamic(s) => &s.positions,
+            Outcome::PdStatic(s) => &s.nodes.positions[..s.nodes.free],
+            Outcome::PdDynamic(s) => &s.discretisation.nodes.positions[..s.discretisation.nodes.free],
+        }
+    }
+
+    /// Displacement at [`Outcome::positions`] (static, or at `end_time`).
+    pub fn displacement(&self) -> &[[f64; 2]] {
+        match self {
+            Outcome::NavierStatic(s) => &s.displacement,
+            Outcome::NavierDynamic(s) => &s.u,
+            Outcome::PdStatic(s) => &s.displacement[..s.nodes.free],
+            Outcome::PdDynamic(s) => &s.u,
+        }
+    }
+
+    /// Solver iterations (static runs) or time steps (dynamic runs).
+    pub fn iterations(&self) -> usize {
+        match self {
+            Outcome::NavierStatic(s) => s.solver.iterations,
+            Outcome::PdStatic(s) => s.solver.iterations,
+            Outcome::NavierDynamic(s) => s.report.steps,
+            Outcome::PdDynamic(s) => s.report.steps,
+        }
+    }
+
+    /// Seconds per stage.
+    pub fn timings(&self) -> &StageTimings {
+        match self {
+            Outcome::NavierStatic(s) => &s.timings,
+            Outcome::NavierDynamic(s) => &s.timings,
+            Outcome::PdStatic(s) => &s.timings,
+            Outcome::PdDynamic(s) => &s.timings,
+        }
+    }
+
+    /// One line saying what was computed, for tables.
+    pub fn describe(&self, problem: &Problem) -> String {
+        match self {
+            Outcome::NavierStatic(s) => format!("MLSM solution ({} nodes, spacing {:.3e})", s.nodes.len(), s.nodes.spacing),
+            Outcome::NavierDynamic(s) => {
+                let t = s.energies.last().map_or(0.0, |e| e[0]);
+                format!(
+                    "MLSM elastodynamics at t = {t:.3e} s ({} nodes, spacing {:.3e}, {} steps)",
+                    s.positions.len(),
+                    problem.navier.fill.spacing,
+                    s.report.steps
+                )
+            }
+            Outcome::PdStatic(s) => format!("peridynamics ({} free nodes, horizon {:.3e})", s.nodes.free, s.params.horizon),
+            Outcome::PdDynamic(s) => {
+                format!("peridynamic dynamics ({} free nodes, {} steps)", s.discretisation.nodes.free, s.report.steps)
+            }
+        }
+    }
+}

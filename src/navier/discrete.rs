@@ -1,0 +1,159 @@
+//! The MLSM discretisation of a case, ready for assembly: nodes, the boundary
+//! equations of each boundary node, ghost nodes, supports, and the shape functions of
+//! exactly the operators each node needs:
+//!
+//! | node | rows it carries | operators |
+//! |---|---|---|
+//! | interior | Navier | `d2` |
+//! | boundary, all-traction, with a ghost | Navier + tractions (in the ghost's rows) | `d1`, `d2` |
+//! | boundary with a traction component | tractions, displacements | `d1` |
+//! | boundary, all-displacement | displacements | none |
+//!
+//! plus `d1` everywhere when post-processing needs the gradient. Ghost nodes are
+//! nodes `n..` of the supports and shapes; they carry no operators of their own.
+
+use super::equations::{resolve, ComponentEquation};
+use super::system::System;
+use super::{stage, NavierParams};
+use crate::case::Case;
+use crate::domain::{self, ghost::place_ghosts, neighbors::Supports, NodeSet, Point};
+use crate::elasticity::dofs::DofMap;
+use crate::elasticity::stress::Gradient;
+use crate::exact::ExactSolution;
+use crate::mlsm::{compute_shapes, Op, OpSet, Shapes};
+use crate::pipeline::{RunError, StageTimer};
+use rayon::prelude::*;
+
+/// Everything the rows of the Navier model are written from (module docs).
+pub struct Discretisation {
+    /// Nodes of the solid (ghosts are not in it).
+    pub nodes: NodeSet,
+    /// Equations of each boundary node.
+    pub boundary_equations: Vec<[ComponentEquation; 2]>,
+    /// Ghost node of each node, if it has one (ghosts are nodes `n..`).
+    pub ghost: Vec<Option<usize>>,
+    /// Supports over nodes and ghosts.
+    pub supports: Supports,
+    /// Shape functions over nodes and ghosts.
+    pub shapes: Shapes,
+    /// Operators computed, with the number of nodes each was computed at.
+    pub operators_computed: Vec<(String, usize)>,
+    /// Unknown layout over nodes and ghosts.
+    pub dofs: DofMap,
+}
+
+impl Discretisation {
+    /// Nodes, ghosts, supports and shapes of `case` with `params`, each stage timed
+    /// by `timer`; `exact` gives the values of `"exact"` boundary conditions.
+    pub fn new(case: &Case, params: &NavierParams, exact: Option<&dyn ExactSolution>, timer: &mut StageTimer) -> Result<Self, RunError> {
+        let n_support = params.approximation.support;
+        let nodes = timer.run(stage::NODES, || {
+            let nodes = domain::generate(&case.domain, &params.fill);
+            if nodes.len() < n_support {
+                return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
+            }
+            let note = format!("{} nodes ({} on the boundary)", nodes.len(), nodes.boundary.len());
+            Ok((nodes, note))
+        })?;
+        let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
+        // Placing ghosts is part of building the point cloud, so it is timed with the supports.
+        let (positions, ghost, supports) = timer.run(stage::SUPPORTS, || {
+            let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
+            let supports = Supports::nearest(&positions, n_support);
+            let note = format!("{n_support} nearest, {} ghost nodes", positions.len() - nodes.len());
+            Ok(((positions, ghost, supports), note))
+        })?;
+        let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len());
+        let shapes = timer.run(stage::SHAPES, || {
+            let s = compute_shapes(&positions, &supports, &params.approximation, &needs)?;
+            let note = format!("{} shape functions", s.count());
+            Ok((s, note))
+        })?;
+        let n = nodes.len();
+        let operators_computed = Op::ALL
+            .iter()
+            .filter(|op| shapes.operators().contains(**op))
+            .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
+            .collect();
+        let dofs = DofMap::displacement_only(positions.len());
+        Ok(Discretisation { nodes, boundary_equations, ghost, supports, shapes, operators_computed, dofs })
+    }
+
+    /// Number of ghost nodes.
+    pub fn ghost_count(&self) -> usize {
+        self.dofs.nodes() - self.nodes.len()
+    }
+
+    /// Whether node `i` carries the Navier equation (interior, or boundary with a ghost).
+    pub fn has_navier_row(&self, i: usize) -> bool {
+        i < self.nodes.len() && (!self.nodes.is_boundary(i) || self.ghost[i].is_some())
+    }
+
+    /// The rows of every equation (see [`System::assemble`]).
+    pub fn system<'a>(&'a self, case: &'a Case, exact: Option<&'a dyn ExactSolution>) -> System<'a> {
+        System { case, disc: self, exact }
+    }
+
+    /// Displacement gradient `[[u_x, u_y], [v_x, v_y]]` at every node (ghosts
+    /// excluded) from the global vector `x`; needs first-derivative shapes everywhere.
+    pub fn gradients(&self, x: &[f64]) -> Vec<Gradient> {
+        (0..self.nodes.len())
+            .into_par_iter()
+            .map(|i| {
+                let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
+                let mut g = [[0.0; 2]; 2];
+                for (k, &j) in self.supports.of(i).iter().enumerate() {
+                    let u = self.dofs.displacement(x, j as usize);
+                    for c in 0..2 {
+                        g[c][0] += dx[k] * u[c];
+                        g[c][1] += dy[k] * u[c];
+                    }
+                }
+                g
+            })
+            .collect()
+    }
+}
+
+/// Positions of nodes and ghosts, and the ghost of each node.
+///
+/// Ghosts only where both equations are tractions: on mixed (symmetry) nodes an extra
+/// Navier row made scattered-node runs unstable (measured on kirsch.toml: e_inf(sigma)
+/// 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
+fn ghosts(case: &Case, params: &NavierParams, nodes: &NodeSet, equations: &[[ComponentEquation; 2]]) -> (Vec<Point>, Vec<Option<usize>>) {
+    let candidates: Vec<usize> = if params.approximation.ghost_nodes {
+        (0..nodes.boundary.len()).filter(|&i| equations[i].iter().all(ComponentEquation::is_traction)).collect()
+    } else {
+        Vec::new()
+    };
+    let placed = place_ghosts(&case.domain, nodes, &candidates);
+    let n = nodes.len();
+    let mut positions = nodes.positions.clone();
+    positions.extend(placed.iter().map(|g| g.1));
+    let mut ghost = vec![None; n];
+    for (k, g) in placed.iter().enumerate() {
+        ghost[g.0] = Some(n + k);
+    }
+    (positions, ghost)
+}
+
+/// The operators each of the `total` nodes and ghosts needs (module docs).
+fn shape_needs(case: &Case, nodes: &NodeSet, equations: &[[ComponentEquation; 2]], ghost: &[Option<usize>], total: usize) -> Vec<OpSet> {
+    let gradient_needed = case.outputs.needs_gradient();
+    let has_traction = |i: usize| nodes.is_boundary(i) && equations[i].iter().any(ComponentEquation::is_traction);
+    (0..total)
+        .map(|i| {
+            if i >= nodes.len() {
+                return OpSet::EMPTY;
+            }
+            let mut ops = if gradient_needed { OpSet::D1 } else { OpSet::EMPTY };
+            if has_traction(i) {
+                ops |= OpSet::D1;
+            }
+            if !nodes.is_boundary(i) || ghost[i].is_some() {
+                ops |= OpSet::D2;
+            }
+            ops
+        })
+        .collect()
+}

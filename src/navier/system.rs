@@ -1,0 +1,77 @@
+//! Assembly of the collocation system `A u = r`: one row per unknown, written node by
+//! node in parallel by the [`RowWriter`].
+//!
+//! Interior nodes carry the Navier rows; boundary nodes their boundary rows and,
+//! when they have a ghost, also the Navier rows: then the node's own rows hold the
+//! Navier equation and the ghost's rows the tractions, so that both have a large
+//! diagonal entry (the centre weight of a first derivative on a symmetric stencil is
+//! ~0), which incomplete factorisations without pivoting need.
+
+use super::discrete::Discretisation;
+use super::equations::ComponentEquation;
+use super::rows::{Entries, RowWriter};
+use crate::case::Case;
+use crate::exact::{self, ExactSolution};
+use crate::linalg::Triplets;
+use crate::pipeline::RunError;
+use rayon::prelude::*;
+
+/// Everything the equation rows of one discretisation need.
+pub struct System<'a> {
+    /// The case (material, body force).
+    pub case: &'a Case,
+    /// Nodes, equations, ghosts, supports, shapes, unknowns.
+    pub disc: &'a Discretisation,
+    /// Exact solution for `"exact"` values.
+    pub exact: Option<&'a dyn ExactSolution>,
+}
+
+impl System<'_> {
+    /// Rows of node `i`: coefficients and `(row, right-hand side)` pairs (module docs).
+    fn node_rows(&self, writer: &RowWriter, i: usize) -> (Entries, Vec<(usize, f64)>) {
+        let (disc, dofs) = (self.disc, self.disc.dofs);
+        let mut e = Entries::with_capacity(8 * disc.supports.size());
+        let mut rhs = Vec::with_capacity(4);
+        if disc.nodes.is_boundary(i) {
+            let bc_rows = disc.ghost[i].unwrap_or(i);
+            for (c, eq) in disc.boundary_equations[i].iter().enumerate() {
+                let r = match *eq {
+                    ComponentEquation::Displacement { value } => writer.displacement(i, c, value, &mut e),
+                    ComponentEquation::Traction { normal, value } => writer.traction(i, bc_rows, c, normal, value, &mut e),
+                };
+                rhs.push((dofs.dof(bc_rows, c), r));
+            }
+        }
+        if disc.has_navier_row(i) {
+            let f = exact::value(self.case.body_force, self.exact, |e| e.body_force(disc.nodes.positions[i]));
+            let r = writer.navier(i, i, f, &mut e);
+            rhs.extend([(dofs.dof(i, 0), r[0]), (dofs.dof(i, 1), r[1])]);
+        }
+        (e, rhs)
+    }
+
+    /// Rows of every node, in parallel; returns the triplets and the right-hand side,
+    /// or the first node whose equations hold a non-finite number.
+    pub fn assemble(&self) -> Result<(Triplets, Vec<f64>), RunError> {
+        let (disc, dofs) = (self.disc, self.disc.dofs);
+        let writer = RowWriter { dofs, lame: self.case.material.lame(), supports: &disc.supports, shapes: &disc.shapes };
+        let per_node: Vec<(Entries, Vec<(usize, f64)>)> =
+            (0..disc.nodes.len()).into_par_iter().map(|i| self.node_rows(&writer, i)).collect();
+        let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();
+        let mut triplets = Triplets::with_capacity(dofs.len(), total);
+        let mut rhs = vec![0.0; dofs.len()];
+        for (i, (entries, r)) in per_node.into_iter().enumerate() {
+            if entries.iter().any(|e| !e.2.is_finite()) || r.iter().any(|v| !v.1.is_finite()) {
+                let p = disc.nodes.positions[i];
+                return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
+            }
+            for (row, col, v) in entries {
+                triplets.push(row, col, v);
+            }
+            for (row, v) in r {
+                rhs[row] = v;
+            }
+        }
+        Ok((triplets, rhs))
+    }
+}

@@ -1,0 +1,197 @@
+//! The plumbing every run shares, whatever the model: named stages, their timing, a
+//! progress observer, and the errors a run can end with after validation.
+//!
+//! A model names its own stages (`navier::stage`, `peridynamics::stage`,
+//! `dynamics::INTEGRATE`); a [`StageTimer`] runs each one, reports its start and end
+//! to a [`Progress`] observer and records its wall-clock seconds in
+//! [`StageTimings`], which `summary.json` writes as `timings_s` keyed by stage name.
+
+use crate::linalg::SolveError;
+use crate::mlsm::ShapeError;
+use crate::output::OutputError;
+use serde::ser::SerializeMap;
+use serde::Serialize;
+use std::time::Instant;
+
+/// A named stage of a run (`nodes`, `shapes`, `families`, `solve`, ...).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Stage(&'static str);
+
+impl Stage {
+    /// A stage called `name` in the terminal and in `summary.json`.
+    pub const fn new(name: &'static str) -> Self {
+        Stage(name)
+    }
+
+    /// Name as printed and as used in `summary.json`.
+    pub fn name(self) -> &'static str {
+        self.0
+    }
+}
+
+/// Writing the results (timed by the command that writes them).
+pub const OUTPUT: Stage = Stage::new("output");
+
+/// Observer of stage starts and ends (the CLI shows progress with it).
+pub trait Progress: Sync {
+    /// A stage begins.
+    fn start(&self, stage: Stage);
+    /// A stage ended after `seconds`, with a short note (sizes).
+    fn finish(&self, stage: Stage, seconds: f64, note: &str);
+    /// `done` of `total` steps of the current stage are complete (stepping stages only).
+    fn advance(&self, _done: u64, _total: u64) {}
+}
+
+/// A progress observer that does nothing.
+pub struct Silent;
+
+impl Progress for Silent {
+    fn start(&self, _: Stage) {}
+    fn finish(&self, _: Stage, _: f64, _: &str) {}
+}
+
+/// Wall-clock seconds per stage, in the order the stages ran; serialised as a map
+/// `{stage name: seconds}`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StageTimings(Vec<(Stage, f64)>);
+
+impl StageTimings {
+    /// Add `seconds` to `stage` (a stage that runs twice is summed).
+    pub fn record(&mut self, stage: Stage, seconds: f64) {
+        match self.0.iter_mut().find(|(s, _)| *s == stage) {
+            Some((_, t)) => *t += seconds,
+            None => self.0.push((stage, seconds)),
+        }
+    }
+
+    /// Seconds spent in `stage` (0 if it did not run).
+    pub fn get(&self, stage: Stage) -> f64 {
+        self.0.iter().find(|(s, _)| *s == stage).map_or(0.0, |(_, t)| *t)
+    }
+
+    /// Stages in the order they ran, with their seconds.
+    pub fn iter(&self) -> impl Iterator<Item = (Stage, f64)> + '_ {
+        self.0.iter().copied()
+    }
+}
+
+impl Serialize for StageTimings {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (stage, t) in &self.0 {
+            map.serialize_entry(stage.name(), t)?;
+        }
+        map.end()
+    }
+}
+
+/// Runs the stages of one run: reports each to the observer and records its time.
+pub struct StageTimer<'a> {
+    progress: &'a dyn Progress,
+    timings: StageTimings,
+}
+
+impl<'a> StageTimer<'a> {
+    /// A timer reporting to `progress`, with nothing recorded yet.
+    pub fn new(progress: &'a dyn Progress) -> Self {
+        StageTimer { progress, timings: StageTimings::default() }
+    }
+
+    /// The observer the stages report to (for stepping stages that advance it).
+    pub fn progress(&self) -> &'a dyn Progress {
+        self.progress
+    }
+
+    /// Run `work` as `stage`; it returns its value and a short note for the terminal.
+    pub fn run<T>(&mut self, stage: Stage, work: impl FnOnce() -> Result<(T, String), RunError>) -> Result<T, RunError> {
+        self.progress.start(stage);
+        let t0 = Instant::now();
+        let (value, note) = work()?;
+        let seconds = t0.elapsed().as_secs_f64();
+        self.timings.record(stage, seconds);
+        self.progress.finish(stage, seconds, &note);
+        Ok(value)
+    }
+
+    /// Record `seconds` of `stage` that was timed elsewhere.
+    pub fn record(&mut self, stage: Stage, seconds: f64) {
+        self.timings.record(stage, seconds);
+    }
+
+    /// The timings recorded so far.
+    pub fn timings(&self) -> &StageTimings {
+        &self.timings
+    }
+
+    /// The recorded timings.
+    pub fn finish(self) -> StageTimings {
+        self.timings
+    }
+}
+
+/// Why a run failed after validation.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// A fixed time step above the stability limit of the scheme.
+    #[error("time step {given:.3e} s exceeds the stable step {limit:.3e} s of the {integrator} scheme (central-difference bound sqrt(2 rho / max_i sum_j |c_ij| |xi|^2)); use a smaller dynamics.time_step or leave it out")]
+    UnstableTimeStep { given: f64, limit: f64, integrator: &'static str },
+    /// The solution became non-finite during time integration.
+    #[error("the solution became non-finite at step {step} (t = {t:.4e} s): the time integration diverged")]
+    Diverged { step: usize, t: f64 },
+    /// Too few nodes for the support size.
+    #[error("the node set has {nodes} nodes, fewer than the support size {support}; use a smaller nodes.spacing")]
+    TooFewNodes { nodes: usize, support: usize },
+    /// A local least-squares problem is rank deficient.
+    #[error(transparent)]
+    Shape(#[from] ShapeError),
+    /// The linear solver failed.
+    #[error("linear solve failed: {0}")]
+    Solve(#[from] SolveError),
+    /// A non-finite coefficient in a row.
+    #[error("non-finite coefficient in the equations of node {node} at ({x:.6e}, {y:.6e})")]
+    NotFinite { node: usize, x: f64, y: f64 },
+    /// Writing a snapshot during time integration failed.
+    #[error(transparent)]
+    Snapshot(OutputError),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const A: Stage = Stage::new("a");
+    const B: Stage = Stage::new("b");
+
+    #[test]
+    fn timings_keep_order_and_sum_repeated_stages() {
+        let mut t = StageTimings::default();
+        t.record(B, 1.0);
+        t.record(A, 2.0);
+        t.record(B, 0.5);
+        assert_eq!(t.iter().collect::<Vec<_>>(), vec![(B, 1.5), (A, 2.0)]);
+        assert_eq!(t.get(A), 2.0);
+        assert_eq!(t.get(Stage::new("c")), 0.0);
+        assert_eq!(serde_json::to_string(&t).unwrap(), r#"{"b":1.5,"a":2.0}"#);
+    }
+
+    #[test]
+    fn timer_reports_and_stops_at_the_first_error() {
+        struct Log(std::sync::Mutex<Vec<String>>);
+        impl Progress for Log {
+            fn start(&self, s: Stage) {
+                self.0.lock().unwrap().push(format!("start {}", s.name()));
+            }
+            fn finish(&self, s: Stage, _: f64, note: &str) {
+                self.0.lock().unwrap().push(format!("finish {} {note}", s.name()));
+            }
+        }
+        let log = Log(Default::default());
+        let mut timer = StageTimer::new(&log);
+        assert_eq!(timer.run(A, || Ok((7, "seven".into()))).unwrap(), 7);
+        let err = timer.run(B, || Err::<((), String), _>(RunError::Diverged { step: 3, t: 0.5 })).unwrap_err();
+        assert!(matches!(err, RunError::Diverged { step: 3, .. }));
+        assert_eq!(*log.0.lock().unwrap(), ["start a", "finish a seven", "start b"]);
+        let t = timer.finish();
+        assert_eq!(t.iter().map(|(s, _)| s).collect::<Vec<_>>(), vec![A]);
+    }
+}
