@@ -13,7 +13,6 @@
 //! nodes `n..` of the supports and shapes; they carry no operators of their own.
 
 use super::equations::{resolve, ComponentEquation};
-use super::system::System;
 use super::{stage, NavierParams};
 use crate::case::Case;
 use crate::domain::{self, ghost::place_ghosts, neighbors::Supports, NodeSet, Point};
@@ -87,11 +86,6 @@ impl Discretisation {
     /// Whether node `i` carries the Navier equation (interior, or boundary with a ghost).
     pub fn has_navier_row(&self, i: usize) -> bool {
         i < self.nodes.len() && (!self.nodes.is_boundary(i) || self.ghost[i].is_some())
-    }
-
-    /// The rows of every equation (see [`System::assemble`]).
-    pub fn system<'a>(&'a self, case: &'a Case, exact: Option<&'a dyn ExactSolution>) -> System<'a> {
-        System { case, disc: self, exact }
     }
 
     /// Displacement gradient `[[u_x, u_y], [v_x, v_y]]` at every node (ghosts

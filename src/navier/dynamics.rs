@@ -18,6 +18,7 @@
 //! eigenvalue with a positive real part makes every explicit run grow).
 
 use super::discrete::Discretisation;
+use super::system::System;
 use super::{stage, NavierParams};
 use crate::case::Case;
 use crate::domain::cells::{cells_inside, nodal_areas};
@@ -172,7 +173,7 @@ pub struct Simulation {
 /// The condensed system of `disc`: assembled, split and factorised (module docs).
 fn condensed(case: &Case, disc: &Discretisation, density: f64) -> Result<NavierDynamics, RunError> {
     let exact = case.exact_solution();
-    let (triplets, rhs) = disc.system(case, exact.as_deref()).assemble()?;
+    let (triplets, rhs) = System { case, disc, exact: exact.as_deref() }.assemble()?;
     let matrix = crate::linalg::assemble(&triplets)?;
     let is_dynamic: Vec<bool> = (0..rhs.len()).map(|g| disc.has_navier_row(disc.dofs.location(g).0)).collect();
     Ok(NavierDynamics::new(&matrix, &rhs, &is_dynamic, density)?)

@@ -4,6 +4,7 @@
 
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
+use super::system::System;
 use super::{stage, NavierParams};
 use crate::case::Case;
 use crate::domain::NodeSet;
@@ -49,7 +50,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
     let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
-        let (triplets, rhs) = disc.system(case, exact).assemble()?;
+        let (triplets, rhs) = System { case, disc: &disc, exact }.assemble()?;
         let m = linalg::assemble(&triplets)?;
         let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.compute_nnz());
         Ok(((m, rhs), note))
