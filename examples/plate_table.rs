@@ -8,13 +8,14 @@
 //! cargo run --release --example plate_table -- [--horizon 0.1] [--reference 24]
 //!     [--ratios 3,4,6,8] [--rules full-area,gauss2x2,triangle-p2] [--kernels plain,-2,0,1]
 
+use mlsm::choice::Choice;
 use mlsm::compare::interpolate::mls_values;
 use mlsm::peridynamics::simulate;
 use mlsm::peridynamics::solve::interior_flags;
 use mlsm::peridynamics::{Kernel, PdParams, Quadrature};
+use mlsm::pipeline::Silent;
 use mlsm::post::observed_order;
 use mlsm::problem::Problem;
-use mlsm::pipeline::Silent;
 use std::path::Path;
 
 struct Run {
@@ -64,7 +65,7 @@ fn main() {
         let reference = run(&p, &PdParams { ratio: reference_m, kernel, quadrature: Quadrature::FullArea, ..base });
         eprintln!("kernel {k}: reference m = {reference_m}: {} nodes, {:.1} s", reference.positions.len(), reference.seconds);
         for rule in &rules {
-            let quadrature = Quadrature::ALL.iter().find(|(n, _)| n == rule).expect("known rule").1;
+            let quadrature = Quadrature::parse(rule).expect("known rule");
             let (mut hs, mut eu, mut ev) = (Vec::new(), Vec::new(), Vec::new());
             for &m in &ratios {
                 let params = PdParams { ratio: m, kernel, quadrature, ..base };

@@ -4,11 +4,12 @@
 //! models read a [`Case`]; each adds its own discretisation parameters
 //! (`navier::NavierParams`, `peridynamics::PdParams`).
 
+use crate::choice::Choice;
 use crate::domain::Domain;
 use crate::dynamics::DynamicsParams;
 use crate::elasticity::conditions::{BoundaryCondition, Value};
 use crate::elasticity::material::Material;
-use crate::exact::{self, ExactKind, ExactSolution};
+use crate::exact::{ExactSolution, NamedSolution};
 use serde::Serialize;
 
 /// Output fields a run writes.
@@ -26,7 +27,47 @@ pub struct Outputs {
     pub error: bool,
 }
 
+/// A field of `output.fields`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputField {
+    /// Displacement (always written).
+    Displacement,
+    /// Strain components.
+    Strain,
+    /// Stress components.
+    Stress,
+    /// Von Mises stress.
+    VonMises,
+    /// Errors against the exact solution.
+    Error,
+}
+
+impl Choice for OutputField {
+    const FIELD: &'static str = "output.fields[k]";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (OutputField::Displacement, "displacement", "the displacement vector (always written)"),
+        (OutputField::Strain, "strain", "eps_xx, eps_yy, eps_xy"),
+        (OutputField::Stress, "stress", "sigma_xx, sigma_yy, sigma_xy (and sigma_zz in plane strain)"),
+        (OutputField::VonMises, "von_mises", "von Mises stress"),
+        (OutputField::Error, "error", "exact displacement and the error fields and norms (needs [exact])"),
+    ];
+    const DEFAULT: Option<Self> = None;
+    const DEFAULT_NOTE: &'static str = "displacement, stress, von_mises, and error when the scene has [exact]";
+}
+
 impl Outputs {
+    /// Request `field`.
+    pub fn request(&mut self, field: OutputField) {
+        let slot = match field {
+            OutputField::Displacement => &mut self.displacement,
+            OutputField::Strain => &mut self.strain,
+            OutputField::Stress => &mut self.stress,
+            OutputField::VonMises => &mut self.von_mises,
+            OutputField::Error => &mut self.error,
+        };
+        *slot = true;
+    }
+
     /// Whether post-processing needs the displacement gradient.
     pub fn needs_gradient(&self) -> bool {
         self.strain || self.stress || self.von_mises || self.error
@@ -45,7 +86,7 @@ pub struct Case {
     /// Condition of each boundary part, indexed like `domain.parts`.
     pub conditions: Vec<BoundaryCondition>,
     /// Closed-form solution, if any.
-    pub exact: Option<ExactKind>,
+    pub exact: Option<NamedSolution>,
     /// Requested fields.
     pub outputs: Outputs,
     /// Time-dependent run settings, when the scene has a `[dynamics]` table.
@@ -55,6 +96,6 @@ pub struct Case {
 impl Case {
     /// The exact solution the scene names, if any (its parameters were validated).
     pub fn exact_solution(&self) -> Option<Box<dyn ExactSolution>> {
-        self.exact.as_ref().map(|k| exact::from_kind(k, self.material).expect("validated exact solution parameters"))
+        self.exact.as_ref().map(|e| e.build(self.material).expect("validated exact solution parameters"))
     }
 }

@@ -44,6 +44,8 @@ pub enum Command {
         #[arg(long)]
         horizon: Option<f64>,
     },
+    /// Print every option word a scene file may use, with its default and meaning (Markdown).
+    Options,
     /// Validate a scene file without solving it.
     Check {
         /// Scene file (TOML).

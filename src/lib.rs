@@ -5,7 +5,8 @@
 //! cross-checked against linear bond-based peridynamics on the same plate.
 //!
 //! The modules from the bottom up (each uses only those listed before it):
-//! 1. [`output`], [`linalg`], [`domain`]: files, sparse solvers, geometry and nodes;
+//! 1. [`choice`]: scene names, defaults and help of every option enum;
+//!    [`output`], [`linalg`], [`domain`]: files, sparse solvers, geometry and nodes;
 //! 2. [`mlsm`]: weighted least-squares shape functions for the operators each node needs;
 //! 3. [`pipeline`]: stage names, timing, progress, run errors;
 //! 4. [`elasticity`]: material, boundary conditions, unknown layout, stress;
@@ -20,6 +21,7 @@
 //! 12. [`app`] and [`cli`]: the command line (the only printing).
 
 pub mod case;
+pub mod choice;
 pub mod compare;
 pub mod domain;
 pub mod dynamics;

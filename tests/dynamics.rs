@@ -1,6 +1,7 @@
 //! Time integrators on the seed's closed-form rod (seed 000, sec. 4.2-4.3): observed
 //! orders of u, v and a (table 4.3.1) and the energy exchange.
 
+use mlsm::choice::Choice;
 use mlsm::dynamics::rod::Rod;
 use mlsm::dynamics::{Integrator, SecondOrderSystem, State};
 use mlsm::post::observed_order;

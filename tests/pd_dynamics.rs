@@ -7,8 +7,8 @@ mod common;
 use common::*;
 use mlsm::dynamics::Integrator;
 use mlsm::peridynamics::simulate;
-use mlsm::problem::Problem;
 use mlsm::pipeline::{RunError, Silent};
+use mlsm::problem::Problem;
 
 /// Final time, displacement (flat) and energy history of a run.
 type Run = (f64, Vec<f64>, Vec<[f64; 4]>);

@@ -12,8 +12,8 @@ use common::*;
 use mlsm::exact::{ExactSolution, Polynomial};
 use mlsm::peridynamics::solve::Discretisation;
 use mlsm::peridynamics::{Kernel, Micromodulus};
-use mlsm::problem::Problem;
 use mlsm::pipeline::{Silent, StageTimer};
+use mlsm::problem::Problem;
 
 const RULES: [&str; 7] = ["full-area", "partial-area", "gauss2x2", "triangle-p1", "triangle-p2", "triangle-p3", "ac"];
 

@@ -1,6 +1,7 @@
 //! `mlsm check`: validate a scene and print what it describes.
 
 use super::AppError;
+use crate::choice::Choice;
 use crate::problem::Problem;
 use std::path::Path;
 

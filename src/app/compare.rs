@@ -5,6 +5,7 @@ use super::fields::{integer, scalar, vector, write_points_vtu};
 use super::summary::Header;
 use super::terminal::Terminal;
 use super::{create_dir, AppError};
+use crate::choice::Choice;
 use crate::compare::LocalReference;
 use crate::model;
 use crate::output::{self, Series};
@@ -75,15 +76,9 @@ struct Table<'a> {
 fn quadratures(req: &CompareRequest, base: &PdParams) -> Result<Vec<Quadrature>, AppError> {
     match &req.quadratures {
         None => Ok(vec![base.quadrature]),
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                Quadrature::ALL.iter().find(|(k, _)| k == n).map(|(_, q)| *q).ok_or_else(|| {
-                    let known: Vec<&str> = Quadrature::ALL.iter().map(|(k, _)| *k).collect();
-                    AppError::Usage(format!("--quadratures: unknown rule \"{n}\" (expected one of {})", known.join(", ")))
-                })
-            })
-            .collect(),
+        Some(names) => {
+            names.iter().map(|n| Quadrature::parse(n).map_err(|reason| AppError::Usage(format!("--quadratures: {reason}")))).collect()
+        }
     }
 }
 

@@ -63,6 +63,10 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
     let term = Terminal::new(cli.quiet);
     match &cli.command {
         Command::Check { scene } => check::run(scene, cli.quiet),
+        Command::Options => {
+            print!("{}", crate::problem::reference::markdown());
+            Ok(())
+        }
         Command::Run { scene, out, spacing, model, horizon } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,

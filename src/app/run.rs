@@ -6,6 +6,7 @@ use super::series::Series;
 use super::summary::{DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::terminal::Terminal;
 use super::{create_dir, default_out, AppError};
+use crate::choice::Choice;
 use crate::dynamics::driver::{DynamicReport, EnergyRow};
 use crate::model::{self, Outcome};
 use crate::output;

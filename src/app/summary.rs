@@ -3,10 +3,11 @@
 //! timings keyed by stage), followed by what each kind of run reports.
 
 use crate::case::Outputs;
+use crate::choice::Choice;
 use crate::dynamics::driver::{DynamicReport, EnergyRow};
 use crate::dynamics::DynamicsParams;
 use crate::elasticity::material::{Material, PlaneModel};
-use crate::linalg::{SolveReport, SolverKind};
+use crate::linalg::SolveReport;
 use crate::mlsm::Approximation;
 use crate::navier;
 use crate::output;
@@ -114,13 +115,7 @@ impl<'a> NavierSummary<'a> {
             approximation: p.navier.approximation,
             material: MaterialSummary::of(&p.case.material),
             operators_computed: sol.operators_computed.iter().cloned().collect(),
-            solver: SolverSummary {
-                kind: match p.navier.solver.kind {
-                    SolverKind::Lu => "lu",
-                    SolverKind::Bicgstab { .. } => "bicgstab",
-                },
-                report: &sol.solver,
-            },
+            solver: SolverSummary { kind: p.navier.solver.kind.method().name(), report: &sol.solver },
             errors: sol.errors,
             outputs: p.case.outputs,
         }

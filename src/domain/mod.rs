@@ -12,8 +12,9 @@ pub mod ghost;
 pub mod neighbors;
 pub mod shape;
 
+use crate::choice::Choice;
 pub use boundary::BoundarySample;
-pub use shape::{CsgOp, Domain, Point, Primitive, Region};
+pub use shape::{CsgOp, Domain, Point, Primitive, PrimitiveKind, Region};
 
 /// How interior nodes are placed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -23,6 +24,16 @@ pub enum FillKind {
     Grid,
     /// Advancing-front Poisson-disk fill.
     Scattered,
+}
+
+impl Choice for FillKind {
+    const FIELD: &'static str = "nodes.fill";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (FillKind::Grid, "grid", "lattice of the bounding box at the spacing, clipped to the solid"),
+        (FillKind::Scattered, "scattered", "advancing-front Poisson-disk fill, seeded by `seed`"),
+    ];
+    const DEFAULT: Option<Self> = None;
+    const DEFAULT_NOTE: &'static str = "\"grid\" for a single rectangle, else \"scattered\"";
 }
 
 /// Parameters of the node generator.

@@ -2,6 +2,7 @@
 //! snapshots, the energy history and a throughput report.
 
 use super::{DynamicsParams, Integrator, SecondOrderSystem, State};
+use crate::choice::Choice;
 use crate::pipeline::{RunError, Stage, StageTimer};
 use serde::Serialize;
 

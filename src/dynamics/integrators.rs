@@ -15,6 +15,7 @@
 //! central-difference limit.
 
 use super::{SecondOrderSystem, State};
+use crate::choice::Choice;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -30,15 +31,17 @@ pub enum Integrator {
     Rk4,
 }
 
+impl Choice for Integrator {
+    const FIELD: &'static str = "dynamics.integrator";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (Integrator::Emu, "emu", "v += dt a(u), then u += dt v (seed 000, alg. 4.3.1); orders 2, 1, 1 in u, v, a"),
+        (Integrator::Verlet, "verlet", "Stormer-Verlet (velocity form); second order, bounded energy error"),
+        (Integrator::Rk4, "rk4", "classical fourth-order Runge-Kutta; stable to sqrt(2) times the central-difference step"),
+    ];
+    const DEFAULT: Option<Self> = Some(Integrator::Verlet);
+}
+
 impl Integrator {
-    /// Every scheme with its scene name.
-    pub const ALL: [(&'static str, Integrator); 3] = [("emu", Integrator::Emu), ("verlet", Integrator::Verlet), ("rk4", Integrator::Rk4)];
-
-    /// Scene name.
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(_, i)| *i == self).map(|(n, _)| *n).expect("listed")
-    }
-
     /// Largest stable `dt` relative to the central-difference limit `2 / omega_max`.
     pub fn stability_factor(self) -> f64 {
         match self {

@@ -29,6 +29,7 @@
 
 use serde::Serialize;
 
+use super::named::{Parameter, ParameterKind, Parameters};
 use super::{Check, ExactSolution, ParameterError};
 use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
 
@@ -46,6 +47,18 @@ pub struct Cantilever {
 }
 
 impl Cantilever {
+    /// Parameters of `[exact] kind = "cantilever"`.
+    pub const PARAMETERS: &'static [Parameter] = &[
+        Parameter { name: "load", kind: ParameterKind::Number, help: "end shear load P (N/m)" },
+        Parameter { name: "length", kind: ParameterKind::Length, help: "length L (m)" },
+        Parameter { name: "depth", kind: ParameterKind::Length, help: "depth D (m)" },
+    ];
+
+    /// From validated scene parameters.
+    pub fn from_parameters(p: &Parameters, material: Material) -> Result<Self, ParameterError> {
+        Cantilever::new(p.number("load"), p.number("length"), p.number("depth"), material)
+    }
+
     /// Checked constructor.
     pub fn new(load: f64, length: f64, depth: f64, material: Material) -> Result<Self, ParameterError> {
         let check = Check("cantilever");

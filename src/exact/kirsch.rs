@@ -23,6 +23,7 @@
 
 use serde::Serialize;
 
+use super::named::{Parameter, ParameterKind, Parameters};
 use super::{kolosov, Check, ExactSolution, ParameterError};
 use crate::elasticity::material::Material;
 
@@ -38,6 +39,17 @@ pub struct Kirsch {
 }
 
 impl Kirsch {
+    /// Parameters of `[exact] kind = "kirsch"`.
+    pub const PARAMETERS: &'static [Parameter] = &[
+        Parameter { name: "tension", kind: ParameterKind::Number, help: "far-field tension T along x (Pa)" },
+        Parameter { name: "radius", kind: ParameterKind::Length, help: "hole radius a (m)" },
+    ];
+
+    /// From validated scene parameters.
+    pub fn from_parameters(p: &Parameters, material: Material) -> Result<Self, ParameterError> {
+        Kirsch::new(p.number("tension"), p.number("radius"), material)
+    }
+
     /// Checked constructor.
     pub fn new(tension: f64, radius: f64, material: Material) -> Result<Self, ParameterError> {
         let check = Check("kirsch");

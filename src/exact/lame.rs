@@ -21,6 +21,7 @@
 
 use serde::Serialize;
 
+use super::named::{Parameter, ParameterKind, Parameters};
 use super::{Check, ExactSolution, ParameterError};
 use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
 
@@ -38,6 +39,18 @@ pub struct LameCylinder {
 }
 
 impl LameCylinder {
+    /// Parameters of `[exact] kind = "lame"`.
+    pub const PARAMETERS: &'static [Parameter] = &[
+        Parameter { name: "pressure", kind: ParameterKind::Number, help: "internal pressure p (Pa)" },
+        Parameter { name: "inner", kind: ParameterKind::Length, help: "inner radius a (m)" },
+        Parameter { name: "outer", kind: ParameterKind::Length, help: "outer radius b > a (m)" },
+    ];
+
+    /// From validated scene parameters.
+    pub fn from_parameters(p: &Parameters, material: Material) -> Result<Self, ParameterError> {
+        LameCylinder::new(p.number("pressure"), p.number("inner"), p.number("outer"), material)
+    }
+
     /// Checked constructor.
     pub fn new(pressure: f64, inner: f64, outer: f64, material: Material) -> Result<Self, ParameterError> {
         let check = Check("lame");

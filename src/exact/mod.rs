@@ -30,6 +30,7 @@ mod cantilever;
 mod kirsch;
 mod lame;
 mod manufactured;
+pub mod named;
 mod polynomial;
 #[cfg(test)]
 mod tests;
@@ -38,12 +39,12 @@ use std::fmt;
 
 use crate::elasticity::conditions::Value;
 use crate::elasticity::material::{self, Material, PlaneModel};
-use serde::Serialize;
 
 pub use cantilever::Cantilever;
 pub use kirsch::Kirsch;
 pub use lame::LameCylinder;
 pub use manufactured::Manufactured;
+pub use named::{ExactKind, NamedSolution, Parameter, ParameterKind, Parameters};
 pub use polynomial::Polynomial;
 
 /// A closed-form displacement field that solves the Navier equation with a known body force.
@@ -137,24 +138,6 @@ impl Check {
     }
 }
 
-/// A closed-form solution named in the scene (built by [`from_kind`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "lowercase")]
-pub enum ExactKind {
-    /// Timoshenko cantilever, variant A (verification.md 1).
-    Cantilever { load: f64, length: f64, depth: f64 },
-    /// Kirsch plate with a hole (verification.md 2).
-    Kirsch { tension: f64, radius: f64 },
-    /// Lame thick cylinder under internal pressure (verification.md 3).
-    Lame { pressure: f64, inner: f64, outer: f64 },
-    /// `u = (sin(pi x) cos(pi y), x^2 y^3)` with its body force (verification.md 6).
-    Manufactured,
-    /// Uniform uniaxial stress `sigma_xx = tension` (a linear field, zero at the origin).
-    Tension { tension: f64 },
-    /// A polynomial field of degree <= 3 with its body force (patch tests).
-    Polynomial { ux: [f64; 10], uy: [f64; 10] },
-}
-
 /// The vector a boundary or body-force [`Value`] stands for: the constant, or `pick`
 /// applied to the exact solution (validation makes sure one exists).
 pub fn value(value: Value, exact: Option<&dyn ExactSolution>, pick: impl FnOnce(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
@@ -162,17 +145,4 @@ pub fn value(value: Value, exact: Option<&dyn ExactSolution>, pick: impl FnOnce(
         Value::Constant(c) => c,
         Value::Exact => pick(exact.expect("validated: \"exact\" values need an exact solution")),
     }
-}
-
-/// Build the solution a scene names, for the scene's material.
-pub fn from_kind(kind: &ExactKind, material: Material) -> Result<Box<dyn ExactSolution>, ParameterError> {
-    use ExactKind as K;
-    Ok(match *kind {
-        K::Cantilever { load, length, depth } => Box::new(Cantilever::new(load, length, depth, material)?),
-        K::Kirsch { tension, radius } => Box::new(Kirsch::new(tension, radius, material)?),
-        K::Lame { pressure, inner, outer } => Box::new(LameCylinder::new(pressure, inner, outer, material)?),
-        K::Manufactured => Box::new(Manufactured::new(material)?),
-        K::Tension { tension } => Box::new(Polynomial::uniaxial_tension(tension, material)?),
-        K::Polynomial { ux, uy } => Box::new(Polynomial::new(ux, uy, material)?),
-    })
 }

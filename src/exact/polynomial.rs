@@ -10,6 +10,7 @@
 
 use serde::Serialize;
 
+use super::named::{Parameter, ParameterKind};
 use super::{navier_body_force, Check, ExactSolution, ParameterError};
 use crate::elasticity::material::Material;
 
@@ -25,6 +26,20 @@ pub struct Polynomial {
 }
 
 impl Polynomial {
+    /// Parameters of `[exact] kind = "polynomial"`.
+    pub const PARAMETERS: &'static [Parameter] = &[
+        Parameter {
+            name: "ux",
+            kind: ParameterKind::Coefficients(10),
+            help: "u over the monomials 1, x, y, x^2, x y, y^2, x^3, x^2 y, x y^2, y^3",
+        },
+        Parameter { name: "uy", kind: ParameterKind::Coefficients(10), help: "v over the same monomials as ux" },
+    ];
+
+    /// Parameters of `[exact] kind = "tension"`.
+    pub const TENSION_PARAMETERS: &'static [Parameter] =
+        &[Parameter { name: "tension", kind: ParameterKind::Number, help: "uniaxial stress sigma_xx (Pa)" }];
+
     /// Exponents `(i, j)` of the monomials `x^i y^j`, in coefficient order.
     pub const MONOMIALS: [(u32, u32); 10] = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1, 2), (0, 3)];
 

@@ -13,6 +13,7 @@
 //! (distance from the centre to its nearest neighbour).
 
 use super::ops::Op;
+use crate::choice::Choice;
 use serde::Serialize;
 
 /// Radial function of an RBF basis.
@@ -37,6 +38,64 @@ pub enum Basis {
     Tensor { degree: u32 },
     /// RBFs centred at the support nodes; `shape` in units of the local spacing.
     Rbf { rbf: RbfKind, shape: f64 },
+}
+
+/// The name of a basis in a scene (`approximation.basis`); its degree or shape
+/// parameter are their own fields.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BasisKind {
+    /// [`Basis::Monomials`].
+    Monomials,
+    /// [`Basis::Tensor`].
+    Tensor,
+    /// [`Basis::Rbf`] with [`RbfKind::Gaussian`].
+    Gaussian,
+    /// [`Basis::Rbf`] with [`RbfKind::Mq`].
+    Mq,
+    /// [`Basis::Rbf`] with [`RbfKind::Imq`].
+    Imq,
+}
+
+impl Choice for BasisKind {
+    const FIELD: &'static str = "approximation.basis";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (BasisKind::Monomials, "monomials", "monomials x^a y^b of total degree a + b <= `degree` (2..6, default 2)"),
+        (BasisKind::Tensor, "tensor", "tensor-product monomials x^a y^b, a, b <= `degree`"),
+        (BasisKind::Gaussian, "gaussian", "Gaussian RBF exp(-(r/c)^2) at the support nodes, c = `shape` x local spacing"),
+        (BasisKind::Mq, "mq", "multiquadric RBF sqrt(r^2 + c^2), c = `shape` x local spacing"),
+        (BasisKind::Imq, "imq", "inverse multiquadric RBF 1/sqrt(r^2 + c^2), c = `shape` x local spacing"),
+    ];
+    const DEFAULT: Option<Self> = Some(BasisKind::Monomials);
+}
+
+impl BasisKind {
+    /// The radial function of an RBF basis (`None` for the polynomial bases).
+    pub fn rbf(self) -> Option<RbfKind> {
+        match self {
+            BasisKind::Monomials | BasisKind::Tensor => None,
+            BasisKind::Gaussian => Some(RbfKind::Gaussian),
+            BasisKind::Mq => Some(RbfKind::Mq),
+            BasisKind::Imq => Some(RbfKind::Imq),
+        }
+    }
+}
+
+/// The name of a weight in a scene (`approximation.weight`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WeightKind {
+    /// [`Weight::Gaussian`].
+    Gaussian,
+    /// [`Weight::None`].
+    None,
+}
+
+impl Choice for WeightKind {
+    const FIELD: &'static str = "approximation.weight";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (WeightKind::Gaussian, "gaussian", "w(r) = exp(-(r / (sigma h))^2), `sigma` in units of the local spacing h (default 1)"),
+        (WeightKind::None, "none", "w = 1 (unweighted least squares)"),
+    ];
+    const DEFAULT: Option<Self> = Some(WeightKind::Gaussian);
 }
 
 /// Weight of the local fit.

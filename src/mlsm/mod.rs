@@ -9,7 +9,7 @@ pub mod ops;
 pub mod shapes;
 pub mod wls;
 
-pub use basis::{Basis, RbfKind, Weight};
+pub use basis::{Basis, BasisKind, RbfKind, Weight, WeightKind};
 pub use ops::{Op, OpSet};
 pub use shapes::{compute_shapes, ShapeError, Shapes};
 

@@ -32,7 +32,7 @@ pub mod strain;
 pub mod weights;
 
 pub use dynamics::{simulate, Simulation};
-pub use kernel::{Kernel, Micromodulus};
+pub use kernel::{Kernel, KernelKind, Micromodulus};
 pub use params::{BondForce, PdParams, Quadrature, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
 

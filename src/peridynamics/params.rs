@@ -3,6 +3,7 @@
 //! linear solver and bond force law.
 
 use super::kernel::Kernel;
+use crate::choice::Choice;
 use crate::domain::Point;
 use serde::Serialize;
 
@@ -69,22 +70,38 @@ impl Quadrature {
             }
         }
     }
+}
 
-    /// Every rule with its scene name.
-    pub const ALL: [(&'static str, Quadrature); 7] = [
-        ("full-area", Quadrature::FullArea),
-        ("partial-area", Quadrature::PartialArea),
-        ("gauss2x2", Quadrature::Gauss2x2),
-        ("triangle-p1", Quadrature::TriangleP1),
-        ("triangle-p2", Quadrature::TriangleP2),
-        ("triangle-p3", Quadrature::TriangleP3),
-        ("ac", Quadrature::Compatible),
+impl Choice for Quadrature {
+    const FIELD: &'static str = "peridynamics.quadrature";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (Quadrature::FullArea, "full-area", "cell-centre nodes with the full cell area (the seed's midpoint rule)"),
+        (Quadrature::PartialArea, "partial-area", "cell-centre nodes weighted by the cell area inside the horizon"),
+        (Quadrature::Gauss2x2, "gauss2x2", "four nodes per cell at the 2x2 Gauss points"),
+        (Quadrature::TriangleP1, "triangle-p1", "two triangles per cell, one node at each centroid"),
+        (Quadrature::TriangleP2, "triangle-p2", "two triangles per cell, three interior nodes each"),
+        (Quadrature::TriangleP3, "triangle-p3", "two triangles per cell, seven-point rule with shared vertices and edge midpoints"),
+        (Quadrature::Compatible, "ac", "cell-centre nodes, bond weights matched to the continuum moments (asymptotically compatible)"),
     ];
+    const DEFAULT: Option<Self> = Some(Quadrature::Compatible);
+}
 
-    /// Scene name of the rule.
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(_, q)| *q == self).map(|(n, _)| *n).expect("every rule is listed")
-    }
+impl Choice for SurfaceCorrection {
+    const FIELD: &'static str = "peridynamics.correction";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (SurfaceCorrection::None, "none", "bonds as they are (nodes near a free edge are softer)"),
+        (SurfaceCorrection::Volume, "volume", "bond ij scaled by 2 V_delta / (V_i + V_j) (volume method)"),
+    ];
+    const DEFAULT: Option<Self> = Some(SurfaceCorrection::None);
+}
+
+impl Choice for BondForce {
+    const FIELD: &'static str = "peridynamics.force";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (BondForce::Linear, "linear", "f = c (xi ⊗ xi) eta (the linear model; static and dynamic runs)"),
+        (BondForce::BondStretch, "bond-stretch", "f = c |xi|^3 s (xi + eta)/|xi + eta| (nonlinear; dynamics only)"),
+    ];
+    const DEFAULT: Option<Self> = Some(BondForce::Linear);
 }
 
 /// Surface correction of bonds near free edges.

@@ -1,10 +1,12 @@
 //! The validated problem: built once from a scene file by [`Problem::from_file`].
 //! After this point no code handles raw strings or unchecked numbers.
 
+pub mod reference;
 pub mod spec;
 pub mod validate;
 
 use crate::case::Case;
+use crate::choice::Choice;
 use crate::navier::NavierParams;
 use crate::peridynamics::PdParams;
 use serde::Serialize;
@@ -30,6 +32,15 @@ pub enum Model {
     Navier,
     /// Linear bond-based peridynamics.
     Peridynamics,
+}
+
+impl Choice for Model {
+    const FIELD: &'static str = "model";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (Model::Navier, "navier", "the Navier equation by MLSM collocation"),
+        (Model::Peridynamics, "peridynamics", "linear bond-based peridynamics (needs [peridynamics])"),
+    ];
+    const DEFAULT: Option<Self> = Some(Model::Navier);
 }
 
 /// A validated scene: the physical case, the discretisation of each model, and the

@@ -253,30 +253,13 @@ pub struct OutputSpec {
     pub fields: Option<Vec<String>>,
 }
 
-/// `[exact]`.
+/// `[exact]`: the solution's name and its parameters (which parameters a solution
+/// takes is checked in `validate`, against the solution's own list).
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub struct ExactSpec {
-    /// `cantilever`, `kirsch`, `lame`, `manufactured`, `tension`, `polynomial`.
+    /// Solution name (`cantilever`, `kirsch`, ...).
     pub kind: String,
-    /// Cantilever end load P (N/m).
-    pub load: Option<f64>,
-    /// Cantilever length L (m).
-    pub length: Option<f64>,
-    /// Cantilever depth D (m).
-    pub depth: Option<f64>,
-    /// Kirsch far-field tension T, or the uniaxial tension of `tension` (Pa).
-    pub tension: Option<f64>,
-    /// Kirsch hole radius a (m).
-    pub radius: Option<f64>,
-    /// Lame internal pressure p (Pa).
-    pub pressure: Option<f64>,
-    /// Lame inner radius a (m).
-    pub inner: Option<f64>,
-    /// Lame outer radius b (m).
-    pub outer: Option<f64>,
-    /// Polynomial coefficients of u over `1, x, y, x^2, x y, y^2, x^3, x^2 y, x y^2, y^3`.
-    pub ux: Option<Vec<f64>>,
-    /// Polynomial coefficients of v.
-    pub uy: Option<Vec<f64>>,
+    /// Every other key: the solution's parameters.
+    #[serde(flatten)]
+    pub parameters: std::collections::BTreeMap<String, toml::Value>,
 }

@@ -1,0 +1,127 @@
+//! The solutions a scene can name: `[exact] kind = "..."` and the parameters each
+//! takes. Each solution declares its parameters next to its formulas
+//! (`PARAMETERS`, `from_parameters`); [`ExactKind`] lists them.
+
+use super::{Cantilever, ExactSolution, Kirsch, LameCylinder, Manufactured, ParameterError, Polynomial};
+use crate::choice::Choice;
+use crate::elasticity::material::Material;
+
+/// What values a parameter accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParameterKind {
+    /// Any finite number (loads, pressures).
+    Number,
+    /// A positive finite number (lengths).
+    Length,
+    /// An array of this many finite numbers.
+    Coefficients(usize),
+}
+
+/// A parameter of a named solution.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Parameter {
+    /// Key in the `[exact]` table.
+    pub name: &'static str,
+    /// Accepted values.
+    pub kind: ParameterKind,
+    /// Meaning and unit.
+    pub help: &'static str,
+}
+
+/// Validated parameter values, by name (a number is an array of one).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Parameters(Vec<(&'static str, Vec<f64>)>);
+
+impl Parameters {
+    /// Set `name` to `values`.
+    pub fn insert(&mut self, name: &'static str, values: Vec<f64>) {
+        self.0.retain(|(n, _)| *n != name);
+        self.0.push((name, values));
+    }
+
+    fn get(&self, name: &str) -> &[f64] {
+        self.0.iter().find(|(n, _)| *n == name).map(|(_, v)| v.as_slice()).unwrap_or_else(|| panic!("parameter {name} was validated"))
+    }
+
+    /// The number `name`.
+    pub fn number(&self, name: &str) -> f64 {
+        self.get(name)[0]
+    }
+
+    /// The `N` coefficients `name`.
+    pub fn coefficients<const N: usize>(&self, name: &str) -> [f64; N] {
+        self.get(name).try_into().unwrap_or_else(|_| panic!("parameter {name} was validated to {N} coefficients"))
+    }
+}
+
+/// The closed-form solutions a scene can name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExactKind {
+    /// [`Cantilever`].
+    Cantilever,
+    /// [`Kirsch`].
+    Kirsch,
+    /// [`LameCylinder`].
+    Lame,
+    /// [`Manufactured`].
+    Manufactured,
+    /// [`Polynomial::uniaxial_tension`].
+    Tension,
+    /// [`Polynomial`].
+    Polynomial,
+}
+
+impl Choice for ExactKind {
+    const FIELD: &'static str = "exact.kind";
+    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
+        (ExactKind::Cantilever, "cantilever", "Timoshenko cantilever under an end load (`load`, `length`, `depth`)"),
+        (ExactKind::Kirsch, "kirsch", "infinite plate with a hole under uniaxial tension (`tension`, `radius`)"),
+        (ExactKind::Lame, "lame", "thick cylinder under internal pressure (`pressure`, `inner`, `outer`)"),
+        (ExactKind::Manufactured, "manufactured", "u = (sin(pi x) cos(pi y), x^2 y^3) with its body force (needs body_force = \"exact\")"),
+        (ExactKind::Tension, "tension", "uniform uniaxial stress sigma_xx = `tension`"),
+        (ExactKind::Polynomial, "polynomial", "a cubic field with its body force (`ux`, `uy`: 10 coefficients each)"),
+    ];
+    const DEFAULT: Option<Self> = None;
+}
+
+impl ExactKind {
+    /// The parameters of the `[exact]` table of this solution.
+    pub fn parameters(self) -> &'static [Parameter] {
+        match self {
+            ExactKind::Cantilever => Cantilever::PARAMETERS,
+            ExactKind::Kirsch => Kirsch::PARAMETERS,
+            ExactKind::Lame => LameCylinder::PARAMETERS,
+            ExactKind::Manufactured => &[],
+            ExactKind::Tension => Polynomial::TENSION_PARAMETERS,
+            ExactKind::Polynomial => Polynomial::PARAMETERS,
+        }
+    }
+
+    /// The solution with validated `parameters` for `material`.
+    pub fn build(self, p: &Parameters, material: Material) -> Result<Box<dyn ExactSolution>, ParameterError> {
+        Ok(match self {
+            ExactKind::Cantilever => Box::new(Cantilever::from_parameters(p, material)?),
+            ExactKind::Kirsch => Box::new(Kirsch::from_parameters(p, material)?),
+            ExactKind::Lame => Box::new(LameCylinder::from_parameters(p, material)?),
+            ExactKind::Manufactured => Box::new(Manufactured::new(material)?),
+            ExactKind::Tension => Box::new(Polynomial::uniaxial_tension(p.number("tension"), material)?),
+            ExactKind::Polynomial => Box::new(Polynomial::new(p.coefficients("ux"), p.coefficients("uy"), material)?),
+        })
+    }
+}
+
+/// The `[exact]` table, validated: which solution and its parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedSolution {
+    /// Which solution.
+    pub kind: ExactKind,
+    /// Its parameters.
+    pub parameters: Parameters,
+}
+
+impl NamedSolution {
+    /// The solution for `material`.
+    pub fn build(&self, material: Material) -> Result<Box<dyn ExactSolution>, ParameterError> {
+        self.kind.build(&self.parameters, material)
+    }
+}

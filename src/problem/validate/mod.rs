@@ -1,0 +1,190 @@
+//! Scene text -> [`SceneSpec`] (syntax, types, unknown keys) -> [`Problem`]
+//! (physics and consistency). Every error names the file, the field and the reason.
+//! One file per scene table; option words are read through their enum's
+//! [`Choice`] table.
+
+mod approximation;
+mod conditions;
+mod domain;
+mod dynamics;
+mod exact;
+mod material;
+mod peridynamics;
+mod solver;
+
+pub use approximation::{default_support, DEFAULT_GHOST_NODES};
+pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO};
+
+use super::spec::SceneSpec;
+use super::{Model, Problem, ProblemError};
+use crate::case::{Case, OutputField, Outputs};
+use crate::choice::Choice;
+use crate::domain::{Domain, FillKind};
+use crate::navier::NavierParams;
+use std::path::Path;
+
+/// Largest node count a run may ask for (a sparse LU of 1e8 unknowns does not fit in memory).
+pub const MAX_NODES: f64 = 5e7;
+
+/// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
+/// `nodes.count` into a spacing (the scattered fill packs about 1.1 nodes per h^2).
+pub(crate) fn packing(kind: FillKind) -> f64 {
+    match kind {
+        FillKind::Grid => 1.0,
+        FillKind::Scattered => 1.1,
+    }
+}
+
+/// TOML syntax, types and unknown keys; the message carries line, column and key path.
+pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, ProblemError> {
+    let err = |field: String, reason: String| ProblemError { file: path.to_path_buf(), field, reason };
+    let de = toml::Deserializer::parse(text).map_err(|e| err("(syntax)".into(), located(text, &e)))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        err(if field == "." { "(top level)".into() } else { field }, located(text, &inner))
+    })
+}
+
+fn located(text: &str, e: &toml::de::Error) -> String {
+    let msg = e.message().trim().to_string();
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {col}: {msg}")
+        }
+        None => msg,
+    }
+}
+
+/// The scene file being validated, for error messages.
+struct Ctx<'a> {
+    path: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn error(&self, field: impl Into<String>, reason: impl Into<String>) -> ProblemError {
+        ProblemError { file: self.path.to_path_buf(), field: field.into(), reason: reason.into() }
+    }
+
+    fn err<T>(&self, field: impl Into<String>, reason: impl Into<String>) -> Result<T, ProblemError> {
+        Err(self.error(field, reason))
+    }
+
+    fn positive(&self, field: &str, v: f64) -> Result<f64, ProblemError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            self.err(field, format!("must be a positive finite number, got {v}"))
+        }
+    }
+
+    fn finite(&self, field: &str, v: &[f64]) -> Result<(), ProblemError> {
+        match v.iter().find(|x| !x.is_finite()) {
+            Some(x) => self.err(field, format!("must be finite, got {x}")),
+            None => Ok(()),
+        }
+    }
+
+    fn need<T>(&self, field: &str, v: Option<T>, what: &str) -> Result<T, ProblemError> {
+        match v {
+            Some(x) => Ok(x),
+            None => self.err(field, format!("missing: {what}")),
+        }
+    }
+
+    /// The option `word` names at `field`; its default when absent.
+    fn choose<C: Choice>(&self, field: &str, word: Option<&str>) -> Result<C, ProblemError> {
+        match (word, C::DEFAULT) {
+            (Some(w), _) => C::parse(w).map_err(|reason| self.error(field, reason)),
+            (None, Some(d)) => Ok(d),
+            (None, None) => self.err(field, format!("missing: one of {}", C::expected())),
+        }
+    }
+}
+
+/// Semantic validation: physics, geometry, consistency of names and options.
+pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
+    let c = Ctx { path };
+    let name = scene_name(&c, spec.name.as_deref(), path)?;
+    let domain = domain::domain(&c, &spec.domain)?;
+    let area = domain.area_estimate(400);
+    let dynamic = spec.dynamics.is_some();
+    let fill = approximation::nodes(&c, &spec.nodes, &domain, area)?;
+    let approximation = approximation::approximation(&c, &spec.approximation, fill.kind, dynamic)?;
+    approximation::check_node_count(&c, &fill, &approximation, area)?;
+    let material = material::material(&c, &spec.material)?;
+    let exact = spec.exact.as_ref().map(|e| exact::exact(&c, e, material)).transpose()?;
+    let body_force = exact::body_force(&c, spec.body_force.as_ref(), exact.as_ref())?;
+    let dynamics = spec.dynamics.as_ref().map(|d| dynamics::dynamics(&c, d)).transpose()?;
+    let present = parts_present(&domain, fill.spacing);
+    let conditions = conditions::conditions(&c, &spec.boundary, &domain, &present, exact.is_some(), dynamic)?;
+    let solver = solver::solver(&c, &spec.solver)?;
+    let outputs = outputs(&c, spec.output.fields.as_deref(), exact.is_some())?;
+    let peridynamics = match &spec.peridynamics {
+        Some(pd) => Some(peridynamics::peridynamics(&c, pd, &domain, &material, &spec.boundary, dynamic)?),
+        None => None,
+    };
+    let model: Model = c.choose("model", spec.model.as_deref())?;
+    if model == Model::Peridynamics && peridynamics.is_none() {
+        return c.err("model", "model = \"peridynamics\" needs a [peridynamics] table (horizon, quadrature, ...)");
+    }
+    Ok(Problem {
+        name,
+        source: path.to_path_buf(),
+        case: Case { domain, material, body_force, conditions, exact, outputs, dynamics },
+        navier: NavierParams { fill, approximation, solver },
+        peridynamics,
+        model,
+    })
+}
+
+/// The scene's name (default: the file stem), which names its output folder.
+fn scene_name(c: &Ctx, name: Option<&str>, path: &Path) -> Result<String, ProblemError> {
+    match name {
+        Some(n) if n.is_empty() || n.contains(['/', '\\']) || n == "." || n == ".." => {
+            c.err("name", format!("\"{n}\" cannot name an output folder (no slashes, not empty)"))
+        }
+        Some(n) => Ok(n.to_string()),
+        None => Ok(path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into())),
+    }
+}
+
+/// Which boundary parts hold boundary nodes at `spacing` (a part cut away by a
+/// subtraction holds none).
+fn parts_present(domain: &Domain, spacing: f64) -> Vec<bool> {
+    let mut present = vec![false; domain.parts.len()];
+    for b in crate::domain::boundary::discretise_boundary(domain, spacing) {
+        for (part, _) in b.touches {
+            present[part] = true;
+        }
+    }
+    present
+}
+
+/// `[output] fields`: the requested fields (default: displacement, stress, von
+/// Mises, and errors when the scene has an exact solution).
+fn outputs(c: &Ctx, fields: Option<&[String]>, has_exact: bool) -> Result<Outputs, ProblemError> {
+    let mut o = Outputs::default();
+    match fields {
+        None => {
+            for f in [OutputField::Displacement, OutputField::Stress, OutputField::VonMises] {
+                o.request(f);
+            }
+            o.error = has_exact;
+        }
+        Some(fields) => {
+            for (k, f) in fields.iter().enumerate() {
+                o.request(c.choose(&format!("output.fields[{k}]"), Some(f))?);
+            }
+        }
+    }
+    if o.error && !has_exact {
+        return c.err("output.fields", "\"error\" needs an [exact] solution to compare with");
+    }
+    // The displacement is the solution itself: always written.
+    o.displacement = true;
+    Ok(o)
+}
