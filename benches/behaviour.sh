@@ -32,6 +32,13 @@ if [ "$mode" = record ]; then
       "$bin" --quiet run "$scene" --model navier --out "$dir/${name}_navier"
     fi
   done
+  # The iterative solver with each preconditioner (the shipped scenes use LU).
+  for pc in ilut ilu0 jacobi; do
+    mkdir -p output/behaviour_scenes
+    scene="output/behaviour_scenes/kirsch_bicgstab_$pc.toml"
+    { cat problems/kirsch.toml; printf '\n[solver]\nkind = "bicgstab"\npreconditioner = "%s"\nmax_iterations = 20000\n' "$pc"; } > "$scene"
+    "$bin" --quiet run "$scene" --spacing 0.1 --out "$dir/kirsch_bicgstab_$pc" || echo "kirsch with $pc: exit $?" > "$dir/kirsch_bicgstab_$pc.failed"
+  done
   "$bin" --quiet compare problems/pd_manufactured.toml --levels 1 --quadratures ac,full-area --out "$dir/compare_pd_manufactured"
   "$bin" --quiet compare problems/steel_plate.toml --levels 1 --reference-spacing 0.02 --out "$dir/compare_steel_plate"
   "$bin" --quiet convergence problems/manufactured_traction.toml --levels 1 --out "$dir/convergence_manufactured_traction"

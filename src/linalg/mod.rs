@@ -19,6 +19,7 @@
 //! an error, never silently returned.
 
 pub mod bicgstab;
+pub mod ilut;
 pub mod lu;
 pub mod params;
 pub mod precond;
