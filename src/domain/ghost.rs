@@ -67,3 +67,61 @@ pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> V
     }
     placed
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::{generate, FillKind, FillParams};
+    use super::*;
+    use crate::domain::{CsgOp, Primitive, Region};
+
+    fn nodes(domain: &Domain, h: f64) -> NodeSet {
+        generate(domain, &FillParams { spacing: h, kind: FillKind::Grid, seed: 0, relax_iterations: 0 })
+    }
+
+    /// On a rectangle every boundary node gets its ghost at `p + h n`, outside the
+    /// solid, and no two points (nodes or ghosts) are closer than h/2.
+    #[test]
+    fn rectangle_ghosts_lie_one_spacing_outside_along_the_normal() {
+        let h = 0.1;
+        let domain = Domain::rectangle([0.0, 0.0], [1.0, 0.5]);
+        let n = nodes(&domain, h);
+        let all: Vec<usize> = (0..n.boundary.len()).collect();
+        let ghosts = place_ghosts(&domain, &n, &all);
+        assert_eq!(ghosts.len(), n.boundary.len(), "every boundary node of a convex solid has a ghost");
+        let mut points = n.positions.clone();
+        for &(i, g) in &ghosts {
+            let (p, normal) = (n.positions[i], n.normal(i));
+            assert!((g[0] - p[0] - h * normal[0]).abs() < 1e-12 && (g[1] - p[1] - h * normal[1]).abs() < 1e-12);
+            assert!(domain.signed_distance(g) >= 0.5 * h, "ghost of node {i} at {g:?} is not outside");
+            points.push(g);
+        }
+        for (a, p) in points.iter().enumerate() {
+            for q in &points[a + 1..] {
+                assert!((p[0] - q[0]).hypot(p[1] - q[1]) >= 0.5 * h - 1e-12, "{p:?} and {q:?} too close");
+            }
+        }
+        // Only the candidates get ghosts.
+        assert_eq!(place_ghosts(&domain, &n, &all[..3]).len(), 3);
+    }
+
+    /// An L-shaped solid: the concave corner (0.5, 0.5) gets no ghost, and no ghost
+    /// lies in the wedge outside it, near the other part's nodes.
+    #[test]
+    fn concave_corner_has_no_ghost() {
+        let h = 0.05;
+        let vertices = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.5, 0.5], [0.5, 1.0], [0.0, 1.0]];
+        let domain = Domain {
+            regions: vec![Region { primitive: Primitive::Polygon { vertices }, op: CsgOp::Union, edge_parts: (0..6).collect() }],
+            parts: (0..6).map(|k| format!("edge{k}")).collect(),
+        };
+        let n = nodes(&domain, h);
+        let all: Vec<usize> = (0..n.boundary.len()).collect();
+        let ghosts = place_ghosts(&domain, &n, &all);
+        let corner = n.positions.iter().position(|p| (p[0] - 0.5).hypot(p[1] - 0.5) < 1e-12).expect("a node at the concave corner");
+        assert!(!ghosts.iter().any(|&(i, _)| i == corner), "the concave corner got a ghost");
+        for &(_, g) in &ghosts {
+            assert!((g[0] - 0.5).hypot(g[1] - 0.5) > 1.2 * h - 1e-12, "ghost {g:?} in the wedge of the concave corner");
+        }
+        assert!(ghosts.len() > n.boundary.len() / 2, "the straight edges keep their ghosts");
+    }
+}

@@ -239,6 +239,14 @@ impl Curve {
 }
 
 impl Domain {
+    /// The rectangle `[min, max]` alone, with the parts `bottom`, `right`, `top`, `left`.
+    pub fn rectangle(min: Point, max: Point) -> Domain {
+        Domain {
+            regions: vec![Region { primitive: Primitive::Rectangle { min, max }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] }],
+            parts: ["bottom", "right", "top", "left"].iter().map(|s| s.to_string()).collect(),
+        }
+    }
+
     /// Signed distance of the CSG combination (negative inside the solid).
     pub fn signed_distance(&self, p: Point) -> f64 {
         let mut d = f64::INFINITY;

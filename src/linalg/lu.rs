@@ -86,16 +86,16 @@ impl SparseLu {
         if n > 1 {
             let mut xi = sign(&y);
             let mut z = self.solve_transpose(&xi);
-            let mut j_prev = usize::MAX;
+            let mut j_prev = None;
             for _ in 0..5 {
                 if !est.is_finite() || z.iter().any(|v| !v.is_finite()) {
                     return f64::INFINITY;
                 }
                 let j = (0..n).max_by(|&p, &q| z[p].abs().total_cmp(&z[q].abs())).unwrap_or(0);
-                if j == j_prev {
+                if j_prev == Some(j) {
                     break;
                 }
-                j_prev = j;
+                j_prev = Some(j);
                 let mut e = vec![0.0; n];
                 e[j] = 1.0;
                 y = self.solve(&e);

@@ -70,7 +70,8 @@ impl Shapes {
 pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approximation, needs: &[OpSet]) -> Result<Shapes, ShapeError> {
     let n = supports.size();
     let stored = needs.iter().fold(OpSet::EMPTY, |a, &b| a | b);
-    let mut slot = [usize::MAX; 6];
+    // Storage slot of each operator (only the stored ones have one).
+    let mut slot = [0; 6];
     for (k, op) in stored.iter().enumerate() {
         slot[op as usize] = k;
     }

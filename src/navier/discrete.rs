@@ -151,3 +151,43 @@ fn shape_needs(case: &Case, nodes: &NodeSet, equations: &[[ComponentEquation; 2]
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::domain::FillKind;
+    use crate::navier::test_case::quadratic_plate;
+    use crate::pipeline::{Silent, StageTimer};
+
+    /// The operators of each node are those of the table in the module docs.
+    #[test]
+    fn each_node_gets_exactly_the_operators_its_rows_need() {
+        let (mut case, params) = quadratic_plate(FillKind::Grid, 0.1);
+        for gradient in [false, true] {
+            case.outputs.stress = gradient;
+            let exact = case.exact_solution();
+            let disc = Discretisation::new(&case, &params, exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap();
+            let d1 = if gradient { OpSet::D1 } else { OpSet::EMPTY };
+            for i in 0..disc.dofs.nodes() {
+                let got = disc.shapes.computed_at(i);
+                let want = if i >= disc.nodes.len() {
+                    OpSet::EMPTY
+                } else if !disc.nodes.is_boundary(i) {
+                    d1 | OpSet::D2
+                } else if disc.ghost[i].is_some() {
+                    OpSet::D1 | OpSet::D2
+                } else if disc.boundary_equations[i].iter().any(ComponentEquation::is_traction) {
+                    OpSet::D1
+                } else {
+                    d1
+                };
+                assert_eq!(got, want, "node {i} (gradient output {gradient})");
+            }
+            // Left edge (displacement): no ghosts, no Navier rows; the traction edges'
+            // interior nodes have ghosts and Navier rows.
+            let left: Vec<usize> = (0..disc.nodes.boundary.len()).filter(|&i| disc.nodes.positions[i][0] == 0.0).collect();
+            assert!(!left.is_empty() && left.iter().all(|&i| disc.ghost[i].is_none() && !disc.has_navier_row(i)));
+            assert!((0..disc.nodes.boundary.len()).any(|i| disc.ghost[i].is_some() && disc.has_navier_row(i)));
+        }
+    }
+}

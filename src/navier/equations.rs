@@ -60,3 +60,69 @@ pub fn resolve(sample: &BoundarySample, conditions: &[BoundaryCondition], exact:
     };
     [eq(0), eq(1)]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::elasticity::conditions::Value;
+    use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
+    use crate::exact::Polynomial;
+
+    fn condition(components: [ComponentCondition; 2], value: [f64; 2]) -> BoundaryCondition {
+        BoundaryCondition { components, value: Value::Constant(value) }
+    }
+
+    fn corner(touches: Vec<(usize, [f64; 2])>) -> BoundarySample {
+        BoundarySample { position: [1.0, 1.0], touches }
+    }
+
+    #[test]
+    fn prescribed_displacement_wins_per_component_at_corners() {
+        use ComponentCondition::{Displacement as D, Traction as T};
+        // Part 0: symmetry (u prescribed, v traction-free); part 1: traction (3, 4).
+        let conditions = [condition([D, T], [0.5, 0.0]), condition([T, T], [3.0, 4.0])];
+        let eq = resolve(&corner(vec![(0, [-1.0, 0.0]), (1, [0.0, 1.0])]), &conditions, None);
+        assert_eq!(eq[0], ComponentEquation::Displacement { value: 0.5 });
+        // v: both parts are traction parts: bisector normal, summed tractions / |n0 + n1|.
+        let s = 2f64.sqrt();
+        match eq[1] {
+            ComponentEquation::Traction { normal, value } => {
+                assert!((normal[0] + 1.0 / s).abs() < 1e-15 && (normal[1] - 1.0 / s).abs() < 1e-15);
+                assert!((value - (0.0 + 4.0) / s).abs() < 1e-15);
+            }
+            other => panic!("expected a traction equation, got {other:?}"),
+        }
+    }
+
+    /// The combined corner equation holds for every stress that satisfies both parts'
+    /// equations: `sigma = [[1, 0], [0, 2]]` gives `sigma n_k = t_k` on the two sides.
+    #[test]
+    fn corner_traction_is_the_sum_of_the_parts_equations() {
+        let conditions =
+            [condition([ComponentCondition::Traction; 2], [1.0, 0.0]), condition([ComponentCondition::Traction; 2], [0.0, 2.0])];
+        let eq = resolve(&corner(vec![(0, [1.0, 0.0]), (1, [0.0, 1.0])]), &conditions, None);
+        let sigma = [[1.0, 0.0], [0.0, 2.0]];
+        for (c, e) in eq.iter().enumerate() {
+            let ComponentEquation::Traction { normal, value } = *e else { panic!("traction expected") };
+            let sn = sigma[c][0] * normal[0] + sigma[c][1] * normal[1];
+            assert!((sn - value).abs() < 1e-15, "component {c}: {sn} vs {value}");
+        }
+    }
+
+    #[test]
+    fn exact_values_come_from_the_exact_solution_and_slits_use_the_first_part() {
+        let material = Material { elastic: YoungPoisson { young: 10.0, poisson: 0.25 }, plane: PlaneModel::Strain };
+        let exact = Polynomial::quadratic([0.0, 1.0, 2.0, 0.5, 0.0, 0.0], [1.0, 0.0, -1.0, 0.0, 0.25, 0.0], material).unwrap();
+        let disp = [BoundaryCondition { components: [ComponentCondition::Displacement; 2], value: Value::Exact }];
+        let sample = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, -1.0])] };
+        let eq = resolve(&sample, &disp, Some(&exact));
+        let u = exact.displacement(sample.position);
+        assert_eq!(eq, [ComponentEquation::Displacement { value: u[0] }, ComponentEquation::Displacement { value: u[1] }]);
+        // A zero-thickness slit: opposite normals of two traction parts.
+        let trac = [BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Exact }; 2];
+        let slit = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, 1.0]), (1, [0.0, -1.0])] };
+        let eq = resolve(&slit, &trac, Some(&exact));
+        let t = exact.traction(slit.position, [0.0, 1.0]);
+        assert_eq!(eq[1], ComponentEquation::Traction { normal: [0.0, 1.0], value: t[1] });
+    }
+}

@@ -61,3 +61,49 @@ pub mod stage {
     /// Strain, stress, errors.
     pub const POST: Stage = Stage::new("post");
 }
+
+/// A small case shared by the stage tests of this model.
+#[cfg(test)]
+pub(crate) mod test_case {
+    use super::NavierParams;
+    use crate::case::{Case, Outputs};
+    use crate::domain::{Domain, FillKind, FillParams};
+    use crate::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
+    use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
+    use crate::exact::{ExactKind, NamedSolution, Parameters};
+    use crate::linalg::SolverParams;
+    use crate::mlsm::{Approximation, Basis, Weight};
+
+    /// The plate `[0, 1] x [0, 0.5]` with the quadratic field
+    /// `u = (1 + x + 2 y + 0.5 x^2, -y + 0.25 x y - y^2)` as exact solution: its
+    /// displacement on the left edge, its traction on the others, its body force;
+    /// degree-2 monomials, ghost nodes, the given fill at spacing `h`.
+    pub(crate) fn quadratic_plate(fill: FillKind, h: f64) -> (Case, NavierParams) {
+        let mut parameters = Parameters::default();
+        parameters.insert("ux", vec![1.0, 1.0, 2.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        parameters.insert("uy", vec![0.0, 0.0, -1.0, 0.0, 0.25, -1.0, 0.0, 0.0, 0.0, 0.0]);
+        let traction = BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Exact };
+        let displacement = BoundaryCondition { components: [ComponentCondition::Displacement; 2], value: Value::Exact };
+        let case = Case {
+            domain: Domain::rectangle([0.0, 0.0], [1.0, 0.5]),
+            material: Material { elastic: YoungPoisson { young: 3.0, poisson: 0.3 }, plane: PlaneModel::Stress },
+            body_force: Value::Exact,
+            conditions: vec![traction, traction, traction, displacement],
+            exact: Some(NamedSolution { kind: ExactKind::Polynomial, parameters }),
+            outputs: Outputs::default(),
+            dynamics: None,
+        };
+        let support = if fill == FillKind::Grid { 13 } else { 12 };
+        let params = NavierParams {
+            fill: FillParams { spacing: h, kind: fill, seed: 1, relax_iterations: 0 },
+            approximation: Approximation {
+                basis: Basis::Monomials { degree: 2 },
+                weight: Weight::Gaussian { sigma: 1.0 },
+                support,
+                ghost_nodes: true,
+            },
+            solver: SolverParams::default(),
+        };
+        (case, params)
+    }
+}

@@ -73,3 +73,79 @@ impl RowWriter<'_> {
         g
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mlsm::{compute_shapes, Approximation, Basis, OpSet, Weight};
+
+    /// A 7 x 7 lattice of spacing 0.1 (node 24 at the centre), supports of 13 nodes and
+    /// degree-2 shapes of every derivative at every node.
+    fn lattice() -> (Vec<[f64; 2]>, Supports, Shapes) {
+        let positions: Vec<[f64; 2]> = (0..49).map(|k| [0.1 * (k % 7) as f64 - 0.3, 0.1 * (k / 7) as f64 - 0.3]).collect();
+        let supports = Supports::nearest(&positions, 13);
+        let approximation = Approximation {
+            basis: Basis::Monomials { degree: 2 },
+            weight: Weight::Gaussian { sigma: 1.0 },
+            support: 13,
+            ghost_nodes: false,
+        };
+        let shapes = compute_shapes(&positions, &supports, &approximation, &[OpSet::D1 | OpSet::D2; 49]).unwrap();
+        (positions, supports, shapes)
+    }
+
+    /// `sum_j a_rj x_j` for every row the entries touch.
+    fn apply(entries: &Entries, x: &[f64]) -> std::collections::BTreeMap<usize, f64> {
+        let mut rows = std::collections::BTreeMap::new();
+        for &(r, c, v) in entries {
+            *rows.entry(r).or_insert(0.0) += v * x[c];
+        }
+        rows
+    }
+
+    /// Degree-2 shapes differentiate quadratics exactly, so every row evaluated on the
+    /// nodal values of a quadratic field equals its equation evaluated on the field
+    /// itself, up to round-off of the local solves (1e-9 of the second derivatives,
+    /// which are O(1) here while the shapes are O(1/h^2) = O(100)).
+    #[test]
+    fn rows_are_exact_on_quadratic_fields() {
+        let (positions, supports, shapes) = lattice();
+        let lame = Lame { lambda: 2.0, mu: 0.7 };
+        let dofs = DofMap::displacement_only(positions.len());
+        let writer = RowWriter { dofs, lame, supports: &supports, shapes: &shapes };
+        // u = x + 0.5 x^2 - xy + 2 y^2, v = -y + 3 x y + 0.25 x^2.
+        let field =
+            |p: [f64; 2]| [p[0] + 0.5 * p[0] * p[0] - p[0] * p[1] + 2.0 * p[1] * p[1], -p[1] + 3.0 * p[0] * p[1] + 0.25 * p[0] * p[0]];
+        let x = dofs.from_displacements(|i| field(positions[i]));
+        let (uxx, uxy, uyy, vxx, vxy, vyy) = (1.0, -1.0, 4.0, 0.5, 3.0, 0.0);
+        let (l, m) = (lame.lambda, lame.mu);
+
+        let mut e = Entries::new();
+        let rhs = writer.navier(24, 24, [0.3, -0.1], &mut e);
+        let rows = apply(&e, &x);
+        let navier = [(l + 2.0 * m) * uxx + m * uyy + (l + m) * vxy, (l + m) * uxy + m * vxx + (l + 2.0 * m) * vyy];
+        for c in 0..2 {
+            assert!((rows[&dofs.dof(24, c)] - navier[c]).abs() < 1e-9, "Navier row {c}: {} vs {}", rows[&dofs.dof(24, c)], navier[c]);
+        }
+        assert_eq!(rhs, [-0.3, 0.1]);
+
+        // Traction rows at node 23 with a unit normal, written into the rows of node 5.
+        let n = [0.6, 0.8];
+        let p = positions[23];
+        let g = [[1.0 + p[0] - p[1], -p[0] + 4.0 * p[1]], [3.0 * p[1] + 0.5 * p[0], -1.0 + 3.0 * p[0]]];
+        let sigma = lame.stress(g);
+        let sn = [sigma[0] * n[0] + sigma[2] * n[1], sigma[2] * n[0] + sigma[1] * n[1]];
+        for c in 0..2 {
+            let mut e = Entries::new();
+            assert_eq!(writer.traction(23, 5, c, n, 7.0, &mut e), 7.0);
+            let rows = apply(&e, &x);
+            assert_eq!(rows.keys().copied().collect::<Vec<_>>(), vec![dofs.dof(5, c)]);
+            assert!((rows[&dofs.dof(5, c)] - sn[c]).abs() < 1e-9, "traction row {c}");
+        }
+
+        // A displacement row is the identity row of its unknown.
+        let mut e = Entries::new();
+        assert_eq!(writer.displacement(3, 1, 0.25, &mut e), 0.25);
+        assert_eq!(e, vec![(dofs.dof(3, 1), dofs.dof(3, 1), 1.0)]);
+    }
+}

@@ -62,3 +62,36 @@ impl Families {
         self.offsets[i]..self.offsets[i + 1]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The k-d tree query finds exactly the brute-force neighbours, sorted, without
+    /// the node itself; bonds between free nodes come in pairs.
+    #[test]
+    fn families_are_the_brute_force_neighbourhoods() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let points: Vec<Point> = (0..400).map(|_| [rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)]).collect();
+        let (free, radius) = (300, 0.12);
+        let f = Families::within(&points, free, radius);
+        assert_eq!(f.len(), free);
+        let mut total = 0;
+        for i in 0..free {
+            let brute: Vec<u32> = (0..points.len())
+                .filter(|&j| j != i && (points[i][0] - points[j][0]).hypot(points[i][1] - points[j][1]) <= radius)
+                .map(|j| j as u32)
+                .collect();
+            assert_eq!(f.of(i), brute.as_slice(), "family of node {i}");
+            assert_eq!(f.range(i).len(), brute.len());
+            total += brute.len();
+            for &j in f.of(i) {
+                if (j as usize) < free {
+                    assert!(f.of(j as usize).contains(&(i as u32)), "bond {i}-{j} has no partner");
+                }
+            }
+        }
+        assert_eq!(f.bonds(), total);
+    }
+}

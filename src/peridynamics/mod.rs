@@ -52,3 +52,39 @@ pub mod stage {
     /// Strain, stress, errors.
     pub const POST: Stage = Stage::new("post");
 }
+
+/// A small plate shared by the stage tests of this model.
+#[cfg(test)]
+pub(crate) mod test_case {
+    use super::nodes::{self, Body, PdNodes};
+    use super::{BondForce, Kernel, PdParams, Quadrature, SurfaceCorrection};
+    use crate::domain::Domain;
+    use crate::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
+    use crate::linalg::SolverParams;
+
+    /// The plate `[0, 1] x [0, 0.5]`: left edge clamped, right edge loaded by the
+    /// traction `t`, top and bottom free (parts bottom, right, top, left).
+    pub(crate) fn plate(t: [f64; 2]) -> (Domain, Vec<BoundaryCondition>) {
+        let clamped = BoundaryCondition { components: [ComponentCondition::Displacement; 2], value: Value::Constant([0.0, 0.0]) };
+        let loaded = BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Constant(t) };
+        (Domain::rectangle([0.0, 0.0], [1.0, 0.5]), vec![BoundaryCondition::FREE, loaded, BoundaryCondition::FREE, clamped])
+    }
+
+    /// Horizon `delta`, `m = 3`, the plain kernel and `quadrature`.
+    pub(crate) fn params(delta: f64, quadrature: Quadrature) -> PdParams {
+        PdParams {
+            horizon: delta,
+            ratio: 3.0,
+            kernel: Kernel::Plain,
+            quadrature,
+            correction: SurfaceCorrection::None,
+            solver: SolverParams::default(),
+            force: BondForce::Linear,
+        }
+    }
+
+    /// The nodes of the plate of [`plate`] for `params`.
+    pub(crate) fn plate_nodes(domain: &Domain, conditions: &[BoundaryCondition], params: &PdParams) -> PdNodes {
+        nodes::generate(&Body::new(domain, conditions, None, params), params)
+    }
+}

@@ -43,3 +43,33 @@ pub fn gradients(nodes: &PdNodes, families: &Families, u: &[[f64; 2]]) -> Vec<[[
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::peridynamics::test_case::{params, plate, plate_nodes};
+    use crate::peridynamics::weights::search_radius as radius;
+    use crate::peridynamics::Quadrature;
+
+    /// The least-squares gradient is exact for linear fields, at complete and
+    /// truncated families alike (round-off 1e-12 relative to |grad u| = O(1)).
+    #[test]
+    fn linear_fields_have_their_exact_gradient() {
+        let (domain, conditions) = plate([1.0, 0.0]);
+        let g = [[0.3, -1.2], [0.7, 0.05]];
+        for rule in [Quadrature::FullArea, Quadrature::TriangleP2] {
+            let p = params(0.06, rule);
+            let nodes = plate_nodes(&domain, &conditions, &p);
+            let families = Families::within(&nodes.positions, nodes.free, radius(&p));
+            let u: Vec<[f64; 2]> =
+                nodes.positions.iter().map(|x| [1.0 + g[0][0] * x[0] + g[0][1] * x[1], -2.0 + g[1][0] * x[0] + g[1][1] * x[1]]).collect();
+            for (i, gi) in gradients(&nodes, &families, &u).iter().enumerate() {
+                for a in 0..2 {
+                    for c in 0..2 {
+                        assert!((gi[a][c] - g[a][c]).abs() < 1e-12, "{rule:?} node {i}: {gi:?}");
+                    }
+                }
+            }
+        }
+    }
+}
