@@ -4,7 +4,7 @@
 //! models read a [`Case`]; each adds its own discretisation parameters
 //! (`navier::NavierParams`, `peridynamics::PdParams`).
 
-use crate::choice::Choice;
+use crate::choice::choice;
 use crate::domain::Domain;
 use crate::dynamics::DynamicsParams;
 use crate::elasticity::conditions::{BoundaryCondition, Value};
@@ -27,32 +27,22 @@ pub struct Outputs {
     pub error: bool,
 }
 
-/// A field of `output.fields`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum OutputField {
-    /// Displacement (always written).
-    Displacement,
-    /// Strain components.
-    Strain,
-    /// Stress components.
-    Stress,
-    /// Von Mises stress.
-    VonMises,
-    /// Errors against the exact solution.
-    Error,
-}
-
-impl Choice for OutputField {
-    const FIELD: &'static str = "output.fields[k]";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (OutputField::Displacement, "displacement", "the displacement vector (always written)"),
-        (OutputField::Strain, "strain", "eps_xx, eps_yy, eps_xy"),
-        (OutputField::Stress, "stress", "sigma_xx, sigma_yy, sigma_xy (and sigma_zz in plane strain)"),
-        (OutputField::VonMises, "von_mises", "von Mises stress"),
-        (OutputField::Error, "error", "exact displacement and the error fields and norms (needs [exact])"),
-    ];
-    const DEFAULT: Option<Self> = None;
-    const DEFAULT_NOTE: &'static str = "displacement, stress, von_mises, and error when the scene has [exact]";
+choice! {
+    /// A field of `output.fields`.
+    pub enum OutputField("output.fields[k]") {
+        /// Displacement (always written).
+        Displacement = "displacement" => "the displacement vector (always written)",
+        /// Strain components.
+        Strain = "strain" => "eps_xx, eps_yy, eps_xy",
+        /// Stress components.
+        Stress = "stress" => "sigma_xx, sigma_yy, sigma_xy (and sigma_zz in plane strain)",
+        /// Von Mises stress.
+        VonMises = "von_mises" => "von Mises stress",
+        /// Errors against the exact solution.
+        Error = "error" => "exact displacement and the error fields and norms (needs [exact])",
+    }
+    default = None;
+    default_note = "displacement, stress, von_mises, and error when the scene has [exact]";
 }
 
 impl Outputs {

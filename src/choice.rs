@@ -7,6 +7,44 @@
 //! exponent, ...) has a fieldless companion enum (`BasisKind`, `KernelKind`, ...)
 //! that implements [`Choice`]; the numbers come from their own scene fields.
 
+/// Define an option enum and its [`Choice`] table together: every variant with its
+/// scene name and one-line help (which is also the variant's doc), then the default.
+///
+/// ```text
+/// choice! {
+///     /// How a region combines with the regions before it.
+///     pub enum CsgOp("domain.region[k].op") {
+///         Union = "union" => "add the region",
+///         Subtract = "subtract" => "cut the region out",
+///     }
+///     default = Some(CsgOp::Union);
+/// }
+/// ```
+macro_rules! choice {
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $name:ident ($field:literal) {
+            $( $(#[$vmeta:meta])* $variant:ident = $value:literal => $help:literal ),+ $(,)?
+        }
+        default = $default:expr;
+        $( default_note = $note:literal; )?
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        $vis enum $name {
+            $( $(#[$vmeta])* #[doc = $help] $variant ),+
+        }
+
+        impl $crate::choice::Choice for $name {
+            const FIELD: &'static str = $field;
+            const VALUES: &'static [(Self, &'static str, &'static str)] = &[$(($name::$variant, $value, $help)),+];
+            const DEFAULT: Option<Self> = $default;
+            $( const DEFAULT_NOTE: &'static str = $note; )?
+        }
+    };
+}
+pub(crate) use choice;
+
 /// An option enum: its values, their scene names and help, its default.
 pub trait Choice: Copy + PartialEq + Sized + 'static {
     /// The scene field that chooses it, as written in the reference (`approximation.basis`).
@@ -92,16 +130,13 @@ pub fn reference_markdown(options: &[OptionDoc]) -> String {
 mod tests {
     use super::*;
 
-    #[derive(Debug, Clone, Copy, PartialEq)]
-    enum Colour {
-        Red,
-        Blue,
-    }
-
-    impl Choice for Colour {
-        const FIELD: &'static str = "paint.colour";
-        const VALUES: &'static [(Self, &'static str, &'static str)] = &[(Colour::Red, "red", "warm"), (Colour::Blue, "blue", "cold")];
-        const DEFAULT: Option<Self> = Some(Colour::Blue);
+    choice! {
+        /// A test option.
+        enum Colour("paint.colour") {
+            Red = "red" => "warm",
+            Blue = "blue" => "cold",
+        }
+        default = Some(Colour::Blue);
     }
 
     #[test]

@@ -29,8 +29,23 @@ impl Stage {
     }
 }
 
-/// Writing the results (timed by the command that writes them).
-pub const OUTPUT: Stage = Stage::new("output");
+/// Stages every model has; a model adds its own (`navier::stage`,
+/// `peridynamics::stage`, `dynamics::INTEGRATE`).
+pub mod stage {
+    use super::Stage;
+    /// Node generation.
+    pub const NODES: Stage = Stage::new("nodes");
+    /// Matrix assembly (for dynamics: the operator, loads and its factorisations).
+    pub const ASSEMBLY: Stage = Stage::new("assembly");
+    /// Linear solve.
+    pub const SOLVE: Stage = Stage::new("solve");
+    /// Strain, stress, errors.
+    pub const POST: Stage = Stage::new("post");
+    /// Writing the results (timed by the command that writes them).
+    pub const OUTPUT: Stage = Stage::new("output");
+}
+
+pub use stage::OUTPUT;
 
 /// Observer of stage starts and ends (the CLI shows progress with it).
 pub trait Progress: Sync {

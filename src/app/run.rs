@@ -80,61 +80,54 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
     let mut series = Series::new(&dir, &p.case.domain);
     let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot))?;
     let t_out = Instant::now();
+    let seconds = || t_out.elapsed().as_secs_f64();
     match outcome {
         Outcome::NavierStatic(mut sol) => {
-            create_dir(&dir)?;
-            write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, &navier_fields(&p.case, &sol))?;
-            sol.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
-            output::write_json(&dir.join("summary.json"), &NavierSummary::new(&p, &sol, t0))?;
-            term.line(OUTPUT, t_out.elapsed().as_secs_f64(), &dir.display().to_string());
+            write_solution(&p, &dir, &sol.nodes.positions, &navier_fields(&p.case, &sol))?;
+            sol.timings.record(OUTPUT, seconds());
+            write_summary(&dir, &NavierSummary::new(&p, &sol, t0), term, seconds())?;
             if !quiet {
                 print_navier(&sol);
             }
         }
         Outcome::PdStatic(mut sol) => {
-            create_dir(&dir)?;
-            write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions[..sol.nodes.free], &p.case.domain, &pd_fields(&p.case, &sol))?;
-            sol.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
-            output::write_json(&dir.join("summary.json"), &PdSummary::new(&p, &sol, t0))?;
-            term.line(OUTPUT, t_out.elapsed().as_secs_f64(), &dir.display().to_string());
+            write_solution(&p, &dir, &sol.nodes.positions[..sol.nodes.free], &pd_fields(&p.case, &sol))?;
+            sol.timings.record(OUTPUT, seconds());
+            write_summary(&dir, &PdSummary::new(&p, &sol, t0), term, seconds())?;
             if !quiet {
                 print_pd(&sol);
             }
         }
         Outcome::NavierDynamic(mut sim) => {
             series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
-            sim.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
-            let part = NavierDynamicPart {
-                model: "navier",
-                ghost_nodes: sim.ghost_nodes,
-                dynamic_unknowns: sim.unknowns.0,
-                algebraic_unknowns: sim.unknowns.1,
-                spacing: p.navier.fill.spacing,
-                approximation: p.navier.approximation,
-            };
+            sim.timings.record(OUTPUT, seconds());
             let dynamic = Dynamic { nodes: sim.positions.len(), report: &sim.report, energies: &sim.energies, timings: &sim.timings };
-            write_dynamic(&p, &dir, dynamic, part, t0, quiet)?;
+            write_dynamic(&p, &dir, dynamic, NavierDynamicPart::of(&p, &sim), t0, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
             series.finish(&sim.energies, &nodes.positions[..nodes.free], &sim.u, &sim.v)?;
-            sim.timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
-            let part = PdDynamicPart {
-                model: "peridynamics",
-                constrained_nodes: nodes.constrained(),
-                bonds: sim.discretisation.families.bonds(),
-                spacing: nodes.spacing,
-                peridynamics: p.peridynamics.expect("peridynamic run"),
-                micromodulus: sim.discretisation.micromodulus,
-                bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
-            };
+            sim.timings.record(OUTPUT, seconds());
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
             let dynamic = Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings };
-            write_dynamic(&p, &dir, dynamic, part, t0, quiet)?;
+            write_dynamic(&p, &dir, dynamic, PdDynamicPart::of(&p, &sim), t0, quiet)?;
         }
     }
+    Ok(())
+}
+
+/// `solution.vtu` of a static run: `points` with `fields`.
+fn write_solution(p: &Problem, dir: &Path, points: &[[f64; 2]], fields: &[crate::output::PointField]) -> Result<(), AppError> {
+    create_dir(dir)?;
+    write_points_vtu(&dir.join("solution.vtu"), points, &p.case.domain, fields)
+}
+
+/// `summary.json` of a static run, and the output line on the terminal.
+fn write_summary(dir: &Path, summary: &impl Serialize, term: &Terminal, seconds: f64) -> Result<(), AppError> {
+    output::write_json(&dir.join("summary.json"), summary)?;
+    term.line(OUTPUT, seconds, &dir.display().to_string());
     Ok(())
 }
 

@@ -174,24 +174,52 @@ impl<'a> PdSummary<'a> {
 /// What the peridynamic model adds to a dynamic summary.
 #[derive(Serialize)]
 pub(super) struct PdDynamicPart {
-    pub(super) model: &'static str,
-    pub(super) constrained_nodes: usize,
-    pub(super) bonds: usize,
-    pub(super) spacing: f64,
-    pub(super) peridynamics: PdParams,
-    pub(super) micromodulus: Micromodulus,
-    pub(super) bond_updates_per_second_per_thread: f64,
+    model: &'static str,
+    constrained_nodes: usize,
+    bonds: usize,
+    spacing: f64,
+    peridynamics: PdParams,
+    micromodulus: Micromodulus,
+    bond_updates_per_second_per_thread: f64,
+}
+
+impl PdDynamicPart {
+    pub(super) fn of(p: &Problem, sim: &crate::peridynamics::Simulation) -> Self {
+        let disc = &sim.discretisation;
+        PdDynamicPart {
+            model: "peridynamics",
+            constrained_nodes: disc.nodes.constrained(),
+            bonds: disc.families.bonds(),
+            spacing: disc.nodes.spacing,
+            peridynamics: p.peridynamics.expect("peridynamic run"),
+            micromodulus: disc.micromodulus,
+            bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
+        }
+    }
 }
 
 /// What the Navier model adds to a dynamic summary.
 #[derive(Serialize)]
 pub(super) struct NavierDynamicPart {
-    pub(super) model: &'static str,
-    pub(super) ghost_nodes: usize,
-    pub(super) dynamic_unknowns: usize,
-    pub(super) algebraic_unknowns: usize,
-    pub(super) spacing: f64,
-    pub(super) approximation: Approximation,
+    model: &'static str,
+    ghost_nodes: usize,
+    dynamic_unknowns: usize,
+    algebraic_unknowns: usize,
+    spacing: f64,
+    approximation: Approximation,
+}
+
+impl NavierDynamicPart {
+    pub(super) fn of(p: &Problem, sim: &navier::Simulation) -> Self {
+        NavierDynamicPart {
+            model: "navier",
+            ghost_nodes: sim.ghost_nodes,
+            dynamic_unknowns: sim.unknowns.0,
+            algebraic_unknowns: sim.unknowns.1,
+            spacing: p.navier.fill.spacing,
+            approximation: p.navier.approximation,
+        }
+    }
 }
 
 /// `summary.json` of a time-dependent run.

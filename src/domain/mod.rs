@@ -12,28 +12,22 @@ pub mod ghost;
 pub mod neighbors;
 pub mod shape;
 
-use crate::choice::Choice;
+use crate::choice::choice;
 pub use boundary::BoundarySample;
 pub use shape::{CsgOp, Domain, Point, Primitive, PrimitiveKind, Region};
 
-/// How interior nodes are placed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum FillKind {
-    /// Lattice of the bounding box, clipped to the solid.
-    Grid,
-    /// Advancing-front Poisson-disk fill.
-    Scattered,
-}
-
-impl Choice for FillKind {
-    const FIELD: &'static str = "nodes.fill";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (FillKind::Grid, "grid", "lattice of the bounding box at the spacing, clipped to the solid"),
-        (FillKind::Scattered, "scattered", "advancing-front Poisson-disk fill, seeded by `seed`"),
-    ];
-    const DEFAULT: Option<Self> = None;
-    const DEFAULT_NOTE: &'static str = "\"grid\" for a single rectangle, else \"scattered\"";
+choice! {
+    /// How interior nodes are placed.
+    #[derive(serde::Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum FillKind("nodes.fill") {
+        /// Lattice of the bounding box, clipped to the solid.
+        Grid = "grid" => "lattice of the bounding box at the spacing, clipped to the solid",
+        /// Advancing-front Poisson-disk fill.
+        Scattered = "scattered" => "advancing-front Poisson-disk fill, seeded by `seed`",
+    }
+    default = None;
+    default_note = "\"grid\" for a single rectangle, else \"scattered\"";
 }
 
 /// Parameters of the node generator.

@@ -8,7 +8,7 @@
 //! boundary part (rectangle: `bottom`, `right`, `top`, `left`; disc: its `name`;
 //! polygon: one name per edge), which boundary conditions refer to.
 
-use crate::choice::Choice;
+use crate::choice::choice;
 
 /// A point or vector in the plane.
 pub type Point = [f64; 2];
@@ -24,46 +24,27 @@ pub enum Primitive {
     Polygon { vertices: Vec<Point> },
 }
 
-/// The name of a primitive in a scene (`domain.region[k].shape`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PrimitiveKind {
-    /// [`Primitive::Rectangle`].
-    Rectangle,
-    /// [`Primitive::Disc`].
-    Disc,
-    /// [`Primitive::Polygon`].
-    Polygon,
+choice! {
+    /// The name of a primitive in a scene (`domain.region[k].shape`).
+    pub enum PrimitiveKind("domain.region[k].shape") {
+        Rectangle = "rectangle" => "`min`, `max`; edges bottom, right, top, left (rename with `names`)",
+        Disc = "disc" => "`center`, `radius`; one edge (`name`, default \"rim\", \"hole\" when subtracted)",
+        Polygon = "polygon" => "`vertices` (either orientation); edge k joins vertex k to k+1 (`edge_names`)",
+    }
+    default = None;
 }
 
-impl Choice for PrimitiveKind {
-    const FIELD: &'static str = "domain.region[k].shape";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (PrimitiveKind::Rectangle, "rectangle", "`min`, `max`; edges bottom, right, top, left (rename with `names`)"),
-        (PrimitiveKind::Disc, "disc", "`center`, `radius`; one edge (`name`, default \"rim\", \"hole\" when subtracted)"),
-        (PrimitiveKind::Polygon, "polygon", "`vertices` (either orientation); edge k joins vertex k to k+1 (`edge_names`)"),
-    ];
-    const DEFAULT: Option<Self> = None;
-}
-
-impl Choice for CsgOp {
-    const FIELD: &'static str = "domain.region[k].op";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (CsgOp::Union, "union", "add the region to the regions before it"),
-        (CsgOp::Subtract, "subtract", "cut the region out of the regions before it (holes)"),
-        (CsgOp::Intersect, "intersect", "keep only what lies in the region too"),
-    ];
-    const DEFAULT: Option<Self> = Some(CsgOp::Union);
-}
-
-/// How a region combines with everything before it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CsgOp {
-    /// `A u B`.
-    Union,
-    /// `A \ B` (holes).
-    Subtract,
-    /// `A n B`.
-    Intersect,
+choice! {
+    /// How a region combines with everything before it.
+    pub enum CsgOp("domain.region[k].op") {
+        /// `A u B`.
+        Union = "union" => "add the region to the regions before it",
+        /// `A \ B` (holes).
+        Subtract = "subtract" => "cut the region out of the regions before it (holes)",
+        /// `A n B`.
+        Intersect = "intersect" => "keep only what lies in the region too",
+    }
+    default = Some(CsgOp::Union);
 }
 
 /// One primitive with its CSG operation and the boundary part of each of its edges.

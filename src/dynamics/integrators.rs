@@ -15,30 +15,23 @@
 //! central-difference limit.
 
 use super::{SecondOrderSystem, State};
-use crate::choice::Choice;
+use crate::choice::choice;
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// An explicit time integrator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Integrator {
-    /// Velocity by forward, displacement by backward differences (symplectic Euler).
-    Emu,
-    /// Stormer-Verlet (velocity form).
-    Verlet,
-    /// Classical fourth-order Runge-Kutta.
-    Rk4,
-}
-
-impl Choice for Integrator {
-    const FIELD: &'static str = "dynamics.integrator";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (Integrator::Emu, "emu", "v += dt a(u), then u += dt v (seed 000, alg. 4.3.1); orders 2, 1, 1 in u, v, a"),
-        (Integrator::Verlet, "verlet", "Stormer-Verlet (velocity form); second order, bounded energy error"),
-        (Integrator::Rk4, "rk4", "classical fourth-order Runge-Kutta; stable to sqrt(2) times the central-difference step"),
-    ];
-    const DEFAULT: Option<Self> = Some(Integrator::Verlet);
+choice! {
+    /// An explicit time integrator.
+    #[derive(Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Integrator("dynamics.integrator") {
+        /// Velocity by forward, displacement by backward differences (symplectic Euler).
+        Emu = "emu" => "v += dt a(u), then u += dt v (seed 000, alg. 4.3.1); orders 2, 1, 1 in u, v, a",
+        /// Stormer-Verlet (velocity form).
+        Verlet = "verlet" => "Stormer-Verlet (velocity form); second order, bounded energy error",
+        /// Classical fourth-order Runge-Kutta.
+        Rk4 = "rk4" => "classical fourth-order Runge-Kutta; stable to sqrt(2) times the central-difference step",
+    }
+    default = Some(Integrator::Verlet);
 }
 
 impl Integrator {

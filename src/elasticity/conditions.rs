@@ -2,48 +2,34 @@
 //! vocabulary both models read (the Navier model turns them into equations at its
 //! boundary nodes, peridynamics into volume constraints and layer loads).
 
-use crate::choice::Choice;
+use crate::choice::choice;
 use serde::Serialize;
 
-/// How a displacement component is constrained on a boundary part.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ComponentCondition {
-    /// Prescribed displacement component.
-    Displacement,
-    /// Prescribed traction component `(sigma n)_c`.
-    Traction,
+choice! {
+    /// How a displacement component is constrained on a boundary part.
+    #[derive(Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum ComponentCondition("boundary[k].x, boundary[k].y") {
+        /// Prescribed displacement component.
+        Displacement = "displacement" => "the component of `value` is the displacement u_c",
+        /// Prescribed traction component `(sigma n)_c`.
+        Traction = "traction" => "the component of `value` is the traction (sigma n)_c",
+    }
+    default = None;
+    default_note = "required for kind = \"mixed\"";
 }
 
-impl Choice for ComponentCondition {
-    const FIELD: &'static str = "boundary[k].x, boundary[k].y";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (ComponentCondition::Displacement, "displacement", "the component of `value` is the displacement u_c"),
-        (ComponentCondition::Traction, "traction", "the component of `value` is the traction (sigma n)_c"),
-    ];
-    const DEFAULT: Option<Self> = None;
-    const DEFAULT_NOTE: &'static str = "required for kind = \"mixed\"";
-}
-
-/// What a `[[boundary]]` entry prescribes on its part.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ConditionKind {
-    /// Both displacement components.
-    Displacement,
-    /// Both traction components.
-    Traction,
-    /// One condition per component (`x`, `y`).
-    Mixed,
-}
-
-impl Choice for ConditionKind {
-    const FIELD: &'static str = "boundary[k].kind";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (ConditionKind::Displacement, "displacement", "u = `value` (m)"),
-        (ConditionKind::Traction, "traction", "sigma n = `value` (Pa); a free edge is [0, 0]"),
-        (ConditionKind::Mixed, "mixed", "per component: `x` and `y` name the condition of each (e.g. symmetry)"),
-    ];
-    const DEFAULT: Option<Self> = None;
+choice! {
+    /// What a `[[boundary]]` entry prescribes on its part.
+    pub enum ConditionKind("boundary[k].kind") {
+        /// Both displacement components.
+        Displacement = "displacement" => "u = `value` (m)",
+        /// Both traction components.
+        Traction = "traction" => "sigma n = `value` (Pa); a free edge is [0, 0]",
+        /// One condition per component (`x`, `y`).
+        Mixed = "mixed" => "per component: `x` and `y` name the condition of each (e.g. symmetry)",
+    }
+    default = None;
 }
 
 /// Where a boundary or body-force value comes from.

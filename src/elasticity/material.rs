@@ -11,26 +11,20 @@
 //! conversely a plane-stress `(E, nu)` is the plane-strain
 //! `E'' = E (1 + 2 nu) / (1 + nu)^2`, `nu'' = nu / (1 + nu)`.
 
-use crate::choice::Choice;
+use crate::choice::choice;
 use serde::Serialize;
 
-/// Which planar reduction of 3D elasticity is solved.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PlaneModel {
-    /// Thin plate: `sigma_zz = sigma_xz = sigma_yz = 0`.
-    Stress,
-    /// Long prism: `eps_zz = eps_xz = eps_yz = 0`; `sigma_zz = nu (sigma_xx + sigma_yy)`.
-    Strain,
-}
-
-impl Choice for PlaneModel {
-    const FIELD: &'static str = "material.plane";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (PlaneModel::Stress, "stress", "thin plate: sigma_zz = 0"),
-        (PlaneModel::Strain, "strain", "long prism: eps_zz = 0, sigma_zz = nu (sigma_xx + sigma_yy)"),
-    ];
-    const DEFAULT: Option<Self> = None;
+choice! {
+    /// Which planar reduction of 3D elasticity is solved.
+    #[derive(Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum PlaneModel("material.plane") {
+        /// Thin plate: `sigma_zz = sigma_xz = sigma_yz = 0`.
+        Stress = "stress" => "thin plate: sigma_zz = 0",
+        /// Long prism: `eps_zz = eps_xz = eps_yz = 0`; `sigma_zz = nu (sigma_xx + sigma_yy)`.
+        Strain = "strain" => "long prism: eps_zz = 0, sigma_zz = nu (sigma_xx + sigma_yy)",
+    }
+    default = None;
 }
 
 /// Young's modulus and Poisson's ratio of an isotropic solid.

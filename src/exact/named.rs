@@ -3,7 +3,7 @@
 //! (`PARAMETERS`, `from_parameters`); [`ExactKind`] lists them.
 
 use super::{Cantilever, ExactSolution, Kirsch, LameCylinder, Manufactured, ParameterError, Polynomial};
-use crate::choice::Choice;
+use crate::choice::choice;
 use crate::elasticity::material::Material;
 
 /// What values a parameter accepts.
@@ -54,34 +54,17 @@ impl Parameters {
     }
 }
 
-/// The closed-form solutions a scene can name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ExactKind {
-    /// [`Cantilever`].
-    Cantilever,
-    /// [`Kirsch`].
-    Kirsch,
-    /// [`LameCylinder`].
-    Lame,
-    /// [`Manufactured`].
-    Manufactured,
-    /// [`Polynomial::uniaxial_tension`].
-    Tension,
-    /// [`Polynomial`].
-    Polynomial,
-}
-
-impl Choice for ExactKind {
-    const FIELD: &'static str = "exact.kind";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (ExactKind::Cantilever, "cantilever", "Timoshenko cantilever under an end load (`load`, `length`, `depth`)"),
-        (ExactKind::Kirsch, "kirsch", "infinite plate with a hole under uniaxial tension (`tension`, `radius`)"),
-        (ExactKind::Lame, "lame", "thick cylinder under internal pressure (`pressure`, `inner`, `outer`)"),
-        (ExactKind::Manufactured, "manufactured", "u = (sin(pi x) cos(pi y), x^2 y^3) with its body force (needs body_force = \"exact\")"),
-        (ExactKind::Tension, "tension", "uniform uniaxial stress sigma_xx = `tension`"),
-        (ExactKind::Polynomial, "polynomial", "a cubic field with its body force (`ux`, `uy`: 10 coefficients each)"),
-    ];
-    const DEFAULT: Option<Self> = None;
+choice! {
+    /// The closed-form solutions a scene can name.
+    pub enum ExactKind("exact.kind") {
+        Cantilever = "cantilever" => "Timoshenko cantilever under an end load (`load`, `length`, `depth`)",
+        Kirsch = "kirsch" => "infinite plate with a hole under uniaxial tension (`tension`, `radius`)",
+        Lame = "lame" => "thick cylinder under internal pressure (`pressure`, `inner`, `outer`)",
+        Manufactured = "manufactured" => "u = (sin(pi x) cos(pi y), x^2 y^3) with its body force (needs body_force = \"exact\")",
+        Tension = "tension" => "uniform uniaxial stress sigma_xx = `tension`",
+        Polynomial = "polynomial" => "a cubic field with its body force (`ux`, `uy`: 10 coefficients each)",
+    }
+    default = None;
 }
 
 impl ExactKind {

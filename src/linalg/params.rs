@@ -1,7 +1,7 @@
 //! What a solve is asked to do: the solver, its preconditioner and settings, and
 //! their names in a scene file.
 
-use crate::choice::Choice;
+use crate::choice::choice;
 
 /// Preconditioner `M ≈ A` for BiCGSTAB, applied on the right
 /// (`A M⁻¹ y = b`, `x = M⁻¹ y`).
@@ -91,44 +91,24 @@ impl SolverKind {
     }
 }
 
-/// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SolverMethod {
-    /// [`SolverKind::Lu`].
-    Lu,
-    /// [`SolverKind::Bicgstab`].
-    Bicgstab,
+choice! {
+    /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
+    pub enum SolverMethod("solver.kind") {
+        Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
+        Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
+    }
+    default = Some(SolverMethod::Lu);
+    default_note = "\"lu\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"";
 }
 
-impl Choice for SolverMethod {
-    const FIELD: &'static str = "solver.kind";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (SolverMethod::Lu, "lu", "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count"),
-        (SolverMethod::Bicgstab, "bicgstab", "right-preconditioned BiCGSTAB to a true relative residual `tolerance`"),
-    ];
-    const DEFAULT: Option<Self> = Some(SolverMethod::Lu);
-    const DEFAULT_NOTE: &'static str = "\"lu\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"";
-}
-
-/// The name of a preconditioner in a scene (`solver.preconditioner`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PreconditionerKind {
-    /// [`Preconditioner::Ilut`].
-    Ilut,
-    /// [`Preconditioner::Ilu0`].
-    Ilu0,
-    /// [`Preconditioner::Jacobi`].
-    Jacobi,
-}
-
-impl Choice for PreconditionerKind {
-    const FIELD: &'static str = "solver.preconditioner";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (PreconditionerKind::Ilut, "ilut", "Saad's dual-threshold ILUT(drop, fill), defaults drop = 1e-5, fill = 20"),
-        (PreconditionerKind::Ilu0, "ilu0", "zero-fill incomplete LU"),
-        (PreconditionerKind::Jacobi, "jacobi", "the diagonal"),
-    ];
-    const DEFAULT: Option<Self> = Some(PreconditionerKind::Ilut);
+choice! {
+    /// The name of a preconditioner in a scene (`solver.preconditioner`).
+    pub enum PreconditionerKind("solver.preconditioner") {
+        Ilut = "ilut" => "Saad's dual-threshold ILUT(drop, fill), defaults drop = 1e-5, fill = 20",
+        Ilu0 = "ilu0" => "zero-fill incomplete LU",
+        Jacobi = "jacobi" => "the diagonal",
+    }
+    default = Some(PreconditionerKind::Ilut);
 }
 
 impl Preconditioner {

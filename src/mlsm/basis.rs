@@ -13,7 +13,7 @@
 //! (distance from the centre to its nearest neighbour).
 
 use super::ops::Op;
-use crate::choice::Choice;
+use crate::choice::choice;
 use serde::Serialize;
 
 /// Radial function of an RBF basis.
@@ -40,32 +40,17 @@ pub enum Basis {
     Rbf { rbf: RbfKind, shape: f64 },
 }
 
-/// The name of a basis in a scene (`approximation.basis`); its degree or shape
-/// parameter are their own fields.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BasisKind {
-    /// [`Basis::Monomials`].
-    Monomials,
-    /// [`Basis::Tensor`].
-    Tensor,
-    /// [`Basis::Rbf`] with [`RbfKind::Gaussian`].
-    Gaussian,
-    /// [`Basis::Rbf`] with [`RbfKind::Mq`].
-    Mq,
-    /// [`Basis::Rbf`] with [`RbfKind::Imq`].
-    Imq,
-}
-
-impl Choice for BasisKind {
-    const FIELD: &'static str = "approximation.basis";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (BasisKind::Monomials, "monomials", "monomials x^a y^b of total degree a + b <= `degree` (2..6, default 2)"),
-        (BasisKind::Tensor, "tensor", "tensor-product monomials x^a y^b, a, b <= `degree`"),
-        (BasisKind::Gaussian, "gaussian", "Gaussian RBF exp(-(r/c)^2) at the support nodes, c = `shape` x local spacing"),
-        (BasisKind::Mq, "mq", "multiquadric RBF sqrt(r^2 + c^2), c = `shape` x local spacing"),
-        (BasisKind::Imq, "imq", "inverse multiquadric RBF 1/sqrt(r^2 + c^2), c = `shape` x local spacing"),
-    ];
-    const DEFAULT: Option<Self> = Some(BasisKind::Monomials);
+choice! {
+    /// The name of a basis in a scene (`approximation.basis`); its degree or shape
+    /// parameter are their own fields.
+    pub enum BasisKind("approximation.basis") {
+        Monomials = "monomials" => "monomials x^a y^b of total degree a + b <= `degree` (2..6, default 2)",
+        Tensor = "tensor" => "tensor-product monomials x^a y^b, a, b <= `degree`",
+        Gaussian = "gaussian" => "Gaussian RBF exp(-(r/c)^2) at the support nodes, c = `shape` x local spacing",
+        Mq = "mq" => "multiquadric RBF sqrt(r^2 + c^2), c = `shape` x local spacing",
+        Imq = "imq" => "inverse multiquadric RBF 1/sqrt(r^2 + c^2), c = `shape` x local spacing",
+    }
+    default = Some(BasisKind::Monomials);
 }
 
 impl BasisKind {
@@ -80,22 +65,13 @@ impl BasisKind {
     }
 }
 
-/// The name of a weight in a scene (`approximation.weight`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum WeightKind {
-    /// [`Weight::Gaussian`].
-    Gaussian,
-    /// [`Weight::None`].
-    None,
-}
-
-impl Choice for WeightKind {
-    const FIELD: &'static str = "approximation.weight";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (WeightKind::Gaussian, "gaussian", "w(r) = exp(-(r / (sigma h))^2), `sigma` in units of the local spacing h (default 1)"),
-        (WeightKind::None, "none", "w = 1 (unweighted least squares)"),
-    ];
-    const DEFAULT: Option<Self> = Some(WeightKind::Gaussian);
+choice! {
+    /// The name of a weight in a scene (`approximation.weight`).
+    pub enum WeightKind("approximation.weight") {
+        Gaussian = "gaussian" => "w(r) = exp(-(r / (sigma h))^2), `sigma` in units of the local spacing h (default 1)",
+        None = "none" => "w = 1 (unweighted least squares)",
+    }
+    default = Some(WeightKind::Gaussian);
 }
 
 /// Weight of the local fit.

@@ -13,14 +13,19 @@
 //! nodes `n..` of the supports and shapes; they carry no operators of their own.
 
 use super::equations::{resolve, ComponentEquation};
-use super::{stage, NavierParams};
+use super::NavierParams;
 use crate::case::Case;
 use crate::domain::{self, ghost::place_ghosts, neighbors::Supports, NodeSet, Point};
 use crate::elasticity::dofs::DofMap;
 use crate::elasticity::stress::Gradient;
 use crate::exact::ExactSolution;
 use crate::mlsm::{compute_shapes, Op, OpSet, Shapes};
-use crate::pipeline::{RunError, StageTimer};
+use crate::pipeline::{stage, RunError, Stage, StageTimer};
+
+/// Ghost placement and support search.
+pub const SUPPORTS: Stage = Stage::new("supports");
+/// Shape functions.
+pub const SHAPES: Stage = Stage::new("shapes");
 use rayon::prelude::*;
 
 /// Everything the rows of the Navier model are written from (module docs).
@@ -56,14 +61,14 @@ impl Discretisation {
         })?;
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
-        let (positions, ghost, supports) = timer.run(stage::SUPPORTS, || {
+        let (positions, ghost, supports) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
             let supports = Supports::nearest(&positions, n_support);
             let note = format!("{n_support} nearest, {} ghost nodes", positions.len() - nodes.len());
             Ok(((positions, ghost, supports), note))
         })?;
         let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len());
-        let shapes = timer.run(stage::SHAPES, || {
+        let shapes = timer.run(SHAPES, || {
             let s = compute_shapes(&positions, &supports, &params.approximation, &needs)?;
             let note = format!("{} shape functions", s.count());
             Ok((s, note))

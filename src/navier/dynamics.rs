@@ -19,7 +19,7 @@
 
 use super::discrete::Discretisation;
 use super::system::System;
-use super::{stage, NavierParams};
+use super::NavierParams;
 use crate::case::Case;
 use crate::domain::cells::{cells_inside, nodal_areas};
 use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
@@ -28,7 +28,7 @@ use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
 use crate::elasticity::stress::strain;
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
-use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
+use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 
 /// The condensed MLSM system of one discretisation.
 pub struct NavierDynamics {

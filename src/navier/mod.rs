@@ -8,6 +8,9 @@
 //! discretised in strong form by meshless shape functions (MLSM, seed 002): every
 //! node is a collocation point. The pipeline, one file per stage:
 //!
+//! Stages: nodes, supports, shapes, assembly, solve, post (`pipeline::stage` and
+//! [`discrete::SUPPORTS`], [`discrete::SHAPES`]).
+//!
 //! 1. [`discrete`]: nodes (`domain`), boundary equations of each boundary node
 //!    ([`equations`]), ghost nodes, supports, and the shape functions of exactly the
 //!    operators each node needs (`mlsm`);
@@ -27,7 +30,6 @@ pub mod system;
 use crate::domain::FillParams;
 use crate::linalg::SolverParams;
 use crate::mlsm::Approximation;
-use crate::pipeline::Stage;
 
 pub use discrete::Discretisation;
 pub use dynamics::{simulate, Simulation};
@@ -43,23 +45,6 @@ pub struct NavierParams {
     pub approximation: Approximation,
     /// Linear solver.
     pub solver: SolverParams,
-}
-
-/// The stages of a Navier run, in order.
-pub mod stage {
-    use super::Stage;
-    /// Node generation.
-    pub const NODES: Stage = Stage::new("nodes");
-    /// Ghost placement and support search.
-    pub const SUPPORTS: Stage = Stage::new("supports");
-    /// Shape functions.
-    pub const SHAPES: Stage = Stage::new("shapes");
-    /// Matrix assembly (for dynamics also the split and the boundary factorisation).
-    pub const ASSEMBLY: Stage = Stage::new("assembly");
-    /// Linear solve.
-    pub const SOLVE: Stage = Stage::new("solve");
-    /// Strain, stress, errors.
-    pub const POST: Stage = Stage::new("post");
 }
 
 /// A small case shared by the stage tests of this model.

@@ -5,12 +5,12 @@
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::system::System;
-use super::{stage, NavierParams};
+use super::NavierParams;
 use crate::case::Case;
 use crate::domain::NodeSet;
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::linalg::{self, SolveReport};
-use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
+use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 use crate::post::{ErrorNorms, ExactFields};
 
 /// Everything a static Navier run computed.

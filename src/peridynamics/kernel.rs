@@ -31,7 +31,7 @@
 //! composite Gauss-Legendre quadrature (the integrand is smooth, flat at `s = 1`).
 //! The thickness cancels: a plate of thickness `t` has `c t` per area and `b t` per area.
 
-use crate::choice::Choice;
+use crate::choice::choice;
 use crate::elasticity::material::Material;
 use gauss_quad::GaussLegendre;
 use serde::Serialize;
@@ -50,22 +50,13 @@ pub enum Kernel {
     },
 }
 
-/// The name of a kernel in a scene (`peridynamics.kernel`); `alpha` is its own field.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum KernelKind {
-    /// [`Kernel::Plain`].
-    Plain,
-    /// [`Kernel::Regularised`].
-    Regularised,
-}
-
-impl Choice for KernelKind {
-    const FIELD: &'static str = "peridynamics.kernel";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (KernelKind::Plain, "plain", "c / r^3"),
-        (KernelKind::Regularised, "regularised", "c r^alpha exp(-1/(1 - r^2/delta^2)), alpha > -4 (default -3)"),
-    ];
-    const DEFAULT: Option<Self> = Some(KernelKind::Plain);
+choice! {
+    /// The name of a kernel in a scene (`peridynamics.kernel`); `alpha` is its own field.
+    pub enum KernelKind("peridynamics.kernel") {
+        Plain = "plain" => "c / r^3",
+        Regularised = "regularised" => "c r^alpha exp(-1/(1 - r^2/delta^2)), alpha > -4 (default -3)",
+    }
+    default = Some(KernelKind::Plain);
 }
 
 impl Kernel {

@@ -9,7 +9,9 @@
 //! discretised with the nodes as quadrature points (seed 000, sec. 5.3):
 //! `(L_h u)_i = sum_j c_ij (xi_ij ⊗ xi_ij)(u_j - u_i)`, one scalar `c_ij` per bond.
 //!
-//! Stages: [`params`] (the validated `[peridynamics]` table), [`nodes`] (quadrature
+//! Stages of a run: nodes, families, weights ([`solve::FAMILIES`],
+//! [`solve::WEIGHTS`]), assembly, solve, post. Modules: [`params`] (the validated
+//! `[peridynamics]` table), [`nodes`] (quadrature
 //! points of square cells, plus the Dirichlet collar),
 //! [`family`] (bonds within the horizon, k-d tree radius query), [`kernel`]
 //! (calibrated micromodulus), [`weights`] (bond weights of each quadrature rule, the
@@ -35,23 +37,6 @@ pub use dynamics::{simulate, Simulation};
 pub use kernel::{Kernel, KernelKind, Micromodulus};
 pub use params::{BondForce, PdParams, Quadrature, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
-
-/// The stages of a peridynamic run, in order.
-pub mod stage {
-    use crate::pipeline::Stage;
-    /// Node layout (cells, collar).
-    pub const NODES: Stage = Stage::new("nodes");
-    /// Family search.
-    pub const FAMILIES: Stage = Stage::new("families");
-    /// Bond weights (quadrature, correction, compatible weights).
-    pub const WEIGHTS: Stage = Stage::new("weights");
-    /// Loads and stiffness assembly.
-    pub const ASSEMBLY: Stage = Stage::new("assembly");
-    /// Linear solve.
-    pub const SOLVE: Stage = Stage::new("solve");
-    /// Strain, stress, errors.
-    pub const POST: Stage = Stage::new("post");
-}
 
 /// A small plate shared by the stage tests of this model.
 #[cfg(test)]

@@ -3,32 +3,35 @@
 //! linear solver and bond force law.
 
 use super::kernel::Kernel;
-use crate::choice::Choice;
+use crate::choice::choice;
 use crate::domain::Point;
 use serde::Serialize;
 
-/// How each cell of the lattice is integrated; the nodes are the rule's points.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Quadrature {
-    /// One node at each cell centre with the full cell area (FA; the seed's midpoint rule, Q1).
-    FullArea,
-    /// Cell-centre nodes weighted by the exact area of the cell inside the horizon disc.
-    PartialArea,
-    /// Four nodes per cell at the 2x2 Gauss points, a quarter of the area each (Q3).
-    Gauss2x2,
-    /// Each cell split into two triangles, one node at each centroid (P1).
-    TriangleP1,
-    /// Each cell split into two triangles, three interior nodes
-    /// `(2/3, 1/6, 1/6)` (barycentric) per triangle with a third of its area each (P2).
-    TriangleP2,
-    /// Each cell split into two triangles, the seven-point rule per triangle (vertices
-    /// 3, edge midpoints 8, centroid 27, times `|T|/60`; P3, the seed's "type 3"); the
-    /// vertices and edge midpoints are shared with the neighbouring cells.
-    TriangleP3,
-    /// Cell-centre nodes; at nodes with a complete family the bond weights are
-    /// corrected to reproduce the continuum moments exactly ([`super::compatible`]).
-    Compatible,
+choice! {
+    /// How each cell of the lattice is integrated; the nodes are the rule's points.
+    #[derive(Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum Quadrature("peridynamics.quadrature") {
+        /// One node at each cell centre with the full cell area (FA; the seed's midpoint rule, Q1).
+        FullArea = "full-area" => "cell-centre nodes with the full cell area (the seed's midpoint rule)",
+        /// Cell-centre nodes weighted by the exact area of the cell inside the horizon disc.
+        PartialArea = "partial-area" => "cell-centre nodes weighted by the cell area inside the horizon",
+        /// Four nodes per cell at the 2x2 Gauss points, a quarter of the area each (Q3).
+        Gauss2x2 = "gauss2x2" => "four nodes per cell at the 2x2 Gauss points",
+        /// Each cell split into two triangles, one node at each centroid (P1).
+        TriangleP1 = "triangle-p1" => "two triangles per cell, one node at each centroid",
+        /// Each cell split into two triangles, three interior nodes
+        /// `(2/3, 1/6, 1/6)` (barycentric) per triangle with a third of its area each (P2).
+        TriangleP2 = "triangle-p2" => "two triangles per cell, three interior nodes each",
+        /// Each cell split into two triangles, the seven-point rule per triangle (vertices
+        /// 3, edge midpoints 8, centroid 27, times `|T|/60`; P3, the seed's "type 3"); the
+        /// vertices and edge midpoints are shared with the neighbouring cells.
+        TriangleP3 = "triangle-p3" => "two triangles per cell, seven-point rule with shared vertices and edge midpoints",
+        /// Cell-centre nodes; at nodes with a complete family the bond weights are
+        /// corrected to reproduce the continuum moments exactly ([`super::compatible`]).
+        Compatible = "ac" => "cell-centre nodes, bond weights matched to the continuum moments (asymptotically compatible)",
+    }
+    default = Some(Quadrature::Compatible);
 }
 
 impl Quadrature {
@@ -72,47 +75,18 @@ impl Quadrature {
     }
 }
 
-impl Choice for Quadrature {
-    const FIELD: &'static str = "peridynamics.quadrature";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (Quadrature::FullArea, "full-area", "cell-centre nodes with the full cell area (the seed's midpoint rule)"),
-        (Quadrature::PartialArea, "partial-area", "cell-centre nodes weighted by the cell area inside the horizon"),
-        (Quadrature::Gauss2x2, "gauss2x2", "four nodes per cell at the 2x2 Gauss points"),
-        (Quadrature::TriangleP1, "triangle-p1", "two triangles per cell, one node at each centroid"),
-        (Quadrature::TriangleP2, "triangle-p2", "two triangles per cell, three interior nodes each"),
-        (Quadrature::TriangleP3, "triangle-p3", "two triangles per cell, seven-point rule with shared vertices and edge midpoints"),
-        (Quadrature::Compatible, "ac", "cell-centre nodes, bond weights matched to the continuum moments (asymptotically compatible)"),
-    ];
-    const DEFAULT: Option<Self> = Some(Quadrature::Compatible);
-}
-
-impl Choice for SurfaceCorrection {
-    const FIELD: &'static str = "peridynamics.correction";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (SurfaceCorrection::None, "none", "bonds as they are (nodes near a free edge are softer)"),
-        (SurfaceCorrection::Volume, "volume", "bond ij scaled by 2 V_delta / (V_i + V_j) (volume method)"),
-    ];
-    const DEFAULT: Option<Self> = Some(SurfaceCorrection::None);
-}
-
-impl Choice for BondForce {
-    const FIELD: &'static str = "peridynamics.force";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (BondForce::Linear, "linear", "f = c (xi ⊗ xi) eta (the linear model; static and dynamic runs)"),
-        (BondForce::BondStretch, "bond-stretch", "f = c |xi|^3 s (xi + eta)/|xi + eta| (nonlinear; dynamics only)"),
-    ];
-    const DEFAULT: Option<Self> = Some(BondForce::Linear);
-}
-
-/// Surface correction of bonds near free edges.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SurfaceCorrection {
-    /// Bonds as they are: nodes near a free edge are softer (the PD surface effect).
-    None,
-    /// Volume method: bond `ij` scaled by `2 V_delta / (V_i + V_j)`, `V_i` the family
-    /// volume of node `i` and `V_delta = pi delta^2` (Le & Bobaru 2018, volume method).
-    Volume,
+choice! {
+    /// Surface correction of bonds near free edges.
+    #[derive(Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum SurfaceCorrection("peridynamics.correction") {
+        /// Bonds as they are: nodes near a free edge are softer (the PD surface effect).
+        None = "none" => "bonds as they are (nodes near a free edge are softer)",
+        /// Volume method: bond `ij` scaled by `2 V_delta / (V_i + V_j)`, `V_i` the family
+        /// volume of node `i` and `V_delta = pi delta^2` (Le & Bobaru 2018, volume method).
+        Volume = "volume" => "bond ij scaled by 2 V_delta / (V_i + V_j) (volume method)",
+    }
+    default = Some(SurfaceCorrection::None);
 }
 
 /// The `[peridynamics]` table of a scene, validated.
@@ -134,15 +108,18 @@ pub struct PdParams {
     pub force: BondForce,
 }
 
-/// Bond force law.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum BondForce {
-    /// `f = c_ij (xi ⊗ xi) eta` (seed 000, eq. 4.1.3).
-    Linear,
-    /// `f = c_ij |xi|^3 s (xi + eta)/|xi + eta|`, `s = (|xi + eta| - |xi|)/|xi|` (seed 000,
-    /// definition 4.1.1); its linearisation is the linear law. Dynamics only.
-    BondStretch,
+choice! {
+    /// Bond force law.
+    #[derive(Serialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum BondForce("peridynamics.force") {
+        /// `f = c_ij (xi ⊗ xi) eta` (seed 000, eq. 4.1.3).
+        Linear = "linear" => "f = c (xi ⊗ xi) eta (the linear model; static and dynamic runs)",
+        /// `f = c_ij |xi|^3 s (xi + eta)/|xi + eta|`, `s = (|xi + eta| - |xi|)/|xi|` (seed 000,
+        /// definition 4.1.1); its linearisation is the linear law. Dynamics only.
+        BondStretch = "bond-stretch" => "f = c |xi|^3 s (xi + eta)/|xi + eta| (nonlinear; dynamics only)",
+    }
+    default = Some(BondForce::Linear);
 }
 
 impl PdParams {

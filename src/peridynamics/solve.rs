@@ -7,13 +7,18 @@ use super::kernel::{fourth_moment, Micromodulus};
 use super::nodes::{self, Body, PdNodes};
 use super::operator::Bonds;
 use super::weights::{bond_coefficients, search_radius, BondWeights};
-use super::{loads, stage, strain, PdParams};
+use super::{loads, strain, PdParams};
 use crate::case::Case;
 use crate::domain::{Domain, Point};
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport};
-use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
+use crate::pipeline::{stage, Progress, RunError, Stage, StageTimer, StageTimings};
+
+/// Family search.
+pub const FAMILIES: Stage = Stage::new("families");
+/// Bond weights (quadrature, correction, compatible weights).
+pub const WEIGHTS: Stage = Stage::new("weights");
 use crate::post::{masked_errors, ErrorNorms, ExactFields};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -89,14 +94,14 @@ impl Discretisation {
             let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
             Ok((n, note))
         })?;
-        let families = timer.run(stage::FAMILIES, || {
+        let families = timer.run(FAMILIES, || {
             let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
             let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
             Ok((f, note))
         })?;
         let moment = fourth_moment(&case.material);
         let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
-        let weights = timer.run(stage::WEIGHTS, || {
+        let weights = timer.run(WEIGHTS, || {
             let w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment);
             let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
             Ok((w, note))

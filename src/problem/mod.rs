@@ -6,7 +6,7 @@ pub mod spec;
 pub mod validate;
 
 use crate::case::Case;
-use crate::choice::Choice;
+use crate::choice::choice;
 use crate::navier::NavierParams;
 use crate::peridynamics::PdParams;
 use serde::Serialize;
@@ -24,23 +24,17 @@ pub struct ProblemError {
     pub reason: String,
 }
 
-/// The model `mlsm run` solves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Model {
-    /// The Navier equation by MLSM.
-    Navier,
-    /// Linear bond-based peridynamics.
-    Peridynamics,
-}
-
-impl Choice for Model {
-    const FIELD: &'static str = "model";
-    const VALUES: &'static [(Self, &'static str, &'static str)] = &[
-        (Model::Navier, "navier", "the Navier equation by MLSM collocation"),
-        (Model::Peridynamics, "peridynamics", "linear bond-based peridynamics (needs [peridynamics])"),
-    ];
-    const DEFAULT: Option<Self> = Some(Model::Navier);
+choice! {
+    /// The model `mlsm run` solves.
+    #[derive(Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Model("model") {
+        /// The Navier equation by MLSM.
+        Navier = "navier" => "the Navier equation by MLSM collocation",
+        /// Linear bond-based peridynamics.
+        Peridynamics = "peridynamics" => "linear bond-based peridynamics (needs [peridynamics])",
+    }
+    default = Some(Model::Navier);
 }
 
 /// A validated scene: the physical case, the discretisation of each model, and the
