@@ -4,38 +4,60 @@
 //! form by meshless shape functions (MLSM), verified against closed-form solutions and
 //! cross-checked against linear bond-based peridynamics on the same plate.
 //!
-//! The modules from the bottom up (each uses only those listed before it):
-//! 1. [`choice`]: scene names, defaults and help of every option enum;
-//!    [`output`], [`linalg`], [`domain`]: files, sparse solvers, geometry and nodes;
-//! 2. [`mlsm`]: weighted least-squares shape functions for the operators each node needs;
-//! 3. [`pipeline`]: stage names, timing, progress, run errors;
-//! 4. [`elasticity`]: material, boundary conditions, unknown layout, stress;
-//! 5. [`exact`]: closed-form and manufactured solutions; [`post`]: error norms, orders;
-//! 6. [`dynamics`]: explicit time integrators and the shared time loop;
-//! 7. [`case`]: the physical problem of a scene, independent of any discretisation;
-//! 8. the models: [`navier`] (MLSM collocation, static and elastodynamic) and
+//! The modules from the bottom up, one floor at a time: a module uses only modules on
+//! the floors below its own (`tests/architecture.rs` checks it).
+//! 1. [`choice`]: scene names, defaults and help of every option enum; [`output`]:
+//!    files; [`cli`]: the command line;
+//! 2. [`domain`]: geometry and nodes; [`linalg`]: sparse solvers; [`elasticity`]:
+//!    material, boundary conditions, unknown layout, stress;
+//! 3. [`mlsm`]: weighted least-squares shape functions; [`exact`]: closed-form and
+//!    manufactured solutions;
+//! 4. [`pipeline`]: stage names, timing, progress, run errors; [`post`]: error norms;
+//! 5. [`dynamics`]: explicit time integrators and the shared time loop;
+//! 6. [`case`]: the physical problem of a scene, independent of any discretisation;
+//! 7. the models: [`navier`] (MLSM collocation, static and elastodynamic) and
 //!    [`peridynamics`] (linear bond-based, static and dynamic);
-//! 9. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
-//! 10. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
-//! 11. [`compare`]: the nonlocal-to-local comparison;
-//! 12. [`app`] and [`cli`]: the command line (the only printing).
+//! 8. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
+//! 9. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
+//! 10. [`compare`]: the nonlocal-to-local comparison;
+//! 11. [`app`]: the commands (the only printing).
 
-pub mod case;
+// Floor 1
 pub mod choice;
-pub mod compare;
-pub mod domain;
-pub mod dynamics;
-pub mod elasticity;
-pub mod exact;
-pub mod linalg;
-pub mod mlsm;
-pub mod model;
-pub mod navier;
+pub mod cli;
 pub mod output;
-pub mod peridynamics;
+
+// Floor 2
+pub mod domain;
+pub mod elasticity;
+pub mod linalg;
+
+// Floor 3
+pub mod exact;
+pub mod mlsm;
+
+// Floor 4
 pub mod pipeline;
 pub mod post;
+
+// Floor 5
+pub mod dynamics;
+
+// Floor 6
+pub mod case;
+
+// Floor 7
+pub mod navier;
+pub mod peridynamics;
+
+// Floor 8
 pub mod problem;
 
+// Floor 9
+pub mod model;
+
+// Floor 10
+pub mod compare;
+
+// Floor 11
 pub mod app;
-pub mod cli;

@@ -107,3 +107,47 @@ impl Outcome {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::Silent;
+    use std::path::Path;
+
+    fn shipped(name: &str) -> Problem {
+        Problem::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(name)).unwrap()
+    }
+
+    /// Each (model, static/dynamic) pair runs its own pipeline; only the time-dependent
+    /// runs take snapshots; positions and displacements match in length.
+    #[test]
+    fn each_model_and_time_setting_runs_its_pipeline() {
+        let fixed = shipped("pd_tension.toml");
+        let mut moving = shipped("steel_plate_dynamic.toml");
+        if let Some(d) = moving.case.dynamics.as_mut() {
+            d.end_time = 2e-6;
+        }
+        let cases = [(fixed, false), (moving, true)];
+        for (problem, dynamic) in cases {
+            for model in [Model::Navier, Model::Peridynamics] {
+                let p = Problem { model, ..problem.clone() };
+                let mut snapshots = 0;
+                let outcome = solve(&p, &Silent, |_| {
+                    snapshots += 1;
+                    Ok(())
+                })
+                .unwrap();
+                let kind = match (&outcome, dynamic) {
+                    (Outcome::NavierStatic(_), false) | (Outcome::NavierDynamic(_), true) => Model::Navier,
+                    (Outcome::PdStatic(_), false) | (Outcome::PdDynamic(_), true) => Model::Peridynamics,
+                    _ => panic!("{model:?}, dynamic {dynamic}: wrong pipeline"),
+                };
+                assert_eq!(kind, model);
+                assert_eq!(snapshots > 0, dynamic, "{model:?}: {snapshots} snapshots");
+                assert_eq!(outcome.positions().len(), outcome.displacement().len());
+                assert!(outcome.timings().get(crate::pipeline::stage::NODES) > 0.0);
+                assert!(!outcome.describe(&p).is_empty());
+            }
+        }
+    }
+}
