@@ -29,7 +29,7 @@ pub struct Outputs {
 
 choice! {
     /// A field of `output.fields`.
-    pub enum OutputField("output.fields[k]") {
+    pub enum OutputField("output.fields[k]", default None, note "displacement, stress, von_mises, and error when the scene has [exact]") {
         /// Displacement (always written).
         Displacement = "displacement" => "the displacement vector (always written)",
         /// Strain components.
@@ -41,8 +41,6 @@ choice! {
         /// Errors against the exact solution.
         Error = "error" => "exact displacement and the error fields and norms (needs [exact])",
     }
-    default = None;
-    default_note = "displacement, stress, von_mises, and error when the scene has [exact]";
 }
 
 impl Outputs {

@@ -7,30 +7,30 @@
 //! exponent, ...) has a fieldless companion enum (`BasisKind`, `KernelKind`, ...)
 //! that implements [`Choice`]; the numbers come from their own scene fields.
 
-/// Define an option enum and its [`Choice`] table together: every variant with its
-/// scene name and one-line help (which is also the variant's doc), then the default.
+/// Define an option enum and its [`Choice`] table together: the scene field, the
+/// default (and how it is chosen when it depends on the scene, `note`), the serde
+/// renaming when the enum is written to summaries (`serde`), then every variant with
+/// its scene name and one-line help (which is also the variant's doc).
 ///
 /// ```text
 /// choice! {
 ///     /// How a region combines with the regions before it.
-///     pub enum CsgOp("domain.region[k].op") {
+///     pub enum CsgOp("domain.region[k].op", default Some(CsgOp::Union)) {
 ///         Union = "union" => "add the region",
 ///         Subtract = "subtract" => "cut the region out",
 ///     }
-///     default = Some(CsgOp::Union);
 /// }
 /// ```
 macro_rules! choice {
     (
         $(#[$meta:meta])*
-        $vis:vis enum $name:ident ($field:literal) {
+        $vis:vis enum $name:ident ($field:literal, default $default:expr $(, note $note:literal)? $(, serde $serde:literal)?) {
             $( $(#[$vmeta:meta])* $variant:ident = $value:literal => $help:literal ),+ $(,)?
         }
-        default = $default:expr;
-        $( default_note = $note:literal; )?
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        $( #[derive(serde::Serialize)] #[serde(rename_all = $serde)] )?
         $vis enum $name {
             $( $(#[$vmeta])* #[doc = $help] $variant ),+
         }
@@ -132,11 +132,10 @@ mod tests {
 
     choice! {
         /// A test option.
-        enum Colour("paint.colour") {
+        enum Colour("paint.colour", default Some(Colour::Blue)) {
             Red = "red" => "warm",
             Blue = "blue" => "cold",
         }
-        default = Some(Colour::Blue);
     }
 
     #[test]

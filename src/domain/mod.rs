@@ -18,16 +18,12 @@ pub use shape::{CsgOp, Domain, Point, Primitive, PrimitiveKind, Region};
 
 choice! {
     /// How interior nodes are placed.
-    #[derive(serde::Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum FillKind("nodes.fill") {
+    pub enum FillKind("nodes.fill", default None, note "\"grid\" for a single rectangle, else \"scattered\"", serde "lowercase") {
         /// Lattice of the bounding box, clipped to the solid.
         Grid = "grid" => "lattice of the bounding box at the spacing, clipped to the solid",
         /// Advancing-front Poisson-disk fill.
         Scattered = "scattered" => "advancing-front Poisson-disk fill, seeded by `seed`",
     }
-    default = None;
-    default_note = "\"grid\" for a single rectangle, else \"scattered\"";
 }
 
 /// Parameters of the node generator.

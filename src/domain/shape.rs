@@ -26,17 +26,16 @@ pub enum Primitive {
 
 choice! {
     /// The name of a primitive in a scene (`domain.region[k].shape`).
-    pub enum PrimitiveKind("domain.region[k].shape") {
+    pub enum PrimitiveKind("domain.region[k].shape", default None) {
         Rectangle = "rectangle" => "`min`, `max`; edges bottom, right, top, left (rename with `names`)",
         Disc = "disc" => "`center`, `radius`; one edge (`name`, default \"rim\", \"hole\" when subtracted)",
         Polygon = "polygon" => "`vertices` (either orientation); edge k joins vertex k to k+1 (`edge_names`)",
     }
-    default = None;
 }
 
 choice! {
     /// How a region combines with everything before it.
-    pub enum CsgOp("domain.region[k].op") {
+    pub enum CsgOp("domain.region[k].op", default Some(CsgOp::Union)) {
         /// `A u B`.
         Union = "union" => "add the region to the regions before it",
         /// `A \ B` (holes).
@@ -44,7 +43,6 @@ choice! {
         /// `A n B`.
         Intersect = "intersect" => "keep only what lies in the region too",
     }
-    default = Some(CsgOp::Union);
 }
 
 /// One primitive with its CSG operation and the boundary part of each of its edges.

@@ -17,13 +17,10 @@
 use super::{SecondOrderSystem, State};
 use crate::choice::choice;
 use rayon::prelude::*;
-use serde::Serialize;
 
 choice! {
     /// An explicit time integrator.
-    #[derive(Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum Integrator("dynamics.integrator") {
+    pub enum Integrator("dynamics.integrator", default Some(Integrator::Verlet), serde "lowercase") {
         /// Velocity by forward, displacement by backward differences (symplectic Euler).
         Emu = "emu" => "v += dt a(u), then u += dt v (seed 000, alg. 4.3.1); orders 2, 1, 1 in u, v, a",
         /// Stormer-Verlet (velocity form).
@@ -31,7 +28,6 @@ choice! {
         /// Classical fourth-order Runge-Kutta.
         Rk4 = "rk4" => "classical fourth-order Runge-Kutta; stable to sqrt(2) times the central-difference step",
     }
-    default = Some(Integrator::Verlet);
 }
 
 impl Integrator {

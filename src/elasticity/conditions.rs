@@ -7,21 +7,17 @@ use serde::Serialize;
 
 choice! {
     /// How a displacement component is constrained on a boundary part.
-    #[derive(Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum ComponentCondition("boundary[k].x, boundary[k].y") {
+    pub enum ComponentCondition("boundary[k].x, boundary[k].y", default None, note "required for kind = \"mixed\"", serde "lowercase") {
         /// Prescribed displacement component.
         Displacement = "displacement" => "the component of `value` is the displacement u_c",
         /// Prescribed traction component `(sigma n)_c`.
         Traction = "traction" => "the component of `value` is the traction (sigma n)_c",
     }
-    default = None;
-    default_note = "required for kind = \"mixed\"";
 }
 
 choice! {
     /// What a `[[boundary]]` entry prescribes on its part.
-    pub enum ConditionKind("boundary[k].kind") {
+    pub enum ConditionKind("boundary[k].kind", default None) {
         /// Both displacement components.
         Displacement = "displacement" => "u = `value` (m)",
         /// Both traction components.
@@ -29,7 +25,6 @@ choice! {
         /// One condition per component (`x`, `y`).
         Mixed = "mixed" => "per component: `x` and `y` name the condition of each (e.g. symmetry)",
     }
-    default = None;
 }
 
 /// Where a boundary or body-force value comes from.

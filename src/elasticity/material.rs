@@ -16,15 +16,12 @@ use serde::Serialize;
 
 choice! {
     /// Which planar reduction of 3D elasticity is solved.
-    #[derive(Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum PlaneModel("material.plane") {
+    pub enum PlaneModel("material.plane", default None, serde "lowercase") {
         /// Thin plate: `sigma_zz = sigma_xz = sigma_yz = 0`.
         Stress = "stress" => "thin plate: sigma_zz = 0",
         /// Long prism: `eps_zz = eps_xz = eps_yz = 0`; `sigma_zz = nu (sigma_xx + sigma_yy)`.
         Strain = "strain" => "long prism: eps_zz = 0, sigma_zz = nu (sigma_xx + sigma_yy)",
     }
-    default = None;
 }
 
 /// Young's modulus and Poisson's ratio of an isotropic solid.

@@ -56,7 +56,7 @@ impl Parameters {
 
 choice! {
     /// The closed-form solutions a scene can name.
-    pub enum ExactKind("exact.kind") {
+    pub enum ExactKind("exact.kind", default None) {
         Cantilever = "cantilever" => "Timoshenko cantilever under an end load (`load`, `length`, `depth`)",
         Kirsch = "kirsch" => "infinite plate with a hole under uniaxial tension (`tension`, `radius`)",
         Lame = "lame" => "thick cylinder under internal pressure (`pressure`, `inner`, `outer`)",
@@ -64,7 +64,6 @@ choice! {
         Tension = "tension" => "uniform uniaxial stress sigma_xx = `tension`",
         Polynomial = "polynomial" => "a cubic field with its body force (`ux`, `uy`: 10 coefficients each)",
     }
-    default = None;
 }
 
 impl ExactKind {

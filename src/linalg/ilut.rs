@@ -362,23 +362,23 @@ mod tests {
         // 1 + 1 U entries), so u_12 is dropped and row 2 (a_21 = 1,
         // a_22 = 1e-17) receives nothing on its diagonal. Exact LU has
         // u_22 = 1e-17 - 0.5 ≈ -0.5.
-        let mut t = Triplets::new(6);
-        for (i, j, v) in [
-            (0, 0, 1.0),
-            (0, 3, 1.0),
-            (0, 4, 1.0),
-            (0, 5, 1.0),
-            (1, 0, 1.0),
-            (1, 1, 1.0),
-            (1, 2, 0.5),
-            (2, 1, 1.0),
-            (2, 2, 1e-17),
-            (3, 3, 1.0),
-            (4, 4, 1.0),
-            (5, 5, 1.0),
-        ] {
-            t.push(i, j, v);
-        }
+        let t = Triplets::from_entries(
+            6,
+            &[
+                (0, 0, 1.0),
+                (0, 3, 1.0),
+                (0, 4, 1.0),
+                (0, 5, 1.0),
+                (1, 0, 1.0),
+                (1, 1, 1.0),
+                (1, 2, 0.5),
+                (2, 1, 1.0),
+                (2, 2, 1e-17),
+                (3, 3, 1.0),
+                (4, 4, 1.0),
+                (5, 5, 1.0),
+            ],
+        );
         let a = assemble(&t).unwrap();
         match Ilut::try_new(&a, 0.0, 1) {
             Err(SolveError::Singular { detail }) => {

@@ -93,22 +93,19 @@ impl SolverKind {
 
 choice! {
     /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
-    pub enum SolverMethod("solver.kind") {
+    pub enum SolverMethod("solver.kind", default Some(SolverMethod::Lu), note "\"lu\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"") {
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
     }
-    default = Some(SolverMethod::Lu);
-    default_note = "\"lu\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"";
 }
 
 choice! {
     /// The name of a preconditioner in a scene (`solver.preconditioner`).
-    pub enum PreconditionerKind("solver.preconditioner") {
+    pub enum PreconditionerKind("solver.preconditioner", default Some(PreconditionerKind::Ilut)) {
         Ilut = "ilut" => "Saad's dual-threshold ILUT(drop, fill), defaults drop = 1e-5, fill = 20",
         Ilu0 = "ilu0" => "zero-fill incomplete LU",
         Jacobi = "jacobi" => "the diagonal",
     }
-    default = Some(PreconditionerKind::Ilut);
 }
 
 impl Preconditioner {

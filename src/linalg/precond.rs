@@ -175,10 +175,7 @@ mod tests {
     #[test]
     fn zero_pivots_are_singular_errors() {
         // [[0, 1], [1, 0]] is nonsingular but has no pivot without pivoting.
-        let mut t = Triplets::new(2);
-        t.push(0, 1, 1.0);
-        t.push(1, 0, 1.0);
-        let a = assemble(&t).unwrap();
+        let a = assemble(&Triplets::from_entries(2, &[(0, 1, 1.0), (1, 0, 1.0)])).unwrap();
         for kind in [Preconditioner::Jacobi, Preconditioner::Ilu0, Preconditioner::Ilut { drop: 0.0, fill: 2 }] {
             match BuiltPreconditioner::build(&a, kind) {
                 Err(SolveError::Singular { .. }) => {}

@@ -25,6 +25,15 @@ impl Triplets {
         Triplets { n, entries: Vec::with_capacity(cap) }
     }
 
+    /// The triplets `entries` `(row, column, value)` of an `n × n` matrix.
+    pub fn from_entries(n: usize, entries: &[(usize, usize, f64)]) -> Self {
+        let mut t = Triplets::with_capacity(n, entries.len());
+        for &(r, c, v) in entries {
+            t.push(r, c, v);
+        }
+        t
+    }
+
     /// Add `value` at `(row, col)`. Debug builds assert that the indices are
     /// in range and the value is finite; release builds defer both checks to
     /// [`assemble`], which returns an error instead of panicking.

@@ -43,14 +43,13 @@ pub enum Basis {
 choice! {
     /// The name of a basis in a scene (`approximation.basis`); its degree or shape
     /// parameter are their own fields.
-    pub enum BasisKind("approximation.basis") {
+    pub enum BasisKind("approximation.basis", default Some(BasisKind::Monomials)) {
         Monomials = "monomials" => "monomials x^a y^b of total degree a + b <= `degree` (2..6, default 2)",
         Tensor = "tensor" => "tensor-product monomials x^a y^b, a, b <= `degree`",
         Gaussian = "gaussian" => "Gaussian RBF exp(-(r/c)^2) at the support nodes, c = `shape` x local spacing",
         Mq = "mq" => "multiquadric RBF sqrt(r^2 + c^2), c = `shape` x local spacing",
         Imq = "imq" => "inverse multiquadric RBF 1/sqrt(r^2 + c^2), c = `shape` x local spacing",
     }
-    default = Some(BasisKind::Monomials);
 }
 
 impl BasisKind {
@@ -67,11 +66,10 @@ impl BasisKind {
 
 choice! {
     /// The name of a weight in a scene (`approximation.weight`).
-    pub enum WeightKind("approximation.weight") {
+    pub enum WeightKind("approximation.weight", default Some(WeightKind::Gaussian)) {
         Gaussian = "gaussian" => "w(r) = exp(-(r / (sigma h))^2), `sigma` in units of the local spacing h (default 1)",
         None = "none" => "w = 1 (unweighted least squares)",
     }
-    default = Some(WeightKind::Gaussian);
 }
 
 /// Weight of the local fit.

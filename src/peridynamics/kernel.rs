@@ -52,11 +52,10 @@ pub enum Kernel {
 
 choice! {
     /// The name of a kernel in a scene (`peridynamics.kernel`); `alpha` is its own field.
-    pub enum KernelKind("peridynamics.kernel") {
+    pub enum KernelKind("peridynamics.kernel", default Some(KernelKind::Plain)) {
         Plain = "plain" => "c / r^3",
         Regularised = "regularised" => "c r^alpha exp(-1/(1 - r^2/delta^2)), alpha > -4 (default -3)",
     }
-    default = Some(KernelKind::Plain);
 }
 
 impl Kernel {

@@ -9,9 +9,7 @@ use serde::Serialize;
 
 choice! {
     /// How each cell of the lattice is integrated; the nodes are the rule's points.
-    #[derive(Serialize)]
-    #[serde(rename_all = "kebab-case")]
-    pub enum Quadrature("peridynamics.quadrature") {
+    pub enum Quadrature("peridynamics.quadrature", default Some(Quadrature::Compatible), serde "kebab-case") {
         /// One node at each cell centre with the full cell area (FA; the seed's midpoint rule, Q1).
         FullArea = "full-area" => "cell-centre nodes with the full cell area (the seed's midpoint rule)",
         /// Cell-centre nodes weighted by the exact area of the cell inside the horizon disc.
@@ -31,7 +29,6 @@ choice! {
         /// corrected to reproduce the continuum moments exactly ([`super::compatible`]).
         Compatible = "ac" => "cell-centre nodes, bond weights matched to the continuum moments (asymptotically compatible)",
     }
-    default = Some(Quadrature::Compatible);
 }
 
 impl Quadrature {
@@ -77,16 +74,13 @@ impl Quadrature {
 
 choice! {
     /// Surface correction of bonds near free edges.
-    #[derive(Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum SurfaceCorrection("peridynamics.correction") {
+    pub enum SurfaceCorrection("peridynamics.correction", default Some(SurfaceCorrection::None), serde "lowercase") {
         /// Bonds as they are: nodes near a free edge are softer (the PD surface effect).
         None = "none" => "bonds as they are (nodes near a free edge are softer)",
         /// Volume method: bond `ij` scaled by `2 V_delta / (V_i + V_j)`, `V_i` the family
         /// volume of node `i` and `V_delta = pi delta^2` (Le & Bobaru 2018, volume method).
         Volume = "volume" => "bond ij scaled by 2 V_delta / (V_i + V_j) (volume method)",
     }
-    default = Some(SurfaceCorrection::None);
 }
 
 /// The `[peridynamics]` table of a scene, validated.
@@ -110,16 +104,13 @@ pub struct PdParams {
 
 choice! {
     /// Bond force law.
-    #[derive(Serialize)]
-    #[serde(rename_all = "kebab-case")]
-    pub enum BondForce("peridynamics.force") {
+    pub enum BondForce("peridynamics.force", default Some(BondForce::Linear), serde "kebab-case") {
         /// `f = c_ij (xi ⊗ xi) eta` (seed 000, eq. 4.1.3).
         Linear = "linear" => "f = c (xi ⊗ xi) eta (the linear model; static and dynamic runs)",
         /// `f = c_ij |xi|^3 s (xi + eta)/|xi + eta|`, `s = (|xi + eta| - |xi|)/|xi|` (seed 000,
         /// definition 4.1.1); its linearisation is the linear law. Dynamics only.
         BondStretch = "bond-stretch" => "f = c |xi|^3 s (xi + eta)/|xi + eta| (nonlinear; dynamics only)",
     }
-    default = Some(BondForce::Linear);
 }
 
 impl PdParams {

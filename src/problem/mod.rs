@@ -9,7 +9,6 @@ use crate::case::Case;
 use crate::choice::choice;
 use crate::navier::NavierParams;
 use crate::peridynamics::PdParams;
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// A scene file that cannot be used, with the file, the field and the reason.
@@ -26,15 +25,12 @@ pub struct ProblemError {
 
 choice! {
     /// The model `mlsm run` solves.
-    #[derive(Serialize)]
-    #[serde(rename_all = "lowercase")]
-    pub enum Model("model") {
+    pub enum Model("model", default Some(Model::Navier), serde "lowercase") {
         /// The Navier equation by MLSM.
         Navier = "navier" => "the Navier equation by MLSM collocation",
         /// Linear bond-based peridynamics.
         Peridynamics = "peridynamics" => "linear bond-based peridynamics (needs [peridynamics])",
     }
-    default = Some(Model::Navier);
 }
 
 /// A validated scene: the physical case, the discretisation of each model, and the
