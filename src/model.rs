@@ -3,6 +3,7 @@
 //! scene's `model`, or `--model`). `mlsm run`, `mlsm compare` and the comparison's
 //! local reference all go through [`solve`].
 
+use crate::choice::Choice;
 use crate::domain::Point;
 use crate::dynamics::driver::Snapshot;
 use crate::navier;
@@ -43,6 +44,20 @@ pub fn solve(
                 Some(d) => peridynamics::simulate(case, params, d, progress, snapshot).map(Outcome::PdDynamic),
             }
         }
+    }
+}
+
+/// What [`solve`] will run, in one line (printed before it starts).
+pub fn announce(problem: &Problem) -> String {
+    let p = problem;
+    match (p.model, &p.case.dynamics, &p.peridynamics) {
+        (Model::Navier, None, _) => format!("{}: solving", p.name),
+        (Model::Navier, Some(d), _) => format!("{}: MLSM elastodynamics ({}, t_end = {:.3e} s)", p.name, d.integrator.name(), d.end_time),
+        (Model::Peridynamics, None, Some(pd)) => format!("{}: solving (peridynamics, {})", p.name, pd.quadrature.name()),
+        (Model::Peridynamics, Some(d), Some(pd)) => {
+            format!("{}: peridynamic dynamics ({}, {}, t_end = {:.3e} s)", p.name, pd.quadrature.name(), d.integrator.name(), d.end_time)
+        }
+        (Model::Peridynamics, _, None) => format!("{}: the peridynamic model needs a [peridynamics] table", p.name),
     }
 }
 

@@ -6,7 +6,6 @@ use super::series::Series;
 use super::summary::{DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::terminal::Terminal;
 use super::{create_dir, default_out, AppError};
-use crate::choice::Choice;
 use crate::dynamics::driver::{DynamicReport, EnergyRow};
 use crate::model::{self, Outcome};
 use crate::output;
@@ -56,25 +55,12 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
     Ok(p)
 }
 
-/// The first terminal line of a run.
-fn announce(p: &Problem) -> String {
-    match (p.model, &p.case.dynamics, &p.peridynamics) {
-        (Model::Navier, None, _) => format!("{}: solving", p.name),
-        (Model::Navier, Some(d), _) => format!("{}: MLSM elastodynamics ({}, t_end = {:.3e} s)", p.name, d.integrator.name(), d.end_time),
-        (Model::Peridynamics, None, Some(pd)) => format!("{}: solving (peridynamics, {})", p.name, pd.quadrature.name()),
-        (Model::Peridynamics, Some(d), Some(pd)) => {
-            format!("{}: peridynamic dynamics ({}, {}, t_end = {:.3e} s)", p.name, pd.quadrature.name(), d.integrator.name(), d.end_time)
-        }
-        (Model::Peridynamics, _, None) => unreachable!("checked in prepare"),
-    }
-}
-
 /// Solve, write and report one scene.
 pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), AppError> {
     let p = prepare(&req)?;
     let dir = req.out.clone().unwrap_or_else(|| default_out(&p));
     if !quiet {
-        eprintln!("{}", announce(&p));
+        eprintln!("{}", model::announce(&p));
     }
     let t0 = Instant::now();
     let mut series = Series::new(&dir, &p.case.domain);
