@@ -27,14 +27,16 @@ fn manufactured_traction_is_second_order() {
     assert!(rows.last().unwrap().1 < 2e-4, "{rows:?}");
 }
 
-/// Timoshenko cantilever with the published basis (tensor-product quadratics):
-/// order about 2 (measured 1.93 and 1.88 between 9.9e3, 3.9e4 and 1.5e5 nodes),
-/// and 10-40 times below the published errors at equal node counts
-/// (1.84e-3 at 10 374 nodes): measured 1.26e-4 at 9 881.
+/// Timoshenko cantilever with the published basis (tensor-product quadratics): at
+/// least second order (measured 2.66 in u, 1.84 in sigma between 9.9e3, 3.9e4 and
+/// 1.5e5 nodes: e_inf(u) 5.3e-5, 8.1e-6, 1.4e-6 since supports take groups of
+/// equidistant lattice nodes whole, symmetric; 1.26e-4, 3.3e-5, 9.1e-6 before, when
+/// round-off picked among them), and far below the published errors at equal node
+/// counts (1.84e-3 at 10 374 nodes).
 #[test]
 fn cantilever_tensor_basis_order_two() {
     let (pu, _, rows) = orders("cantilever", &[0.125, 0.0625, 0.03125], &[]);
-    assert!((pu - 2.0).abs() <= 0.25, "order of e_inf(u): {pu}");
+    assert!(pu >= 1.8, "order of e_inf(u): {pu}");
     assert!(rows[0].1 < 1.84e-3 / 5.0, "{rows:?}");
 }
 

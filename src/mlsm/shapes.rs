@@ -30,10 +30,12 @@ pub struct ShapeError {
     pub ratio: f64,
 }
 
-/// Shape functions per node and operator.
+/// Shape functions per node and operator, stored node by node in the order of the
+/// supports: node `i` holds one block of `len(support i)` values per stored operator.
 #[derive(Debug, Clone)]
 pub struct Shapes {
-    support: usize,
+    /// Start of each node's support in the flat support array (`N + 1` entries).
+    offsets: Vec<usize>,
     /// Operators stored for every node (slots), and per node which of them were computed.
     stored: OpSet,
     slot: [usize; 6],
@@ -55,9 +57,9 @@ impl Shapes {
     /// Shape function of `op` at node `i`, aligned with `supports.of(i)`.
     pub fn get(&self, i: usize, op: Op) -> &[f64] {
         debug_assert!(self.computed[i].contains(op), "shape {op:?} not computed at node {i}");
-        let per_node = self.stored.len() * self.support;
-        let start = i * per_node + self.slot[op as usize] * self.support;
-        &self.data[start..start + self.support]
+        let len = self.offsets[i + 1] - self.offsets[i];
+        let start = self.stored.len() * self.offsets[i] + self.slot[op as usize] * len;
+        &self.data[start..start + len]
     }
 
     /// Number of (node, operator) shape functions actually computed.
@@ -68,25 +70,36 @@ impl Shapes {
 
 /// Compute, for every node `i`, the shapes of the operators `needs[i]`.
 pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approximation, needs: &[OpSet]) -> Result<Shapes, ShapeError> {
-    let n = supports.size();
     let stored = needs.iter().fold(OpSet::EMPTY, |a, &b| a | b);
     // Storage slot of each operator (only the stored ones have one).
     let mut slot = [0; 6];
     for (k, op) in stored.iter().enumerate() {
         slot[op as usize] = k;
     }
-    let per_node = stored.len() * n;
-    let mut data = vec![0.0; positions.len() * per_node];
-    if per_node > 0 {
-        data.par_chunks_mut(per_node).enumerate().try_for_each_init(
-            || (Vec::with_capacity(n), Vec::with_capacity(6 * n)),
+    let k = stored.len();
+    let offsets: Vec<usize> =
+        (0..=supports.len()).map(|i| if i < supports.len() { supports.offset(i) } else { supports.total() }).collect();
+    let mut data = vec![0.0; k * supports.total()];
+    if k > 0 {
+        // One mutable block per node, in node order.
+        let mut blocks: Vec<&mut [f64]> = Vec::with_capacity(supports.len());
+        let mut rest = data.as_mut_slice();
+        for i in 0..supports.len() {
+            let (block, tail) = rest.split_at_mut(k * (offsets[i + 1] - offsets[i]));
+            blocks.push(block);
+            rest = tail;
+        }
+        blocks.into_par_iter().enumerate().try_for_each_init(
+            || (Vec::new(), Vec::new()),
             |(pts, buf): &mut (Vec<Point>, Vec<f64>), (i, record)| {
                 let ops: Vec<Op> = needs[i].iter().collect();
                 if ops.is_empty() {
                     return Ok(());
                 }
+                let support = supports.of(i);
+                let n = support.len();
                 pts.clear();
-                pts.extend(supports.of(i).iter().map(|&j| positions[j as usize]));
+                pts.extend(support.iter().map(|&j| positions[j as usize]));
                 buf.clear();
                 buf.resize(ops.len() * n, 0.0);
                 shape_functions(&approx.basis, &approx.weight, positions[i], pts, &ops, buf).map_err(|e| ShapeError {
@@ -97,13 +110,13 @@ pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approxi
                     support: n,
                     ratio: e.ratio,
                 })?;
-                for (k, op) in ops.iter().enumerate() {
+                for (c, op) in ops.iter().enumerate() {
                     let s = slot[*op as usize];
-                    record[s * n..(s + 1) * n].copy_from_slice(&buf[k * n..(k + 1) * n]);
+                    record[s * n..(s + 1) * n].copy_from_slice(&buf[c * n..(c + 1) * n]);
                 }
                 Ok(())
             },
         )?;
     }
-    Ok(Shapes { support: n, stored, slot, computed: needs.to_vec(), data })
+    Ok(Shapes { offsets, stored, slot, computed: needs.to_vec(), data })
 }

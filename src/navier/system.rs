@@ -30,7 +30,7 @@ impl System<'_> {
     /// Rows of node `i`: coefficients and `(row, right-hand side)` pairs (module docs).
     fn node_rows(&self, writer: &RowWriter, i: usize) -> (Entries, Vec<(usize, f64)>) {
         let (disc, dofs) = (self.disc, self.disc.dofs);
-        let mut e = Entries::with_capacity(8 * disc.supports.size());
+        let mut e = Entries::with_capacity(8 * disc.supports.of(i).len());
         let mut rhs = Vec::with_capacity(4);
         if disc.nodes.is_boundary(i) {
             let bc_rows = disc.ghost[i].unwrap_or(i);
