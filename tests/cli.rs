@@ -326,6 +326,27 @@ fn invalid_scenes_exit_2_naming_the_field() {
             &["approximation.degree"],
         ),
         ("wrong type for a count", Some(scene(&[("spacing = 0.05", "count = -400")])), &["nodes.count"]),
+        // RBF-FD: the augmented polynomial must fit the stencil, the PHS exponent be odd.
+        (
+            "PHS stencil smaller than its polynomial",
+            Some(scene(&[("basis = \"monomials\"\ndegree = 2\nsupport = 9", "basis = \"phs\"\ndegree = 4\nsupport = 12")])),
+            &["approximation.support", "15"],
+        ),
+        ("PHS even exponent", Some(scene(&[("basis = \"monomials\"", "basis = \"phs\"\nexponent = 4")])), &["approximation.exponent", "odd"]),
+        ("PHS degree 9", Some(scene(&[("basis = \"monomials\"\ndegree = 2", "basis = \"phs\"\ndegree = 9")])), &["approximation.degree", "2..8"]),
+        (
+            "PHS exponent too high for the degree",
+            Some(scene(&[("basis = \"monomials\"", "basis = \"phs\"\nexponent = 9")])),
+            &["approximation.exponent", "degree 4"],
+        ),
+        ("exponent on a monomial basis", Some(scene(&[("degree = 2", "degree = 2\nexponent = 3")])), &["approximation.exponent", "phs"]),
+        (
+            "weight on an RBF-FD basis",
+            Some(scene(&[("basis = \"monomials\"", "basis = \"phs\"\nweight = \"gaussian\"")])),
+            &["approximation.weight", "RBF-FD"],
+        ),
+        ("MQ without shape", Some(scene(&[("basis = \"monomials\"", "basis = \"mq\"")])), &["approximation.shape", "missing"]),
+
         (
             "polygon edge_names count",
             Some(scene(&[(

@@ -1,7 +1,8 @@
 //! Shape functions reproduce every polynomial up to the basis degree, for every
 //! operator, on scattered supports, at any length scale (property test).
 
-use mlsm::mlsm::basis::{monomial_exponents, Basis, RbfKind, Weight};
+use mlsm::mlsm::basis::{monomial_exponents, Basis, Weight};
+use mlsm::mlsm::Radial;
 use mlsm::mlsm::wls::shape_functions;
 use mlsm::mlsm::Op;
 use proptest::prelude::*;
@@ -86,6 +87,28 @@ proptest! {
     }
 
     #[test]
+    fn phs_reproduces_polynomials_up_to_its_degree(
+        degree in 2u32..7,
+        order in prop::sample::select(vec![3u32, 5, 7]),
+        off in offsets(60),
+        c in prop::collection::vec(-1.0f64..1.0, 28),
+        e in -3i32..4,
+    ) {
+        prop_assume!(degree >= (order - 1) / 2);
+        let n = 2 * ((degree + 1) * (degree + 2) / 2) as usize;
+        let basis = Basis::RbfFd { radial: Radial::Phs { order }, degree };
+        let m = monomial_exponents(&basis).len();
+        check_reproduction(basis, Weight::None, [0.5, -0.25], 10f64.powi(e), &off[..n - 1], &c[..m])?;
+    }
+
+    #[test]
+    fn shape_parameter_rbf_fd_reproduces_quadratics(off in offsets(12), c in prop::collection::vec(-1.0f64..1.0, 6), shape in 1.0f64..4.0) {
+        for radial in [Radial::Gaussian { shape }, Radial::Mq { shape }, Radial::Imq { shape }] {
+            check_reproduction(Basis::RbfFd { radial, degree: 2 }, Weight::None, [2.0, 1.0], 0.1, &off, &c)?;
+        }
+    }
+
+    #[test]
     fn tensor_degree_2_reproduces_biquadratics(off in offsets(16), c in prop::collection::vec(-1.0f64..1.0, 9), e in -2i32..3) {
         let h = 10f64.powi(e);
         check_reproduction(Basis::Tensor { degree: 2 }, Weight::Gaussian { sigma: 1.0 }, [0.0, 0.0], h, &off, &c)?;
@@ -93,14 +116,15 @@ proptest! {
 }
 
 #[test]
-fn square_rbf_interpolates() {
-    // With n = m the fit interpolates: the value shape at the centre is the unit vector.
-    let pts = support([1.0, 1.0], 0.1, &[(1.0, 0.1), (1.1, 1.3), (0.9, 2.5), (1.2, 3.3), (1.0, 4.4), (1.3, 5.5)]);
-    for rbf in [RbfKind::Gaussian, RbfKind::Mq, RbfKind::Imq] {
+fn rbf_fd_interpolates() {
+    // RBF-FD interpolates on its stencil: the value weights at the centre (a stencil
+    // node) are the unit vector, for every radial function.
+    let pts = support([1.0, 1.0], 0.1, &[(1.0, 0.1), (1.1, 1.3), (0.9, 2.5), (1.2, 3.3), (1.0, 4.4), (1.3, 5.5), (1.6, 0.7), (1.7, 3.9)]);
+    for radial in [Radial::Phs { order: 3 }, Radial::Phs { order: 5 }, Radial::Gaussian { shape: 2.0 }, Radial::Mq { shape: 2.0 }, Radial::Imq { shape: 2.0 }] {
         let mut phi = vec![0.0; pts.len()];
-        shape_functions(&Basis::Rbf { rbf, shape: 2.0 }, &Weight::None, [1.0, 1.0], &pts, &[Op::Value], &mut phi).unwrap();
-        assert!((phi[0] - 1.0).abs() < 1e-8, "{rbf:?}: {phi:?}");
-        assert!(phi[1..].iter().all(|v| v.abs() < 1e-8), "{rbf:?}: {phi:?}");
+        shape_functions(&Basis::RbfFd { radial, degree: 2 }, &Weight::None, [1.0, 1.0], &pts, &[Op::Value], &mut phi).unwrap();
+        assert!((phi[0] - 1.0).abs() < 1e-10, "{radial:?}: {phi:?}");
+        assert!(phi[1..].iter().all(|v| v.abs() < 1e-10), "{radial:?}: {phi:?}");
     }
 }
 

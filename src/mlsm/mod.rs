@@ -1,15 +1,18 @@
-//! Meshless shape functions (MLSM): weighted least squares over each node's support.
+//! Meshless shape functions: weighted least squares over each node's support (MLSM)
+//! or RBF-FD on it.
 //!
-//! [`basis`] defines the local bases and weights, [`wls`] one local solve,
-//! [`shapes`] the parallel computation for all nodes of exactly the operators each
-//! node needs.
+//! [`basis`] defines the local bases and weights, [`wls`] one least-squares solve,
+//! [`rbffd`] one RBF-FD solve, [`shapes`] the parallel computation for all nodes of
+//! exactly the operators each node needs.
 
 pub mod basis;
 pub mod ops;
+pub mod rbffd;
 pub mod shapes;
 pub mod wls;
 
-pub use basis::{Basis, BasisKind, RbfKind, Weight, WeightKind};
+pub use basis::{Basis, BasisKind, Weight, WeightKind};
+pub use rbffd::Radial;
 pub use ops::{Op, OpSet};
 pub use shapes::{compute_shapes, ShapeError, Shapes};
 

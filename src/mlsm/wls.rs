@@ -24,16 +24,28 @@ pub struct RankDeficient {
 }
 
 /// Relative size of the smallest QR pivot below which `W B` counts as rank deficient.
-pub fn rank_tolerance(basis: &Basis) -> f64 {
-    match basis {
-        // RBF collocation matrices are notoriously ill-conditioned but still usable.
-        Basis::Rbf { .. } => 1e-15,
-        _ => 1e-10,
+pub const RANK_TOLERANCE: f64 = 1e-10;
+
+/// Smallest `|R_kk| / max |R_kk|` of an upper triangular `r` (0 for a zero matrix).
+fn diagonal_ratio(r: &DMatrix<f64>) -> f64 {
+    let m = r.ncols().min(r.nrows());
+    let diag_max = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
+    let diag_min = (0..m).map(|k| r[(k, k)].abs()).fold(f64::INFINITY, f64::min);
+    if diag_max > 0.0 {
+        diag_min / diag_max
+    } else {
+        0.0
     }
 }
 
+/// Smallest relative QR pivot `|R_kk| / max |R_kk|` of `b`: its numerical rank test.
+pub fn rank_ratio(b: &DMatrix<f64>) -> f64 {
+    diagonal_ratio(&b.clone().qr().r())
+}
+
 /// Shape functions of `ops` at `centre` for the support `points` (the centre first),
-/// written to `out[k * n .. (k + 1) * n]` for the k-th operator.
+/// written to `out[k * n .. (k + 1) * n]` for the k-th operator: weighted least
+/// squares for the monomial bases, [`super::rbffd`] for RBF-FD.
 pub fn shape_functions(
     basis: &Basis,
     weight: &Weight,
@@ -42,6 +54,9 @@ pub fn shape_functions(
     ops: &[Op],
     out: &mut [f64],
 ) -> Result<(), RankDeficient> {
+    if let Basis::RbfFd { radial, degree } = basis {
+        return super::rbffd::shape_functions(radial, *degree, centre, points, ops, out);
+    }
     let n = points.len();
     let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
     let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
@@ -49,7 +64,7 @@ pub fn shape_functions(
     let h_p = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
     let z: Vec<[f64; 2]> = rel.iter().map(|d| [d[0] / s, d[1] / s]).collect();
     let sw: Vec<f64> = dist.iter().map(|&r| weight.sqrt_weight(r, h_p)).collect();
-    let local = LocalBasis::new(basis, &z, h_p / s);
+    let local = LocalBasis::new(basis);
     let m = local.len();
 
     let mut row = vec![0.0; m];
@@ -62,10 +77,8 @@ pub fn shape_functions(
     }
     let qr = wb.qr();
     let r = qr.r();
-    let diag_max = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
-    let diag_min = (0..m).map(|k| r[(k, k)].abs()).fold(f64::INFINITY, f64::min);
-    let ratio = if diag_max > 0.0 { diag_min / diag_max } else { 0.0 };
-    if ratio.is_nan() || ratio <= rank_tolerance(basis) {
+    let ratio = diagonal_ratio(&r);
+    if ratio.is_nan() || ratio <= RANK_TOLERANCE {
         return Err(RankDeficient { ratio, basis_size: m });
     }
     // All operators at once: Y = R^-T L (m x k), then phi = W Q Y (n x k).

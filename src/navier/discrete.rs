@@ -5,7 +5,7 @@
 //! | node | rows it carries | operators |
 //! |---|---|---|
 //! | interior | Navier | `d2` |
-//! | boundary, all-traction, with a ghost | Navier + tractions (in the ghost's rows) | `d1`, `d2` |
+//! | boundary with a ghost (all-traction; RBF-FD: any traction) | Navier + boundary rows (in the ghost's rows) | `d1`, `d2` |
 //! | boundary with a traction component | tractions, displacements | `d1` |
 //! | boundary, all-displacement | displacements | none |
 //!
@@ -19,7 +19,7 @@ use crate::domain::{self, ghost::place_ghosts, neighbors::Supports, NodeSet, Poi
 use crate::elasticity::dofs::DofMap;
 use crate::elasticity::stress::Gradient;
 use crate::exact::ExactSolution;
-use crate::mlsm::{compute_shapes, Op, OpSet, Shapes};
+use crate::mlsm::{compute_shapes, Basis, Op, OpSet, Shapes};
 use crate::pipeline::{stage, RunError, Stage, StageTimer};
 
 /// Ghost placement and support search.
@@ -116,12 +116,25 @@ impl Discretisation {
 
 /// Positions of nodes and ghosts, and the ghost of each node.
 ///
-/// Ghosts only where both equations are tractions: on mixed (symmetry) nodes an extra
-/// Navier row made scattered-node runs unstable (measured on kirsch.toml: e_inf(sigma)
-/// 1.4e-2 at h = 0.005 with them, 3.1e-4 without).
+/// Which boundary nodes get a ghost depends on the basis (measured, README):
+/// * weighted least squares: nodes whose two equations are tractions. On mixed
+///   (symmetry) nodes an extra Navier row made scattered-node runs unstable (Kirsch:
+///   e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without);
+/// * RBF-FD: every node with a traction equation, symmetry nodes included. Without
+///   them the one-sided RBF-FD stencils where a symmetry edge meets a curved free
+///   edge went unstable (Lame, p = 4, 2e4 nodes: e_inf(sigma) 8.1e-4 without, 4.4e-6
+///   with; Kirsch, p = 2: e_inf(u) 0.39 without, 1.0e-3 with).
 fn ghosts(case: &Case, params: &NavierParams, nodes: &NodeSet, equations: &[[ComponentEquation; 2]]) -> (Vec<Point>, Vec<Option<usize>>) {
+    let rbf_fd = matches!(params.approximation.basis, Basis::RbfFd { .. });
+    let wants_ghost = |eq: &[ComponentEquation; 2]| {
+        if rbf_fd {
+            eq.iter().any(ComponentEquation::is_traction)
+        } else {
+            eq.iter().all(ComponentEquation::is_traction)
+        }
+    };
     let candidates: Vec<usize> = if params.approximation.ghost_nodes {
-        (0..nodes.boundary.len()).filter(|&i| equations[i].iter().all(ComponentEquation::is_traction)).collect()
+        (0..nodes.boundary.len()).filter(|&i| wants_ghost(&equations[i])).collect()
     } else {
         Vec::new()
     };

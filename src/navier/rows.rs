@@ -66,10 +66,10 @@ impl RowWriter<'_> {
         t
     }
 
-    /// Displacement row of component `c` at node `i`: `u_c = g`; returns the right-hand side.
-    pub fn displacement(&self, i: usize, c: usize, g: f64, out: &mut Entries) -> f64 {
-        let r = self.dofs.dof(i, c);
-        out.push((r, r, 1.0));
+    /// Displacement row of component `c` at node `i`, `u_c = g`, written in row `c` of
+    /// node `row_node` (`i` itself, or its ghost); returns the right-hand side.
+    pub fn displacement(&self, i: usize, row_node: usize, c: usize, g: f64, out: &mut Entries) -> f64 {
+        out.push((self.dofs.dof(row_node, c), self.dofs.dof(i, c), 1.0));
         g
     }
 }
@@ -145,7 +145,7 @@ mod tests {
 
         // A displacement row is the identity row of its unknown.
         let mut e = Entries::new();
-        assert_eq!(writer.displacement(3, 1, 0.25, &mut e), 0.25);
+        assert_eq!(writer.displacement(3, 3, 1, 0.25, &mut e), 0.25);
         assert_eq!(e, vec![(dofs.dof(3, 1), dofs.dof(3, 1), 1.0)]);
     }
 }

@@ -36,7 +36,7 @@ impl System<'_> {
             let bc_rows = disc.ghost[i].unwrap_or(i);
             for (c, eq) in disc.boundary_equations[i].iter().enumerate() {
                 let r = match *eq {
-                    ComponentEquation::Displacement { value } => writer.displacement(i, c, value, &mut e),
+                    ComponentEquation::Displacement { value } => writer.displacement(i, bc_rows, c, value, &mut e),
                     ComponentEquation::Traction { normal, value } => writer.traction(i, bc_rows, c, normal, value, &mut e),
                 };
                 rhs.push((dofs.dof(bc_rows, c), r));

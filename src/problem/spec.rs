@@ -166,10 +166,12 @@ pub struct NodesSpec {
 #[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct ApproximationSpec {
-    /// `monomials`, `tensor`, `gaussian`, `mq`, `imq`.
+    /// `monomials`, `tensor`, `phs`, `gaussian`, `mq`, `imq`.
     pub basis: Option<String>,
-    /// Polynomial degree.
+    /// Polynomial degree (of the least-squares basis, or of the RBF-FD augmentation).
     pub degree: Option<u32>,
+    /// PHS exponent: `phi(r) = r^exponent`.
+    pub exponent: Option<u32>,
     /// RBF shape parameter in units of the local spacing.
     pub shape: Option<f64>,
     /// `gaussian` or `none`.

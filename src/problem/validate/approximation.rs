@@ -4,7 +4,7 @@
 use super::{packing, Ctx, MAX_NODES};
 use crate::choice::Choice;
 use crate::domain::{Domain, FillKind, FillParams, Primitive};
-use crate::mlsm::{Approximation, Basis, BasisKind, Weight, WeightKind};
+use crate::mlsm::{Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
 use crate::problem::spec::{ApproximationSpec, NodesSpec};
 use crate::problem::ProblemError;
 
@@ -19,27 +19,37 @@ use crate::problem::ProblemError;
 pub fn default_support(m: usize, fill: FillKind) -> usize {
     match fill {
         FillKind::Scattered => 2 * m,
-        FillKind::Grid => {
-            // Count lattice points within radius^2 = r2 for increasing r2.
-            let mut r2 = 1;
-            loop {
-                let k = (r2 as f64).sqrt() as i64;
-                let count = (-k..=k).flat_map(|i| (-k..=k).map(move |j| i * i + j * j)).filter(|&d| d <= r2).count();
-                if count as f64 >= 1.4 * m as f64 {
-                    return count;
-                }
-                r2 += 1;
-            }
+        FillKind::Grid => lattice_ring(1.4 * m as f64),
+    }
+}
+
+/// Default stencil of an RBF-FD basis with `m` polynomial terms: `2 m` nodes (Flyer,
+/// Fornberg, Bayona and Barnett), on grids the smallest complete lattice ring of at
+/// least `2 m`.
+pub fn default_rbf_fd_support(m: usize, fill: FillKind) -> usize {
+    match fill {
+        FillKind::Scattered => 2 * m,
+        FillKind::Grid => lattice_ring(2.0 * m as f64),
+    }
+}
+
+/// The node count of the smallest disc of lattice points holding at least `count`.
+fn lattice_ring(count: f64) -> usize {
+    // Count lattice points within radius^2 = r2 for increasing r2.
+    let mut r2 = 1;
+    loop {
+        let k = (r2 as f64).sqrt() as i64;
+        let inside = (-k..=k).flat_map(|i| (-k..=k).map(move |j| i * i + j * j)).filter(|&d| d <= r2).count();
+        if inside as f64 >= count {
+            return inside;
         }
+        r2 += 1;
     }
 }
 
 /// Ghost nodes outside traction boundaries unless the scene says otherwise (static
 /// scenes; time-dependent ones default to none).
 pub const DEFAULT_GHOST_NODES: bool = true;
-
-/// Support size of an RBF basis without `support` (the RBF interpolates its support).
-const DEFAULT_RBF_SUPPORT: usize = 9;
 
 /// `[nodes]`: fill, spacing (or count), seed, relaxation sweeps.
 pub(super) fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Result<FillParams, ProblemError> {
@@ -71,39 +81,75 @@ pub(super) fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Resul
     Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
 }
 
-/// The basis of `[approximation]`: its kind with its degree or shape parameter.
-fn basis(c: &Ctx, s: &ApproximationSpec) -> Result<Basis, ProblemError> {
-    let kind: BasisKind = c.choose("approximation.basis", s.basis.as_deref())?;
-    let basis = match kind.rbf() {
-        None => {
-            let degree = s.degree.unwrap_or(2);
-            if !(2..=6).contains(&degree) {
-                return c.err("approximation.degree", format!("must be 2..6 (the Navier equations need second derivatives), got {degree}"));
-            }
-            if kind == BasisKind::Tensor {
-                Basis::Tensor { degree }
-            } else {
-                Basis::Monomials { degree }
-            }
-        }
-        Some(rbf) => {
-            if s.degree.is_some() {
-                return c.err("approximation.degree", "RBF bases have no degree; remove it");
-            }
-            let shape = c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?;
-            Basis::Rbf { rbf, shape: c.positive("approximation.shape", shape)? }
-        }
-    };
-    if s.shape.is_some() && kind.rbf().is_none() {
-        return c.err("approximation.shape", "only RBF bases take a shape parameter");
+/// Highest polynomial degree of a basis (the local systems grow as `(p+1)(p+2)/2`).
+pub const MAX_DEGREE: u32 = 8;
+
+/// The polynomial degree of `[approximation]` for a basis of `kind`.
+fn degree(c: &Ctx, s: &ApproximationSpec, kind: BasisKind) -> Result<u32, ProblemError> {
+    let d = s.degree.unwrap_or(2);
+    let max = if kind.is_rbf_fd() { MAX_DEGREE } else { 6 };
+    if !(2..=max).contains(&d) {
+        return c.err(
+            "approximation.degree",
+            format!("must be 2..{max} for basis \"{}\" (the Navier rows need second derivatives, which degree 1 cannot reproduce), got {d}", kind.name()),
+        );
     }
-    Ok(basis)
+    Ok(d)
 }
 
-/// `[approximation]`: basis, weight, support size, ghost nodes.
-pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dynamic: bool) -> Result<Approximation, ProblemError> {
-    let basis = basis(c, s)?;
-    let weight = match c.choose("approximation.weight", s.weight.as_deref())? {
+/// The radial function of an RBF-FD basis of `kind` with augmentation `degree`.
+fn radial(c: &Ctx, s: &ApproximationSpec, kind: BasisKind, degree: u32) -> Result<Radial, ProblemError> {
+    if kind == BasisKind::Phs {
+        let order = s.exponent.unwrap_or(3);
+        if order < 3 || order % 2 == 0 {
+            return c.err("approximation.exponent", format!("the PHS exponent must be odd and at least 3 (r^1 has no second derivative at 0), got {order}"));
+        }
+        // r^beta is conditionally positive definite of order (beta + 1) / 2: the
+        // monomials must include degree (beta - 1) / 2 for the local system to be solvable.
+        if degree < (order - 1) / 2 {
+            return c.err(
+                "approximation.exponent",
+                format!("r^{order} needs monomials up to degree {} at least; raise degree or lower exponent", (order - 1) / 2),
+            );
+        }
+        return Ok(Radial::Phs { order });
+    }
+    let shape = c.positive("approximation.shape", c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?)?;
+    Ok(match kind {
+        BasisKind::Gaussian => Radial::Gaussian { shape },
+        BasisKind::Mq => Radial::Mq { shape },
+        _ => Radial::Imq { shape },
+    })
+}
+
+/// The basis of `[approximation]`: its kind with its degree, exponent or shape parameter.
+fn basis(c: &Ctx, s: &ApproximationSpec) -> Result<Basis, ProblemError> {
+    let kind: BasisKind = c.choose("approximation.basis", s.basis.as_deref())?;
+    let degree = degree(c, s, kind)?;
+    if s.shape.is_some() && !kind.has_shape() {
+        return c.err("approximation.shape", format!("basis \"{}\" takes no shape parameter (only gaussian, mq and imq do)", kind.name()));
+    }
+    if s.exponent.is_some() && kind != BasisKind::Phs {
+        return c.err("approximation.exponent", format!("only basis \"phs\" takes an exponent, not \"{}\"", kind.name()));
+    }
+    Ok(match kind {
+        BasisKind::Monomials => Basis::Monomials { degree },
+        BasisKind::Tensor => Basis::Tensor { degree },
+        _ => Basis::RbfFd { radial: radial(c, s, kind, degree)?, degree },
+    })
+}
+
+/// The weight of a least-squares basis (RBF-FD interpolates on its stencil: none).
+fn weight(c: &Ctx, s: &ApproximationSpec, basis: &Basis) -> Result<Weight, ProblemError> {
+    if let Basis::RbfFd { .. } = basis {
+        for (field, given) in [("weight", s.weight.is_some()), ("sigma", s.sigma.is_some())] {
+            if given {
+                return c.err(format!("approximation.{field}"), "RBF-FD interpolates on its stencil and takes no least-squares weight; remove it");
+            }
+        }
+        return Ok(Weight::None);
+    }
+    Ok(match c.choose("approximation.weight", s.weight.as_deref())? {
         WeightKind::None => {
             if s.sigma.is_some() {
                 return c.err("approximation.sigma", format!("weight = \"{}\" takes no sigma", WeightKind::None.name()));
@@ -111,18 +157,23 @@ pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dyna
             Weight::None
         }
         WeightKind::Gaussian => Weight::Gaussian { sigma: c.positive("approximation.sigma", s.sigma.unwrap_or(1.0))? },
-    };
-    // Polynomial bases have a fixed size m; an RBF basis has one function per support node.
-    let m = basis.polynomial_degree().map(|_| basis.size(0));
-    let support = match (s.support, m) {
+    })
+}
+
+/// `[approximation]`: basis, weight, support size, ghost nodes.
+pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dynamic: bool) -> Result<Approximation, ProblemError> {
+    let basis = basis(c, s)?;
+    let weight = weight(c, s, &basis)?;
+    let m = basis.size();
+    let support = match (s.support, basis) {
         (Some(n), _) => n,
-        (None, None) => DEFAULT_RBF_SUPPORT,
-        (None, Some(m)) => default_support(m, fill),
+        (None, Basis::RbfFd { .. }) => default_rbf_fd_support(m, fill),
+        (None, _) => default_support(m, fill),
     };
     if support < 2 {
         return c.err("approximation.support", format!("must be at least 2, got {support}"));
     }
-    if let Some(m) = m.filter(|&m| support < m) {
+    if support < m {
         return c.err(
             "approximation.support",
             format!(

@@ -1,0 +1,182 @@
+//! RBF-FD weights: a radial function centred at every stencil node, augmented with
+//! the monomials of total degree `<= p` (Flyer, Fornberg, Bayona and Barnett; the
+//! PHS+poly recipe). For a stencil `z_1..z_n` in local coordinates `z = (x - c) / s`
+//! (shifted to the centre `c`, scaled by the stencil radius `s`) the weights `w` of an
+//! operator `L` at the centre solve the saddle-point system
+//!
+//! ```text
+//! [ A   P ] [ w ]   [ L phi(|z - z_j|) at 0 ]          A_ij = phi(|z_i - z_j|)
+//! [ P^T 0 ] [ l ] = [ L p_k at 0            ],         P_jk = p_k(z_j)
+//! ```
+//!
+//! so that `L` is exact on the radial functions and on every polynomial of degree `p`;
+//! physical weights are `w / s^order(L)`. The system is solved by LU with partial
+//! pivoting. `P` must have full column rank (checked by QR, like the least-squares
+//! bases), and the solve is refused when the weights show that the system lost more
+//! than [`AMPLIFICATION_LIMIT`] of the precision (flat Gaussian, MQ or IMQ kernels).
+//!
+//! Radial functions, `r = |z - z_j|`:
+//! * polyharmonic spline `r^beta`, `beta` odd `>= 3` (no shape parameter; all its
+//!   derivatives up to second order vanish at `r = 0`);
+//! * Gaussian `exp(-(r/c)^2)`, multiquadric `sqrt(r^2 + c^2)`, inverse multiquadric
+//!   `1/sqrt(r^2 + c^2)`, with `c` in local units (the scene gives it in units of the
+//!   local spacing).
+
+use super::basis::monomial_exponents;
+use super::ops::Op;
+use super::wls::{rank_ratio, RankDeficient, RANK_TOLERANCE};
+use super::Basis;
+use nalgebra::DMatrix;
+use serde::Serialize;
+
+/// Largest `|w| |M| / |rhs|` accepted (in max norms): a lower bound of the condition
+/// number of the local system that is actually reached. Above it the weights carry
+/// fewer than four significant digits.
+pub const AMPLIFICATION_LIMIT: f64 = 1e12;
+
+/// The radial function of an RBF-FD stencil.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Radial {
+    /// Polyharmonic spline `r^order`, `order` odd and at least 3.
+    Phs {
+        /// The exponent (3, 5, 7, ...).
+        order: u32,
+    },
+    /// `exp(-(r/c)^2)`, `c = shape` x local spacing.
+    Gaussian {
+        /// Shape parameter in units of the local spacing.
+        shape: f64,
+    },
+    /// `sqrt(r^2 + c^2)`.
+    Mq {
+        /// Shape parameter in units of the local spacing.
+        shape: f64,
+    },
+    /// `1 / sqrt(r^2 + c^2)`.
+    Imq {
+        /// Shape parameter in units of the local spacing.
+        shape: f64,
+    },
+}
+
+impl Radial {
+    /// Shape parameter in units of the local spacing (`None` for PHS).
+    pub fn shape(&self) -> Option<f64> {
+        match *self {
+            Radial::Phs { .. } => None,
+            Radial::Gaussian { shape } | Radial::Mq { shape } | Radial::Imq { shape } => Some(shape),
+        }
+    }
+
+    /// `(phi, dphi/dr / r, (d2phi/dr2 - dphi/dr / r) / r^2)` at distance `r`, with `c` the
+    /// shape parameter in local units: then `d phi / dz_a = f1 d_a` and
+    /// `d2 phi / dz_a dz_b = f2 d_a d_b + f1 delta_ab` for `d = z - z_j`.
+    fn profile(&self, r: f64, c: f64) -> (f64, f64, f64) {
+        match *self {
+            Radial::Phs { order } => {
+                let b = order as f64;
+                if r == 0.0 {
+                    // Every derivative up to second order vanishes at the centre for b >= 3.
+                    return (0.0, 0.0, 0.0);
+                }
+                (r.powf(b), b * r.powf(b - 2.0), b * (b - 2.0) * r.powf(b - 4.0))
+            }
+            Radial::Gaussian { .. } => {
+                let f = (-(r * r) / (c * c)).exp();
+                (f, -2.0 * f / (c * c), 4.0 * f / (c * c * c * c))
+            }
+            Radial::Mq { .. } => {
+                let t = (r * r + c * c).sqrt();
+                (t, 1.0 / t, -1.0 / (t * t * t))
+            }
+            Radial::Imq { .. } => {
+                let t = (r * r + c * c).sqrt();
+                (1.0 / t, -1.0 / (t * t * t), 3.0 / (t * t * t * t * t))
+            }
+        }
+    }
+
+    /// `(L phi(|z - zj|))` at `z = 0`.
+    fn operator_at_centre(&self, op: Op, zj: [f64; 2], c: f64) -> f64 {
+        let d = [-zj[0], -zj[1]];
+        let (f, f1, f2) = self.profile(d[0].hypot(d[1]), c);
+        match op {
+            Op::Value => f,
+            Op::Dx => f1 * d[0],
+            Op::Dy => f1 * d[1],
+            Op::Dxx => f2 * d[0] * d[0] + f1,
+            Op::Dxy => f2 * d[0] * d[1],
+            Op::Dyy => f2 * d[1] * d[1] + f1,
+        }
+    }
+}
+
+/// Number of monomials of total degree `<= degree` in 2D: `(p + 1)(p + 2) / 2`.
+pub fn polynomial_size(degree: u32) -> usize {
+    ((degree + 1) * (degree + 2) / 2) as usize
+}
+
+/// RBF-FD weights of `ops` at `centre` for the stencil `points` (the centre first),
+/// written to `out[k * n .. (k + 1) * n]` for the k-th operator.
+pub fn shape_functions(radial: &Radial, degree: u32, centre: [f64; 2], points: &[[f64; 2]], ops: &[Op], out: &mut [f64]) -> Result<(), RankDeficient> {
+    let n = points.len();
+    let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
+    let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
+    let s = dist.iter().cloned().fold(0.0, f64::max);
+    let h_p = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+    let z: Vec<[f64; 2]> = rel.iter().map(|d| [d[0] / s, d[1] / s]).collect();
+    let c = radial.shape().map_or(0.0, |shape| shape * h_p / s);
+    let exps = monomial_exponents(&Basis::Monomials { degree });
+    let m = exps.len();
+    let monomial = |p: [f64; 2], (a, b): (u32, u32)| p[0].powi(a as i32) * p[1].powi(b as i32);
+
+    // The polynomial part must determine every coefficient.
+    let mut p_mat = DMatrix::<f64>::zeros(n, m);
+    for j in 0..n {
+        for (k, &e) in exps.iter().enumerate() {
+            p_mat[(j, k)] = monomial(z[j], e);
+        }
+    }
+    let ratio = rank_ratio(&p_mat);
+    if n < m || ratio.is_nan() || ratio <= RANK_TOLERANCE {
+        return Err(RankDeficient { ratio, basis_size: m });
+    }
+
+    let size = n + m;
+    let mut sys = DMatrix::<f64>::zeros(size, size);
+    for i in 0..n {
+        for j in 0..n {
+            let r = (z[i][0] - z[j][0]).hypot(z[i][1] - z[j][1]);
+            sys[(i, j)] = radial.profile(r, c).0;
+        }
+        for k in 0..m {
+            sys[(i, n + k)] = p_mat[(i, k)];
+            sys[(n + k, i)] = p_mat[(i, k)];
+        }
+    }
+    let fact = |k: u32| (1..=k).product::<u32>() as f64;
+    let mut rhs = DMatrix::<f64>::zeros(size, ops.len());
+    for (col, &op) in ops.iter().enumerate() {
+        for j in 0..n {
+            rhs[(j, col)] = radial.operator_at_centre(op, z[j], c);
+        }
+        let target = op.multi_index();
+        for (k, &(a, b)) in exps.iter().enumerate() {
+            rhs[(n + k, col)] = if (a, b) == target { fact(a) * fact(b) } else { 0.0 };
+        }
+    }
+    let norm = |m: &DMatrix<f64>| m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let solution = sys.clone().lu().solve(&rhs).filter(|w| w.iter().all(|v| v.is_finite()));
+    let amplification = solution.as_ref().map_or(f64::INFINITY, |w| norm(w) * norm(&sys) / norm(&rhs).max(f64::MIN_POSITIVE));
+    let Some(w) = solution.filter(|_| amplification <= AMPLIFICATION_LIMIT) else {
+        return Err(RankDeficient { ratio: 1.0 / amplification, basis_size: m });
+    };
+    for (col, &op) in ops.iter().enumerate() {
+        let scale = s.powi(-op.order());
+        for j in 0..n {
+            out[col * n + j] = w[(j, col)] * scale;
+        }
+    }
+    Ok(())
+}
