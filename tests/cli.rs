@@ -332,8 +332,16 @@ fn invalid_scenes_exit_2_naming_the_field() {
             Some(scene(&[("basis = \"monomials\"\ndegree = 2\nsupport = 9", "basis = \"phs\"\ndegree = 4\nsupport = 12")])),
             &["approximation.support", "15"],
         ),
-        ("PHS even exponent", Some(scene(&[("basis = \"monomials\"", "basis = \"phs\"\nexponent = 4")])), &["approximation.exponent", "odd"]),
-        ("PHS degree 9", Some(scene(&[("basis = \"monomials\"\ndegree = 2", "basis = \"phs\"\ndegree = 9")])), &["approximation.degree", "2..8"]),
+        (
+            "PHS even exponent",
+            Some(scene(&[("basis = \"monomials\"", "basis = \"phs\"\nexponent = 4")])),
+            &["approximation.exponent", "odd"],
+        ),
+        (
+            "PHS degree 9",
+            Some(scene(&[("basis = \"monomials\"\ndegree = 2", "basis = \"phs\"\ndegree = 9")])),
+            &["approximation.degree", "2..8"],
+        ),
         (
             "PHS exponent too high for the degree",
             Some(scene(&[("basis = \"monomials\"", "basis = \"phs\"\nexponent = 9")])),
@@ -346,7 +354,45 @@ fn invalid_scenes_exit_2_naming_the_field() {
             &["approximation.weight", "RBF-FD"],
         ),
         ("MQ without shape", Some(scene(&[("basis = \"monomials\"", "basis = \"mq\"")])), &["approximation.shape", "missing"]),
-
+        (
+            "flat Gaussian",
+            Some(scene(&[("basis = \"monomials\"", "basis = \"gaussian\"\nshape = 200.0")])),
+            &["approximation.shape", "[1, 20]"],
+        ),
+        // Graded spacing ([nodes.refine]).
+        (
+            "refinement on a grid",
+            Some(scene_plus("[nodes.refine]\nnear = [\"left\"]\nspacing = 0.01\ngrowth = 0.2\n")),
+            &["nodes.refine", "scattered"],
+        ),
+        (
+            "refinement coarser than the far spacing",
+            Some(scene(&[("fill = \"grid\"", "fill = \"scattered\"\n[nodes.refine]\nnear = [\"left\"]\nspacing = 0.1\ngrowth = 0.2")])),
+            &["nodes.refine.spacing", "not below"],
+        ),
+        (
+            "refinement growing too fast",
+            Some(scene(&[("fill = \"grid\"", "fill = \"scattered\"\n[nodes.refine]\nnear = [\"left\"]\nspacing = 0.01\ngrowth = 2.0")])),
+            &["nodes.refine.growth", "jumps"],
+        ),
+        (
+            "refinement towards an unknown part",
+            Some(scene(&[("fill = \"grid\"", "fill = \"scattered\"\n[nodes.refine]\nnear = [\"hole\"]\nspacing = 0.01\ngrowth = 0.2")])),
+            &["nodes.refine.near[0]", "hole"],
+        ),
+        (
+            "refinement towards nothing",
+            Some(scene(&[("fill = \"grid\"", "fill = \"scattered\"\n[nodes.refine]\nspacing = 0.01\ngrowth = 0.2")])),
+            &["nodes.refine", "near"],
+        ),
+        (
+            "refinement with more nodes than fit",
+            Some(scene(&[(
+                "fill = \"grid\"",
+                "fill = \"scattered\"\n[nodes.refine]\npoints = [[0.5, 0.5]]\nspacing = 1e-9\ngrowth = 0.0002",
+            )])),
+            &["nodes.spacing", "cannot hold"],
+        ),
         (
             "polygon edge_names count",
             Some(scene(&[(

@@ -2,9 +2,9 @@
 //! operator, on scattered supports, at any length scale (property test).
 
 use mlsm::mlsm::basis::{monomial_exponents, Basis, Weight};
-use mlsm::mlsm::Radial;
 use mlsm::mlsm::wls::shape_functions;
 use mlsm::mlsm::Op;
+use mlsm::mlsm::Radial;
 use proptest::prelude::*;
 
 /// `d^(a+b)/dx^a dy^b` of `x^i y^j` at `p`.
@@ -120,7 +120,13 @@ fn rbf_fd_interpolates() {
     // RBF-FD interpolates on its stencil: the value weights at the centre (a stencil
     // node) are the unit vector, for every radial function.
     let pts = support([1.0, 1.0], 0.1, &[(1.0, 0.1), (1.1, 1.3), (0.9, 2.5), (1.2, 3.3), (1.0, 4.4), (1.3, 5.5), (1.6, 0.7), (1.7, 3.9)]);
-    for radial in [Radial::Phs { order: 3 }, Radial::Phs { order: 5 }, Radial::Gaussian { shape: 2.0 }, Radial::Mq { shape: 2.0 }, Radial::Imq { shape: 2.0 }] {
+    for radial in [
+        Radial::Phs { order: 3 },
+        Radial::Phs { order: 5 },
+        Radial::Gaussian { shape: 2.0 },
+        Radial::Mq { shape: 2.0 },
+        Radial::Imq { shape: 2.0 },
+    ] {
         let mut phi = vec![0.0; pts.len()];
         shape_functions(&Basis::RbfFd { radial, degree: 2 }, &Weight::None, [1.0, 1.0], &pts, &[Op::Value], &mut phi).unwrap();
         assert!((phi[0] - 1.0).abs() < 1e-10, "{radial:?}: {phi:?}");

@@ -13,6 +13,7 @@
 //! normals (the bisector at a rectangle corner); how the boundary conditions of the
 //! parts are combined there is decided in `navier::equations`.
 
+use super::density::SpacingField;
 use super::shape::{BoundaryCurve, Domain, Point};
 
 /// A boundary node before it joins the node set.
@@ -91,16 +92,56 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
 
 /// Sample the boundary of `domain` at spacing about `h` (see module docs).
 pub fn discretise_boundary(domain: &Domain, h: f64) -> Vec<BoundarySample> {
+    discretise_boundary_graded(domain, &SpacingField::uniform(h))
+}
+
+/// Parameters of the samples of `[s0, s1]` on `curve`, the ends included, spaced by
+/// `h(x(s))`: equal steps of `int ds / h`, rounded to a whole number of segments (for a
+/// uniform `h`, `round((s1 - s0) / h)` equal segments).
+fn sample_parameters(curve: &BoundaryCurve, s0: f64, s1: f64, field: &SpacingField) -> Vec<f64> {
+    if field.is_uniform() {
+        let segments = (((s1 - s0) / field.max()).round() as usize).max(1);
+        return (0..=segments).map(|k| s0 + (s1 - s0) * k as f64 / segments as f64).collect();
+    }
+    // Cumulative int ds / h on a fine midpoint rule (32 cells per local spacing at least).
+    let cells = (((s1 - s0) / field.min() * 32.0).ceil() as usize).clamp(64, 1 << 22);
+    let ds = (s1 - s0) / cells as f64;
+    let mut cumulative = Vec::with_capacity(cells + 1);
+    cumulative.push(0.0);
+    for k in 0..cells {
+        let h = field.at(curve.curve.at(s0 + (k as f64 + 0.5) * ds).0);
+        cumulative.push(cumulative[k] + ds / h);
+    }
+    let total = cumulative[cells];
+    let segments = (total.round() as usize).max(1);
+    let mut out = Vec::with_capacity(segments + 1);
+    let mut cell = 0;
+    for k in 0..=segments {
+        let target = total * k as f64 / segments as f64;
+        while cell + 1 < cells && cumulative[cell + 1] < target {
+            cell += 1;
+        }
+        let (a, b) = (cumulative[cell], cumulative[cell + 1]);
+        let t = if b > a { ((target - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
+        out.push(if k == segments { s1 } else { s0 + (cell as f64 + t) * ds });
+    }
+    out
+}
+
+/// Sample the boundary of `domain` with the spacing `field` (see module docs).
+pub fn discretise_boundary_graded(domain: &Domain, field: &SpacingField) -> Vec<BoundarySample> {
+    let h = field.min();
     let tol = (1e-9 * domain.scale()).min(1e-6 * h);
     let mut raw: Vec<BoundarySample> = Vec::new();
     for c in domain.boundary_curves() {
         let len = c.curve.length();
         for (s0, s1) in on_boundary_intervals(domain, &c, h, tol) {
             let whole_closed = c.curve.is_closed() && s0 == 0.0 && s1 == len;
-            let segments = (((s1 - s0) / h).round() as usize).max(1);
-            let count = if whole_closed { segments } else { segments + 1 };
-            for k in 0..count {
-                let s = s0 + (s1 - s0) * k as f64 / segments as f64;
+            let mut params = sample_parameters(&c, s0, s1, field);
+            if whole_closed {
+                params.pop();
+            }
+            for s in params {
                 let s = if c.curve.is_closed() { s.rem_euclid(len) } else { s };
                 let (p, n) = c.curve.at(s);
                 raw.push(BoundarySample { position: p, touches: vec![(c.part, n)] });

@@ -1,8 +1,9 @@
 //! Ghost (fictitious) nodes outside the boundary.
 //!
-//! A boundary node `p` with outward normal `n` gets the ghost `p + h n`. A ghost
-//! extrapolates the solution across its own part of the boundary only, so it is
-//! skipped where that extrapolation would be ambiguous or degenerate:
+//! A boundary node `p` with outward normal `n` gets the ghost `p + h n`, `h` the
+//! node's local spacing. A ghost extrapolates the solution across its own part of the
+//! boundary only, so it is skipped where that extrapolation would be ambiguous or
+//! degenerate:
 //! * it lies less than `h/2` outside the solid (thin parts);
 //! * it lies closer than `h/2` to a node or to an earlier ghost (at a concave
 //!   corner the ghosts of the two edges' neighbouring nodes coincide, which made
@@ -22,14 +23,17 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 /// Ghosts for the boundary nodes `candidates`: `(boundary node, ghost position)`.
 pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> Vec<(usize, Point)> {
-    let h = nodes.spacing;
-    let min_gap = 0.5 * h;
     let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&nodes.positions).expect("finite node positions");
     let mut placed: Vec<(usize, Point)> = Vec::with_capacity(candidates.len());
-    // Ghosts lie in a band along the boundary: a hash of cells of size h/2 finds earlier ones.
-    let cell = |p: Point| ((p[0] / min_gap).floor() as i64, (p[1] / min_gap).floor() as i64);
+    // Ghosts lie in a band along the boundary: a hash of cells of half the smallest
+    // spacing finds earlier ones.
+    let cell_size = 0.5 * candidates.iter().map(|&i| nodes.local_spacing[i]).fold(f64::INFINITY, f64::min);
+    let cell = |p: Point| ((p[0] / cell_size).floor() as i64, (p[1] / cell_size).floor() as i64);
     let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = std::collections::HashMap::new();
     for &i in candidates {
+        // The rules use the node's own (local) spacing h.
+        let h = nodes.local_spacing[i];
+        let min_gap = 0.5 * h;
         let (p, n) = (nodes.positions[i], nodes.normal(i));
         let g = [p[0] + h * n[0], p[1] + h * n[1]];
         if domain.signed_distance(g) < min_gap {
@@ -53,8 +57,9 @@ pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> V
             continue;
         }
         let (cx, cy) = cell(g);
-        let clash = (-2..=2).any(|dx| {
-            (-2..=2).any(|dy| {
+        let reach = (min_gap / cell_size).ceil() as i64 + 1;
+        let clash = (-reach..=reach).any(|dx| {
+            (-reach..=reach).any(|dy| {
                 grid.get(&(cx + dx, cy + dy))
                     .is_some_and(|list| list.iter().any(|&k| (placed[k].1[0] - g[0]).hypot(placed[k].1[1] - g[1]) < min_gap))
             })
@@ -75,7 +80,7 @@ mod tests {
     use crate::domain::{CsgOp, Primitive, Region};
 
     fn nodes(domain: &Domain, h: f64) -> NodeSet {
-        generate(domain, &FillParams { spacing: h, kind: FillKind::Grid, seed: 0, relax_iterations: 0 })
+        generate(domain, &FillParams { spacing: h, refine: None, kind: FillKind::Grid, seed: 0, relax_iterations: 0 })
     }
 
     /// On a rectangle every boundary node gets its ghost at `p + h n`, outside the

@@ -7,6 +7,7 @@
 
 pub mod boundary;
 pub mod cells;
+pub mod density;
 pub mod fill;
 pub mod ghost;
 pub mod neighbors;
@@ -14,6 +15,7 @@ pub mod shape;
 
 use crate::choice::choice;
 pub use boundary::BoundarySample;
+pub use density::{Refinement, SpacingField};
 pub use shape::{CsgOp, Domain, Point, Primitive, PrimitiveKind, Region};
 
 choice! {
@@ -27,16 +29,40 @@ choice! {
 }
 
 /// Parameters of the node generator.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct FillParams {
-    /// Target spacing `h` (m).
+    /// Target spacing `h` (m); with a refinement, the spacing far from its targets.
     pub spacing: f64,
+    /// Graded spacing towards boundary parts or points (scattered fills only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refine: Option<Refinement>,
     /// Interior fill.
     pub kind: FillKind,
     /// Seed of every random choice.
     pub seed: u64,
     /// Relaxation sweeps (0 = none).
     pub relax_iterations: usize,
+}
+
+impl FillParams {
+    /// The spacing function `h(x)` of these parameters on `domain`.
+    pub fn field(&self, domain: &Domain) -> SpacingField {
+        match &self.refine {
+            None => SpacingField::uniform(self.spacing),
+            Some(r) => SpacingField::graded(domain, self.spacing, r),
+        }
+    }
+
+    /// The same parameters with every spacing multiplied by `factor` (the growth rate
+    /// is dimensionless and stays): a uniform refinement of the whole node set.
+    pub fn scaled(&self, factor: f64) -> FillParams {
+        let mut p = self.clone();
+        p.spacing *= factor;
+        if let Some(r) = p.refine.as_mut() {
+            r.spacing *= factor;
+        }
+        p
+    }
 }
 
 /// Nodes of a discretised solid.
@@ -46,8 +72,10 @@ pub struct NodeSet {
     pub positions: Vec<Point>,
     /// Boundary nodes `0..boundary.len()`: parts touched and their normals.
     pub boundary: Vec<BoundarySample>,
-    /// Target spacing used to build the set.
+    /// Target spacing used to build the set (the largest, with a refinement).
     pub spacing: f64,
+    /// Target spacing at each node.
+    pub local_spacing: Vec<f64>,
 }
 
 impl NodeSet {
@@ -75,15 +103,17 @@ impl NodeSet {
 /// Generate the nodes of `domain` (boundary sampling, interior fill, relaxation).
 pub fn generate(domain: &Domain, params: &FillParams) -> NodeSet {
     let h = params.spacing;
-    let boundary = boundary::discretise_boundary(domain, h);
+    let field = params.field(domain);
+    let boundary = boundary::discretise_boundary_graded(domain, &field);
     let mut positions: Vec<Point> = boundary.iter().map(|s| s.position).collect();
     let interior = match params.kind {
         FillKind::Grid => fill::grid_fill(domain, h),
-        FillKind::Scattered => fill::scattered_fill(domain, &positions, h, params.seed),
+        FillKind::Scattered => fill::scattered_fill(domain, &positions, &field, params.seed),
     };
     positions.extend(interior);
     if params.relax_iterations > 0 {
-        fill::relax(domain, &mut positions, boundary.len(), h, params.relax_iterations);
+        fill::relax(domain, &mut positions, boundary.len(), &field, params.relax_iterations);
     }
-    NodeSet { positions, boundary, spacing: h }
+    let local_spacing = if field.is_uniform() { vec![h; positions.len()] } else { positions.iter().map(|&p| field.at(p)).collect() };
+    NodeSet { positions, boundary, spacing: h, local_spacing }
 }

@@ -63,34 +63,50 @@ fn choose(i: usize, mut found: Vec<(f64, u32)>, size: usize, complete: bool) -> 
     Some(row)
 }
 
+/// The support of node `i` of at least `size` nodes (module docs).
+fn support_of(tree: &ImmutableKdTree<f64, 2>, positions: &[Point], i: usize, size: usize) -> Vec<u32> {
+    // A few more than `size`, so that a group of ties at the cut is usually complete.
+    let mut fetch = (size + 8).min(positions.len());
+    loop {
+        let k = NonZeroUsize::new(fetch).expect("at least one node");
+        let query = tree.query(&positions[i]).nearest_n::<SquaredEuclidean<f64>>(k).execute();
+        let found = query.iter().map(|f| (f.distance, f.item)).collect();
+        if let Some(chosen) = choose(i, found, size, fetch == positions.len()) {
+            return chosen;
+        }
+        fetch = (2 * fetch).min(positions.len());
+    }
+}
+
 impl Supports {
     /// Find the supports of every node (module docs): at least `size` nodes each.
     /// `size` must not exceed the node count.
     pub fn nearest(positions: &[Point], size: usize) -> Supports {
         assert!(size >= 1 && size <= positions.len(), "support size {size} for {} nodes", positions.len());
         let tree = ImmutableKdTree::<f64, 2>::new_from_slice(positions).expect("k-d tree of finite node positions");
-        let rows: Vec<Vec<u32>> = (0..positions.len())
-            .into_par_iter()
-            .map(|i| {
-                // A few more than `size`, so that a group of ties at the cut is usually complete.
-                let mut fetch = (size + 8).min(positions.len());
-                loop {
-                    let k = NonZeroUsize::new(fetch).expect("at least one node");
-                    let query = tree.query(&positions[i]).nearest_n::<SquaredEuclidean<f64>>(k).execute();
-                    let found = query.iter().map(|f| (f.distance, f.item)).collect();
-                    if let Some(chosen) = choose(i, found, size, fetch == positions.len()) {
-                        return chosen;
-                    }
-                    fetch = (2 * fetch).min(positions.len());
-                }
-            })
-            .collect();
+        let rows: Vec<Vec<u32>> = (0..positions.len()).into_par_iter().map(|i| support_of(&tree, positions, i, size)).collect();
+        Supports::from_rows(size, rows)
+    }
+
+    fn from_rows(requested: usize, rows: Vec<Vec<u32>>) -> Supports {
         let mut offsets = Vec::with_capacity(rows.len() + 1);
         offsets.push(0);
         for r in &rows {
             offsets.push(offsets.last().unwrap() + r.len());
         }
-        Supports { requested: size, offsets, indices: rows.into_iter().flatten().collect() }
+        Supports { requested, offsets, indices: rows.into_iter().flatten().collect() }
+    }
+
+    /// The same supports with those of `nodes` widened to at least `size` nodes
+    /// (capped at the node count).
+    pub fn widened(&self, positions: &[Point], nodes: &[usize], size: usize) -> Supports {
+        let tree = ImmutableKdTree::<f64, 2>::new_from_slice(positions).expect("k-d tree of finite node positions");
+        let size = size.min(positions.len());
+        let mut rows: Vec<Vec<u32>> = (0..self.len()).map(|i| self.of(i).to_vec()).collect();
+        for &i in nodes {
+            rows[i] = support_of(&tree, positions, i, size);
+        }
+        Supports::from_rows(self.requested, rows)
     }
 
     /// The requested support size `n` (every support holds at least this many nodes).

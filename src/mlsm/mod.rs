@@ -12,9 +12,9 @@ pub mod shapes;
 pub mod wls;
 
 pub use basis::{Basis, BasisKind, Weight, WeightKind};
-pub use rbffd::Radial;
 pub use ops::{Op, OpSet};
-pub use shapes::{compute_shapes, ShapeError, Shapes};
+pub use rbffd::Radial;
+pub use shapes::{compute_shapes, degenerate_supports, ShapeError, Shapes};
 
 /// Basis, weight and support size of the local fits.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

@@ -119,7 +119,14 @@ pub fn polynomial_size(degree: u32) -> usize {
 
 /// RBF-FD weights of `ops` at `centre` for the stencil `points` (the centre first),
 /// written to `out[k * n .. (k + 1) * n]` for the k-th operator.
-pub fn shape_functions(radial: &Radial, degree: u32, centre: [f64; 2], points: &[[f64; 2]], ops: &[Op], out: &mut [f64]) -> Result<(), RankDeficient> {
+pub fn shape_functions(
+    radial: &Radial,
+    degree: u32,
+    centre: [f64; 2],
+    points: &[[f64; 2]],
+    ops: &[Op],
+    out: &mut [f64],
+) -> Result<(), RankDeficient> {
     let n = points.len();
     let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
     let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();

@@ -1,11 +1,13 @@
 //! Shape functions of all nodes, computed in parallel (rayon) for exactly the
 //! operators each node needs, and stored node by node.
 
+use super::basis::{monomial_exponents, Basis};
 use super::ops::{Op, OpSet};
-use super::wls::shape_functions;
+use super::wls::{rank_ratio, shape_functions, RANK_TOLERANCE};
 use super::Approximation;
 use crate::domain::neighbors::Supports;
 use crate::domain::Point;
+use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 /// A support whose local least-squares matrix is rank deficient.
@@ -66,6 +68,35 @@ impl Shapes {
     pub fn count(&self) -> usize {
         self.computed.iter().map(|s| s.len()).sum()
     }
+}
+
+/// The nodes that need shapes (`needs[i]` not empty) and whose support cannot
+/// determine the polynomial part of `basis`: the monomials at the support nodes, in
+/// local coordinates, have numerical rank below their count (a one-sided lattice
+/// stencil spanning fewer than `p + 1` rows, for instance).
+pub fn degenerate_supports(positions: &[Point], supports: &Supports, basis: &Basis, needs: &[OpSet]) -> Vec<usize> {
+    let exponents = monomial_exponents(basis);
+    (0..supports.len())
+        .into_par_iter()
+        .filter(|&i| {
+            if needs[i].is_empty() {
+                return false;
+            }
+            let support = supports.of(i);
+            if support.len() < exponents.len() {
+                return true;
+            }
+            let c = positions[i];
+            let s = support.iter().map(|&j| (positions[j as usize][0] - c[0]).hypot(positions[j as usize][1] - c[1])).fold(0.0, f64::max);
+            let p = DMatrix::from_fn(support.len(), exponents.len(), |r, k| {
+                let x = positions[support[r] as usize];
+                let z = [(x[0] - c[0]) / s, (x[1] - c[1]) / s];
+                z[0].powi(exponents[k].0 as i32) * z[1].powi(exponents[k].1 as i32)
+            });
+            let ratio = rank_ratio(&p);
+            ratio.is_nan() || ratio <= RANK_TOLERANCE
+        })
+        .collect()
 }
 
 /// Compute, for every node `i`, the shapes of the operators `needs[i]`.

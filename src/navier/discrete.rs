@@ -19,7 +19,7 @@ use crate::domain::{self, ghost::place_ghosts, neighbors::Supports, NodeSet, Poi
 use crate::elasticity::dofs::DofMap;
 use crate::elasticity::stress::Gradient;
 use crate::exact::ExactSolution;
-use crate::mlsm::{compute_shapes, Basis, Op, OpSet, Shapes};
+use crate::mlsm::{compute_shapes, degenerate_supports, Basis, Op, OpSet, Shapes};
 use crate::pipeline::{stage, RunError, Stage, StageTimer};
 
 /// Ghost placement and support search.
@@ -38,6 +38,8 @@ pub struct Discretisation {
     pub ghost: Vec<Option<usize>>,
     /// Supports over nodes and ghosts.
     pub supports: Supports,
+    /// Supports widened because they could not determine an RBF-FD polynomial part.
+    pub widened_supports: usize,
     /// Shape functions over nodes and ghosts.
     pub shapes: Shapes,
     /// Operators computed, with the number of nodes each was computed at.
@@ -61,13 +63,14 @@ impl Discretisation {
         })?;
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
-        let (positions, ghost, supports) = timer.run(SUPPORTS, || {
+        let (positions, ghost, supports, needs, widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
-            let supports = Supports::nearest(&positions, n_support);
-            let note = format!("{n_support} nearest, {} ghost nodes", positions.len() - nodes.len());
-            Ok(((positions, ghost, supports), note))
+            let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len());
+            let (supports, widened) =
+                widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &needs);
+            let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
+            Ok(((positions, ghost, supports, needs, widened), note))
         })?;
-        let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len());
         let shapes = timer.run(SHAPES, || {
             let s = compute_shapes(&positions, &supports, &params.approximation, &needs)?;
             let note = format!("{} shape functions", s.count());
@@ -80,7 +83,7 @@ impl Discretisation {
             .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
             .collect();
         let dofs = DofMap::displacement_only(positions.len());
-        Ok(Discretisation { nodes, boundary_equations, ghost, supports, shapes, operators_computed, dofs })
+        Ok(Discretisation { nodes, boundary_equations, ghost, supports, widened_supports: widened, shapes, operators_computed, dofs })
     }
 
     /// Number of ghost nodes.
@@ -147,6 +150,28 @@ fn ghosts(case: &Case, params: &NavierParams, nodes: &NodeSet, equations: &[[Com
         ghost[g.0] = Some(n + k);
     }
     (positions, ghost)
+}
+
+/// RBF-FD only: supports that cannot determine the polynomial part of the basis
+/// (one-sided lattice stencils at high degree) are widened by half, at most three
+/// times; returns the supports and how many were widened. A support still degenerate
+/// after that is reported when its shapes are computed.
+fn widen_degenerate(mut supports: Supports, positions: &[Point], basis: &Basis, needs: &[OpSet]) -> (Supports, usize) {
+    if !matches!(basis, Basis::RbfFd { .. }) {
+        return (supports, 0);
+    }
+    let mut widened = std::collections::BTreeSet::new();
+    let mut size = supports.requested();
+    for _ in 0..3 {
+        let bad = degenerate_supports(positions, &supports, basis, needs);
+        if bad.is_empty() {
+            break;
+        }
+        size += size / 2;
+        supports = supports.widened(positions, &bad, size);
+        widened.extend(bad);
+    }
+    (supports, widened.len())
 }
 
 /// The operators each of the `total` nodes and ghosts needs (module docs).

@@ -37,7 +37,7 @@ pub use solve::{solve, Solution};
 
 /// How the Navier model discretises a case: node generation, local approximation,
 /// linear solver.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct NavierParams {
     /// Node generation (spacing resolved).
     pub fill: FillParams,
@@ -80,7 +80,7 @@ pub(crate) mod test_case {
         };
         let support = if fill == FillKind::Grid { 13 } else { 12 };
         let params = NavierParams {
-            fill: FillParams { spacing: h, kind: fill, seed: 1, relax_iterations: 0 },
+            fill: FillParams { spacing: h, refine: None, kind: fill, seed: 1, relax_iterations: 0 },
             approximation: Approximation {
                 basis: Basis::Monomials { degree: 2 },
                 weight: Weight::Gaussian { sigma: 1.0 },

@@ -31,6 +31,8 @@ pub struct Solution {
     pub errors: Option<ErrorNorms>,
     /// Number of ghost nodes.
     pub ghost_nodes: usize,
+    /// Supports widened to determine an RBF-FD polynomial part.
+    pub widened_supports: usize,
     /// Number of unknowns.
     pub unknowns: usize,
     /// Nonzeros of the assembled matrix.
@@ -78,6 +80,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     })?;
 
     let ghost_nodes = disc.ghost_count();
+    let widened_supports = disc.widened_supports;
     let unknowns = disc.dofs.len();
     let Discretisation { nodes, boundary_equations, operators_computed, .. } = disc;
     Ok(Solution {
@@ -89,6 +92,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         exact: exact_fields,
         errors,
         ghost_nodes,
+        widened_supports,
         unknowns,
         nonzeros,
         operators_computed,

@@ -115,7 +115,7 @@ mod tests {
         }
         let owner = disc.ghost.iter().position(|g| *g == Some(i)).expect("every ghost has an owner");
         let (p, normal) = (disc.nodes.positions[owner], disc.nodes.normal(owner));
-        let h = disc.nodes.spacing;
+        let h = disc.nodes.local_spacing[owner];
         [p[0] + h * normal[0], p[1] + h * normal[1]]
     }
 }

@@ -72,24 +72,28 @@ impl Problem {
     /// `--spacing`); refused when the spacing is not positive or would give more than
     /// [`validate::MAX_NODES`] or fewer than two supports' worth of nodes.
     pub fn with_spacing(&self, spacing: f64) -> Result<Problem, ProblemError> {
-        let expected = self.case.domain.area_estimate(400) / spacing.powi(2) * validate::packing(self.navier.fill.kind);
-        let reason = if !(spacing.is_finite() && spacing > 0.0) {
-            Some(format!("spacing must be a positive number, got {spacing}"))
-        } else if expected > validate::MAX_NODES {
-            Some(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES))
-        } else if expected < 2.0 * self.navier.approximation.support as f64 {
-            Some(format!(
-                "spacing {spacing} gives about {expected:.0} nodes, too few for supports of {}",
-                self.navier.approximation.support
-            ))
-        } else {
-            None
-        };
+        let reason =
+            if !(spacing.is_finite() && spacing > 0.0) { Some(format!("spacing must be a positive number, got {spacing}")) } else { None };
+        // A graded spacing is scaled as a whole (its growth rate stays).
+        let fill = self.navier.fill.scaled(if spacing > 0.0 { spacing / self.navier.fill.spacing } else { 1.0 });
+        let expected = validate::expected_nodes(&self.case.domain, &fill, self.case.domain.area_estimate(400));
+        let reason = reason.or_else(|| {
+            if expected > validate::MAX_NODES {
+                Some(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES))
+            } else if expected < 2.0 * self.navier.approximation.support as f64 {
+                Some(format!(
+                    "spacing {spacing} gives about {expected:.0} nodes, too few for supports of {}",
+                    self.navier.approximation.support
+                ))
+            } else {
+                None
+            }
+        });
         match reason {
             Some(reason) => Err(ProblemError { file: self.source.clone(), field: "nodes.spacing".into(), reason }),
             None => {
                 let mut p = self.clone();
-                p.navier.fill.spacing = spacing;
+                p.navier.fill = fill;
                 Ok(p)
             }
         }

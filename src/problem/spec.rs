@@ -160,6 +160,22 @@ pub struct NodesSpec {
     pub seed: Option<u64>,
     /// Relaxation sweeps.
     pub relax: Option<usize>,
+    /// Graded spacing towards boundary parts or points.
+    pub refine: Option<RefineSpec>,
+}
+
+/// `[nodes.refine]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RefineSpec {
+    /// Spacing at the targets (m).
+    pub spacing: Option<f64>,
+    /// Spacing gained per unit of distance from the targets.
+    pub growth: Option<f64>,
+    /// Boundary parts to refine towards.
+    pub near: Option<Vec<String>>,
+    /// Points to refine towards.
+    pub points: Option<Vec<[f64; 2]>>,
 }
 
 /// `[approximation]`.

@@ -3,9 +3,9 @@
 
 use super::{packing, Ctx, MAX_NODES};
 use crate::choice::Choice;
-use crate::domain::{Domain, FillKind, FillParams, Primitive};
+use crate::domain::{Domain, FillKind, FillParams, Primitive, Refinement};
 use crate::mlsm::{Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
-use crate::problem::spec::{ApproximationSpec, NodesSpec};
+use crate::problem::spec::{ApproximationSpec, NodesSpec, RefineSpec};
 use crate::problem::ProblemError;
 
 /// Default support size for a basis of `m` functions.
@@ -78,7 +78,44 @@ pub(super) fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Resul
     if relax > 1000 {
         return c.err("nodes.relax", format!("{relax} sweeps; the fill settles within tens (seed 002 uses about 10); at most 1000"));
     }
-    Ok(FillParams { spacing, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
+    let refine = s.refine.as_ref().map(|r| refinement(c, r, domain, kind, spacing)).transpose()?;
+    Ok(FillParams { spacing, refine, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
+}
+
+/// Largest growth rate of a refinement: the spacing of neighbouring nodes then
+/// differs by less than a factor 1.5.
+pub const MAX_GROWTH: f64 = 0.5;
+
+/// `[nodes.refine]`: spacing at the targets, growth rate, targets.
+fn refinement(c: &Ctx, r: &RefineSpec, domain: &Domain, kind: FillKind, far: f64) -> Result<Refinement, ProblemError> {
+    if kind != FillKind::Scattered {
+        return c.err("nodes.refine", "a graded spacing needs fill = \"scattered\" (a grid has one spacing)");
+    }
+    let spacing =
+        c.positive("nodes.refine.spacing", c.need("nodes.refine.spacing", r.spacing, "the spacing at the refinement targets (m)")?)?;
+    if spacing >= far {
+        return c.err("nodes.refine.spacing", format!("{spacing} is not below nodes.spacing = {far}, the spacing far from the targets"));
+    }
+    let growth = c.need("nodes.refine.growth", r.growth, "the spacing gained per unit of distance (e.g. 0.2)")?;
+    if !(growth > 0.0 && growth <= MAX_GROWTH) {
+        return c.err("nodes.refine.growth", format!("must lie in (0, {MAX_GROWTH}] so that the density has no jumps, got {growth}"));
+    }
+    let known = || domain.parts.iter().map(|p| format!("\"{p}\"")).collect::<Vec<_>>().join(", ");
+    let mut parts = Vec::new();
+    for (k, name) in r.near.iter().flatten().enumerate() {
+        match domain.parts.iter().position(|p| p == name) {
+            Some(i) => parts.push(i),
+            None => return c.err(format!("nodes.refine.near[{k}]"), format!("\"{name}\" is not a boundary part (known: {})", known())),
+        }
+    }
+    let points = r.points.clone().unwrap_or_default();
+    for p in &points {
+        c.finite("nodes.refine.points", p)?;
+    }
+    if parts.is_empty() && points.is_empty() {
+        return c.err("nodes.refine", "name what to refine towards: near = [\"part\", ...] and/or points = [[x, y], ...]");
+    }
+    Ok(Refinement { spacing, growth, parts, points })
 }
 
 /// Highest polynomial degree of a basis (the local systems grow as `(p+1)(p+2)/2`).
@@ -91,18 +128,27 @@ fn degree(c: &Ctx, s: &ApproximationSpec, kind: BasisKind) -> Result<u32, Proble
     if !(2..=max).contains(&d) {
         return c.err(
             "approximation.degree",
-            format!("must be 2..{max} for basis \"{}\" (the Navier rows need second derivatives, which degree 1 cannot reproduce), got {d}", kind.name()),
+            format!(
+                "must be 2..{max} for basis \"{}\" (the Navier rows need second derivatives, which degree 1 cannot reproduce), got {d}",
+                kind.name()
+            ),
         );
     }
     Ok(d)
 }
+
+/// Accepted shape parameters of the Gaussian, MQ and IMQ kernels, in local spacings.
+pub const SHAPE_RANGE: (f64, f64) = (1.0, 20.0);
 
 /// The radial function of an RBF-FD basis of `kind` with augmentation `degree`.
 fn radial(c: &Ctx, s: &ApproximationSpec, kind: BasisKind, degree: u32) -> Result<Radial, ProblemError> {
     if kind == BasisKind::Phs {
         let order = s.exponent.unwrap_or(3);
         if order < 3 || order % 2 == 0 {
-            return c.err("approximation.exponent", format!("the PHS exponent must be odd and at least 3 (r^1 has no second derivative at 0), got {order}"));
+            return c.err(
+                "approximation.exponent",
+                format!("the PHS exponent must be odd and at least 3 (r^1 has no second derivative at 0), got {order}"),
+            );
         }
         // r^beta is conditionally positive definite of order (beta + 1) / 2: the
         // monomials must include degree (beta - 1) / 2 for the local system to be solvable.
@@ -114,7 +160,19 @@ fn radial(c: &Ctx, s: &ApproximationSpec, kind: BasisKind, degree: u32) -> Resul
         }
         return Ok(Radial::Phs { order });
     }
-    let shape = c.positive("approximation.shape", c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?)?;
+    let shape = c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?;
+    // Measured on lame.toml (degree 2): e_inf(u) 0.8-2.2 at shape 0.01-0.2 (the radial
+    // functions become spikes) and 0.19-1.1 at 200-1000 (flat: the radial part is lost
+    // to round-off); 1e-3 to 1e-2 everywhere in [1, 20], also on Kirsch at degree 4.
+    if !(SHAPE_RANGE.0..=SHAPE_RANGE.1).contains(&shape) {
+        return c.err(
+            "approximation.shape",
+            format!(
+                "{shape} local spacings is outside [{}, {}], where the measured errors of gaussian, mq and imq stencils were O(1); use a shape in that range or basis = \"phs\" (no shape parameter)",
+                SHAPE_RANGE.0, SHAPE_RANGE.1
+            ),
+        );
+    }
     Ok(match kind {
         BasisKind::Gaussian => Radial::Gaussian { shape },
         BasisKind::Mq => Radial::Mq { shape },
@@ -144,7 +202,10 @@ fn weight(c: &Ctx, s: &ApproximationSpec, basis: &Basis) -> Result<Weight, Probl
     if let Basis::RbfFd { .. } = basis {
         for (field, given) in [("weight", s.weight.is_some()), ("sigma", s.sigma.is_some())] {
             if given {
-                return c.err(format!("approximation.{field}"), "RBF-FD interpolates on its stencil and takes no least-squares weight; remove it");
+                return c.err(
+                    format!("approximation.{field}"),
+                    "RBF-FD interpolates on its stencil and takes no least-squares weight; remove it",
+                );
             }
         }
         return Ok(Weight::None);
@@ -189,9 +250,24 @@ pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dyna
     Ok(Approximation { basis, weight, support, ghost_nodes })
 }
 
+/// About how many nodes a fill holds: `area / h^2` times the packing of the fill, or
+/// for a graded spacing the integral of `1 / h(x)^2` ([`crate::domain::SpacingField::node_estimate`]).
+pub fn expected_nodes(domain: &Domain, fill: &FillParams, area: f64) -> f64 {
+    match &fill.refine {
+        None => area / fill.spacing.powi(2) * packing(fill.kind),
+        Some(_) => fill.field(domain).node_estimate(domain, 2.0 * MAX_NODES) * packing(fill.kind),
+    }
+}
+
 /// The fill must give at least two supports' worth of nodes and at most [`MAX_NODES`].
-pub(super) fn check_node_count(c: &Ctx, fill: &FillParams, approximation: &Approximation, area: f64) -> Result<(), ProblemError> {
-    let expected_nodes = area / fill.spacing.powi(2) * packing(fill.kind);
+pub(super) fn check_node_count(
+    c: &Ctx,
+    domain: &Domain,
+    fill: &FillParams,
+    approximation: &Approximation,
+    area: f64,
+) -> Result<(), ProblemError> {
+    let expected_nodes = expected_nodes(domain, fill, area);
     if expected_nodes < 2.0 * approximation.support as f64 {
         return c.err(
             "nodes.spacing",

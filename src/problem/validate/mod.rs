@@ -12,7 +12,7 @@ mod material;
 mod peridynamics;
 mod solver;
 
-pub use approximation::{default_support, DEFAULT_GHOST_NODES};
+pub use approximation::{default_support, expected_nodes, DEFAULT_GHOST_NODES};
 pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO};
 
 use super::spec::SceneSpec;
@@ -114,7 +114,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     let dynamic = spec.dynamics.is_some();
     let fill = approximation::nodes(&c, &spec.nodes, &domain, area)?;
     let approximation = approximation::approximation(&c, &spec.approximation, fill.kind, dynamic)?;
-    approximation::check_node_count(&c, &fill, &approximation, area)?;
+    approximation::check_node_count(&c, &domain, &fill, &approximation, area)?;
     let material = material::material(&c, &spec.material)?;
     let exact = spec.exact.as_ref().map(|e| exact::exact(&c, e, material)).transpose()?;
     let body_force = exact::body_force(&c, spec.body_force.as_ref(), exact.as_ref())?;
