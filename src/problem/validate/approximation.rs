@@ -144,7 +144,7 @@ pub const SHAPE_RANGE: (f64, f64) = (1.0, 20.0);
 fn radial(c: &Ctx, s: &ApproximationSpec, kind: BasisKind, degree: u32) -> Result<Radial, ProblemError> {
     if kind == BasisKind::Phs {
         let order = s.exponent.unwrap_or(3);
-        if order < 3 || order % 2 == 0 {
+        if order < 3 || order.is_multiple_of(2) {
             return c.err(
                 "approximation.exponent",
                 format!("the PHS exponent must be odd and at least 3 (r^1 has no second derivative at 0), got {order}"),
