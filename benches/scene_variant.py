@@ -9,7 +9,7 @@ src, out = sys.argv[1], sys.argv[2]
 edits = {}
 for kv in sys.argv[3:]:
     k, v = kv.split('=', 1)
-    table, key = (k.split('.', 1) if '.' in k else ('approximation', k))
+    table, key = (k.rsplit('.', 1) if '.' in k else ('approximation', k))
     edits.setdefault(table, {})[key] = v
 lines = open(src).read().split('\n')
 out_lines, table, seen = [], None, set()

@@ -53,13 +53,15 @@ impl FillParams {
         }
     }
 
-    /// The same parameters with every spacing multiplied by `factor` (the growth rate
-    /// is dimensionless and stays): a uniform refinement of the whole node set.
+    /// The same parameters with the spacing function multiplied by `factor`:
+    /// `h(x) -> factor h(x)` everywhere (both spacings and the growth rate), a uniform
+    /// refinement of the whole graded node set.
     pub fn scaled(&self, factor: f64) -> FillParams {
         let mut p = self.clone();
         p.spacing *= factor;
         if let Some(r) = p.refine.as_mut() {
             r.spacing *= factor;
+            r.growth *= factor;
         }
         p
     }

@@ -15,6 +15,7 @@
 //! |---|---|---|---|
 //! | [`Cantilever`] | 1, variant A (Timoshenko & Goodier) | 0 | stress; strain via `E'`, `nu'` |
 //! | [`Kirsch`] | 2 (Kirsch 1898; Barber) | 0 | both, through `kappa` |
+//! | [`Flamant`] (line load on a half-plane) | 5 (Flamant 1892; Barber) | 0 | both, through `lambda` |
 //! | [`LameCylinder`] (thick cylinder) | 3 (Lame) | 0 | both |
 //! | [`Manufactured`] | 6 | analytic | both |
 //! | [`Polynomial`] | 6 (patch tests) | analytic | both |
@@ -27,6 +28,7 @@
 //! public so a problem can be read, printed and serialised as it is.
 
 mod cantilever;
+mod flamant;
 mod kirsch;
 mod lame;
 mod manufactured;
@@ -41,6 +43,7 @@ use crate::elasticity::conditions::Value;
 use crate::elasticity::material::{self, Material, PlaneModel};
 
 pub use cantilever::Cantilever;
+pub use flamant::Flamant;
 pub use kirsch::Kirsch;
 pub use lame::LameCylinder;
 pub use manufactured::Manufactured;

@@ -2,7 +2,7 @@
 //! takes. Each solution declares its parameters next to its formulas
 //! (`PARAMETERS`, `from_parameters`); [`ExactKind`] lists them.
 
-use super::{Cantilever, ExactSolution, Kirsch, LameCylinder, Manufactured, ParameterError, Polynomial};
+use super::{Cantilever, ExactSolution, Flamant, Kirsch, LameCylinder, Manufactured, ParameterError, Polynomial};
 use crate::choice::choice;
 use crate::elasticity::material::Material;
 
@@ -59,6 +59,7 @@ choice! {
     pub enum ExactKind("exact.kind", default None) {
         Cantilever = "cantilever" => "Timoshenko cantilever under an end load (`load`, `length`, `depth`)",
         Kirsch = "kirsch" => "infinite plate with a hole under uniaxial tension (`tension`, `radius`)",
+        Flamant = "flamant" => "line load on the half-plane y < 0 at the origin (`load`)",
         Lame = "lame" => "thick cylinder under internal pressure (`pressure`, `inner`, `outer`)",
         Manufactured = "manufactured" => "u = (sin(pi x) cos(pi y), x^2 y^3) with its body force (needs body_force = \"exact\")",
         Tension = "tension" => "uniform uniaxial stress sigma_xx = `tension`",
@@ -72,6 +73,7 @@ impl ExactKind {
         match self {
             ExactKind::Cantilever => Cantilever::PARAMETERS,
             ExactKind::Kirsch => Kirsch::PARAMETERS,
+            ExactKind::Flamant => Flamant::PARAMETERS,
             ExactKind::Lame => LameCylinder::PARAMETERS,
             ExactKind::Manufactured => &[],
             ExactKind::Tension => Polynomial::TENSION_PARAMETERS,
@@ -84,6 +86,7 @@ impl ExactKind {
         Ok(match self {
             ExactKind::Cantilever => Box::new(Cantilever::from_parameters(p, material)?),
             ExactKind::Kirsch => Box::new(Kirsch::from_parameters(p, material)?),
+            ExactKind::Flamant => Box::new(Flamant::from_parameters(p, material)?),
             ExactKind::Lame => Box::new(LameCylinder::from_parameters(p, material)?),
             ExactKind::Manufactured => Box::new(Manufactured::new(material)?),
             ExactKind::Tension => Box::new(Polynomial::uniaxial_tension(p.number("tension"), material)?),

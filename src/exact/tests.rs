@@ -44,6 +44,12 @@ fn cases() -> Vec<Case> {
             step: 1e-5,
         });
         out.push(Case {
+            solution: Box::new(Flamant::new(-3.0e6, steel).unwrap()),
+            points: vec![[0.0, -0.1], [0.5, -0.1], [-1.0, -0.1], [0.3, -0.7], [-0.8, -1.0], [1.0, -0.45], [0.02, -0.3]],
+            ell: 0.1,
+            step: 1e-4,
+        });
+        out.push(Case {
             solution: Box::new(Manufactured::new(steel).unwrap()),
             points: vec![[0.0, 0.0], [0.25, 0.5], [0.5, 0.5], [0.9, 0.1], [1.0, 1.0], [0.33, 0.77]],
             ell: 1.0,

@@ -74,7 +74,7 @@ impl Problem {
     pub fn with_spacing(&self, spacing: f64) -> Result<Problem, ProblemError> {
         let reason =
             if !(spacing.is_finite() && spacing > 0.0) { Some(format!("spacing must be a positive number, got {spacing}")) } else { None };
-        // A graded spacing is scaled as a whole (its growth rate stays).
+        // A graded spacing h(x) is scaled as a whole: every h(x) by the same factor.
         let fill = self.navier.fill.scaled(if spacing > 0.0 { spacing / self.navier.fill.spacing } else { 1.0 });
         let expected = validate::expected_nodes(&self.case.domain, &fill, self.case.domain.area_estimate(400));
         let reason = reason.or_else(|| {
