@@ -12,7 +12,7 @@ levels=${1:-4}
 shift || true
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(manufactured_traction lame kirsch)
-declare -A coarse=([manufactured_traction]=0.1 [lame]=0.0008 [kirsch]=0.16)
+declare -A coarse=([manufactured_traction]=0.1 [lame]=0.0016 [kirsch]=0.32)
 declare -A extra=([manufactured_traction]='nodes.fill="scattered"' [lame]='' [kirsch]='')
 tmp=output/bench_orders
 mkdir -p "$tmp"

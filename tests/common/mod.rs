@@ -82,3 +82,16 @@ pub fn orders(name: &str, spacings: &[f64], extra: &[(&str, Option<toml::Value>)
 pub fn arr(v: &[f64]) -> Option<toml::Value> {
     Some(toml::Value::Array(v.iter().map(|x| toml::Value::Float(*x)).collect()))
 }
+
+/// Edits that pin the least-squares setting (monomials of degree 2 on 12 nodes,
+/// uniform spacing) on a scene that ships another one, for the tests that measured it.
+pub fn least_squares_2() -> Vec<(&'static str, Option<toml::Value>)> {
+    vec![("approximation.basis", s("monomials")), ("approximation.degree", i(2)), ("approximation.support", i(12)), ("nodes.refine", None)]
+}
+
+/// `least_squares_2()` followed by `edits`.
+pub fn pinned(edits: &[(&'static str, Option<toml::Value>)]) -> Vec<(&'static str, Option<toml::Value>)> {
+    let mut all = least_squares_2();
+    all.extend_from_slice(edits);
+    all
+}
