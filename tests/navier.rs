@@ -21,7 +21,11 @@ fn manufactured_dirichlet_is_second_order() {
 /// which is asserted as a lower bound only.
 #[test]
 fn manufactured_traction_is_second_order() {
-    let (pu, ps, rows) = orders("manufactured_traction", &[0.025, 0.0125, 0.00625], &[("approximation.basis", s("monomials")), ("approximation.degree", i(2)), ("approximation.support", i(9))]);
+    let (pu, ps, rows) = orders(
+        "manufactured_traction",
+        &[0.025, 0.0125, 0.00625],
+        &[("approximation.basis", s("monomials")), ("approximation.degree", i(2)), ("approximation.support", i(9))],
+    );
     assert!((pu - 2.0).abs() <= 0.2, "order of e_inf(u): {pu}");
     assert!(ps >= 1.2, "order of e_inf(sigma): {ps}");
     assert!(rows.last().unwrap().1 < 2e-4, "{rows:?}");

@@ -16,7 +16,8 @@ use common::*;
 /// more than doubles an error.
 fn assert_order(scene: &str, coarse: f64, levels: i32, p: i64, (min_u, min_sigma): (f64, f64), extra: &[(&str, Option<toml::Value>)]) {
     let spacings: Vec<f64> = (0..levels).map(|k| coarse / 2f64.powi(k)).collect();
-    let mut edits = vec![("approximation.basis", s("phs")), ("approximation.degree", i(p)), ("approximation.support", None), ("nodes.refine", None)];
+    let mut edits =
+        vec![("approximation.basis", s("phs")), ("approximation.degree", i(p)), ("approximation.support", None), ("nodes.refine", None)];
     edits.extend_from_slice(extra);
     let (pu, ps, rows) = orders(scene, &spacings, &edits);
     assert!(pu >= min_u, "{scene} p = {p}: order of e_inf(u) {pu:.2} < {min_u}: {rows:?}");

@@ -42,8 +42,11 @@ pub struct Flamant {
 
 impl Flamant {
     /// Parameters of `[exact] kind = "flamant"`.
-    pub const PARAMETERS: &'static [Parameter] =
-        &[Parameter { name: "load", kind: ParameterKind::Number, help: "line load P at the origin, positive into the half-plane y < 0 (N/m)" }];
+    pub const PARAMETERS: &'static [Parameter] = &[Parameter {
+        name: "load",
+        kind: ParameterKind::Number,
+        help: "line load P at the origin, positive into the half-plane y < 0 (N/m)",
+    }];
 
     /// From validated scene parameters.
     pub fn from_parameters(p: &Parameters, material: Material) -> Result<Self, ParameterError> {
