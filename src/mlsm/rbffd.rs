@@ -24,7 +24,7 @@
 
 use super::basis::monomial_exponents;
 use super::ops::Op;
-use super::wls::{rank_ratio, RankDeficient, RANK_TOLERANCE};
+use super::wls::{rank_ratio, LocalFrame, RankDeficient, RANK_TOLERANCE};
 use super::Basis;
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -128,11 +128,7 @@ pub fn shape_functions(
     out: &mut [f64],
 ) -> Result<(), RankDeficient> {
     let n = points.len();
-    let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
-    let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
-    let s = dist.iter().cloned().fold(0.0, f64::max);
-    let h_p = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
-    let z: Vec<[f64; 2]> = rel.iter().map(|d| [d[0] / s, d[1] / s]).collect();
+    let LocalFrame { radius: s, nearest: h_p, z, .. } = LocalFrame::new(centre, points);
     let c = radial.shape().map_or(0.0, |shape| shape * h_p / s);
     let exps = monomial_exponents(&Basis::Monomials { degree });
     let m = exps.len();

@@ -58,11 +58,7 @@ pub fn shape_functions(
         return super::rbffd::shape_functions(radial, *degree, centre, points, ops, out);
     }
     let n = points.len();
-    let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
-    let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
-    let s = dist.iter().cloned().fold(0.0, f64::max);
-    let h_p = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
-    let z: Vec<[f64; 2]> = rel.iter().map(|d| [d[0] / s, d[1] / s]).collect();
+    let LocalFrame { dist, radius: s, nearest: h_p, z } = LocalFrame::new(centre, points);
     let sw: Vec<f64> = dist.iter().map(|&r| weight.sqrt_weight(r, h_p)).collect();
     let local = LocalBasis::new(basis);
     let m = local.len();
@@ -99,4 +95,31 @@ pub fn shape_functions(
         }
     }
     Ok(())
+}
+
+/// A stencil in local coordinates: `z_j = (x_j - centre) / radius`, `radius` the
+/// largest distance from the centre, `nearest` the smallest non-zero one (the local
+/// spacing that scales weights and shape parameters). Shared by least squares and
+/// RBF-FD, so both are invariant to translation and to the unit of length.
+pub(super) struct LocalFrame {
+    /// `|x_j - centre|`.
+    pub dist: Vec<f64>,
+    /// `max_j |x_j - centre|`.
+    pub radius: f64,
+    /// `min_j |x_j - centre|` over the points other than the centre.
+    pub nearest: f64,
+    /// Scaled local coordinates.
+    pub z: Vec<[f64; 2]>,
+}
+
+impl LocalFrame {
+    /// The frame of `points` around `centre`.
+    pub fn new(centre: [f64; 2], points: &[[f64; 2]]) -> LocalFrame {
+        let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
+        let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
+        let radius = dist.iter().cloned().fold(0.0, f64::max);
+        let nearest = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+        let z = rel.iter().map(|d| [d[0] / radius, d[1] / radius]).collect();
+        LocalFrame { dist, radius, nearest, z }
+    }
 }
