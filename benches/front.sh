@@ -30,7 +30,7 @@ for scene in "${scenes[@]}"; do
     if [ "$1" = shipped ]; then
       cp "problems/$scene.toml" "$scene_file"
     else
-      python3 benches/scene_variant.py "problems/$scene.toml" "$scene_file" "basis=\"$1\"" "degree=$2"
+      python3 benches/scene_variant.py "problems/$scene.toml" "$scene_file" "basis=\"$1\"" "degree=$2" "estimate.method=\"none\""
     fi
     for h in ${spacings[$scene]}; do
       out="$tmp/${scene}_${1}_${2:-}_$h"

@@ -22,7 +22,7 @@ for scene in "${scenes[@]}"; do
   for basis in "monomials 2" "phs 2" "phs 4" "phs 6"; do
     set -- $basis
     scene_file="$tmp/${scene}_$1_$2.toml"
-    python3 benches/scene_variant.py "problems/$scene.toml" "$scene_file" "basis=\"$1\"" "degree=$2" "nodes.spacing=${coarse[$scene]}" ${extra[$scene]}
+    python3 benches/scene_variant.py "problems/$scene.toml" "$scene_file" "basis=\"$1\"" "degree=$2" "estimate.method=\"none\"" "nodes.spacing=${coarse[$scene]}" ${extra[$scene]}
     out="$tmp/${scene}_$1_$2"
     if ! /usr/bin/time -f "%M" -o "$out.mem" ./target/release/mlsm --quiet convergence "$scene_file" --levels "$levels" --out "$out" 2> "$out.err"; then
       echo "| $scene | $1 $2 | failed: $(tail -c 200 "$out.err" | tr '\n' ' ') | | | | | | |"

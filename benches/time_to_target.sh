@@ -20,7 +20,7 @@ for scene in kirsch lame; do
   for basis in "monomials 2" "phs 4"; do
     set -- $basis
     file="$tmp/${scene}_$1_$2.toml"
-    python3 benches/scene_variant.py "problems/$scene.toml" "$file" "basis=\"$1\"" "degree=$2" > /dev/null
+    python3 benches/scene_variant.py "problems/$scene.toml" "$file" "basis=\"$1\"" "degree=$2" "estimate.method=\"none\"" > /dev/null
     sed -i '/^\[nodes.refine\]/,/^$/d' "$file"
     h=${coarse[$scene]}
     step=0

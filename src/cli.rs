@@ -43,6 +43,9 @@ pub enum Command {
         /// Override the peridynamic horizon delta (m); h = delta / m.
         #[arg(long)]
         horizon: Option<f64>,
+        /// Exit with code 4 when the run ends with warnings (results are still written).
+        #[arg(long)]
+        strict: bool,
     },
     /// Print every option word a scene file may use, with its default and meaning (Markdown).
     Options,

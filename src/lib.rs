@@ -17,7 +17,8 @@
 //! 6. [`case`]: the physical problem of a scene, independent of any discretisation;
 //! 7. the models: [`navier`] (MLSM collocation, static and elastodynamic) and
 //!    [`peridynamics`] (linear bond-based, static and dynamic);
-//! 8. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
+//! 8. [`problem`]: scene file (TOML) -> validated [`problem::Problem`]; [`warnings`]:
+//!    the checks that turn a doubtful result into a warning;
 //! 9. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
 //! 10. [`compare`]: the nonlocal-to-local comparison;
 //! 11. [`app`]: the commands (the only printing).
@@ -52,6 +53,7 @@ pub mod peridynamics;
 
 // Floor 8
 pub mod problem;
+pub mod warnings;
 
 // Floor 9
 pub mod model;

@@ -52,7 +52,8 @@ impl ErrorNorms {
     }
 }
 
-/// `(max |a - b| / max |b|, sqrt(sum |a - b|^2 / sum |b|^2))` over all components.
+/// `(max |a - b| / max |b|, sqrt(sum |a - b|^2 / sum |b|^2))` over all components;
+/// 0 when `a == b` (also when both vanish), infinite when only `b` vanishes.
 pub fn relative_errors<const K: usize>(numerical: &[[f64; K]], exact: &[[f64; K]]) -> (f64, f64) {
     let (mut max_d, mut max_e, mut sum_d, mut sum_e) = (0.0f64, 0.0f64, 0.0, 0.0);
     for (a, b) in numerical.iter().zip(exact) {
@@ -64,7 +65,9 @@ pub fn relative_errors<const K: usize>(numerical: &[[f64; K]], exact: &[[f64; K]
             sum_e += b[k] * b[k];
         }
     }
-    (max_d / max_e, (sum_d / sum_e).sqrt())
+    // Both zero (a zero solution reproduced exactly): no error, not 0/0.
+    let ratio = |d: f64, e: f64| if d == 0.0 { 0.0 } else { d / e };
+    (ratio(max_d, max_e), ratio(sum_d, sum_e).sqrt())
 }
 
 /// Displacement error norms over the entries `i < reference.len()` selected by `keep`

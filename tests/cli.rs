@@ -140,6 +140,52 @@ fn template_is_valid() {
     assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
 }
 
+/// Every static Navier run carries an error estimate (summary, terminal, a per-node
+/// field); a run whose estimate exceeds `estimate.threshold` is warned, still exits 0,
+/// and with `--strict` exits 4 after writing its results.
+#[test]
+fn run_reports_its_estimate_and_strict_turns_warnings_into_exit_4() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "scene.toml", TEMPLATE);
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "scene.toml", "--out", res.to_str().unwrap(), "--strict"]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("estimated: e_inf(u) ~"), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    let (e, est) = (&s["errors"], &s["estimated_errors"]);
+    assert_eq!(est["method"], "higher-degree");
+    // Degree-2 least squares against a degree-4 reference: within the bands of tests/estimate.rs.
+    let eff = num(est, "e_inf_u") / num(e, "e_inf_u");
+    assert!((0.5..=2.0).contains(&eff), "effectivity {eff}: {s}");
+    assert_eq!(s["warnings"].as_array().map(Vec::len), Some(0), "{s}");
+    let vtu = std::fs::read_to_string(res.join("solution.vtu")).unwrap();
+    assert!(vtu.contains("Name=\"estimated_error\"") && vtu.contains("Name=\"estimated_error_stress\""));
+
+    // The same run with a threshold below its error (about 3.5e-3).
+    write(tmp.path(), "tight.toml", &scene_plus("[estimate]\nthreshold = 1e-4\n"));
+    for (strict, code) in [(false, 0), (true, 4)] {
+        let out = tmp.path().join(format!("tight_{strict}"));
+        let mut args = vec!["run", "tight.toml", "--out", out.to_str().unwrap()];
+        if strict {
+            args.push("--strict");
+        }
+        let o = mlsm(tmp.path(), &args);
+        assert_eq!(o.status.code(), Some(code), "{}", describe(&o));
+        assert!(stderr(&o).contains("warning [estimate]: estimated error above the threshold 1e-4"), "{}", describe(&o));
+        let s = read_json(&out.join("summary.json"));
+        assert_eq!(s["warnings"][0]["check"], "estimate", "{s}");
+        assert!(out.join("solution.vtu").is_file());
+    }
+
+    // Bad [estimate] input: exit 2 naming the field.
+    for (extra, field) in [("[estimate]\nthreshold = -1\n", "estimate.threshold"), ("[estimate]\nmethod = \"richardson\"\n", "estimate.method")] {
+        write(tmp.path(), "bad.toml", &scene_plus(extra));
+        let o = mlsm(tmp.path(), &["check", "bad.toml"]);
+        assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+        assert!(stderr(&o).contains(field), "{}", describe(&o));
+    }
+}
+
 #[test]
 fn run_writes_solution_and_summary() {
     let tmp = TempDir::new().unwrap();
@@ -166,7 +212,7 @@ fn run_writes_solution_and_summary() {
     assert!(s["seed"].is_u64(), "seed missing: {s}");
 
     let timings = s["timings_s"].as_object().expect("timings_s");
-    let stages = ["nodes", "supports", "shapes", "assembly", "solve", "post", "output", "total"];
+    let stages = ["nodes", "supports", "shapes", "assembly", "solve", "post", "estimate", "output", "total"];
     let mut keys: Vec<&str> = timings.keys().map(|k| k.as_str()).collect();
     keys.sort_unstable();
     let mut expected = stages.to_vec();

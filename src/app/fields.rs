@@ -91,6 +91,12 @@ pub(super) fn navier_fields(case: &Case, sol: &Solution) -> Vec<PointField> {
     f.push(integer("boundary_part", (0..n).map(|i| if i < nb { sol.nodes.boundary[i].touches[0].0 as i32 } else { -1 })));
     f.push(vector("normal", (0..n).map(|i| if i < nb { sol.nodes.normal(i) } else { [0.0, 0.0] })));
     f.extend(error_fields(case, &sol.displacement, &sol.stress, &sol.exact));
+    if let Some(e) = sol.estimate.done() {
+        f.push(scalar("estimated_error", e.per_node_u.iter().copied()));
+        if let Some(s) = &e.per_node_sigma {
+            f.push(scalar("estimated_error_stress", s.iter().copied()));
+        }
+    }
     f
 }
 

@@ -34,6 +34,9 @@ pub enum AppError {
     /// Invalid command-line use (exit 2).
     #[error("{0}")]
     Usage(String),
+    /// `--strict` and the run ended with warnings (exit 4); the results were written.
+    #[error("--strict: the run ended with {0} warning(s) (listed above and in summary.json)")]
+    Strict(usize),
 }
 
 impl From<RunError> for AppError {
@@ -48,12 +51,13 @@ impl From<RunError> for AppError {
 
 impl AppError {
     /// Process exit code: 2 invalid input (a fixed time step above the stability limit
-    /// included), 3 solver failure, 1 anything else.
+    /// included), 3 solver failure, 4 warnings under `--strict`, 1 anything else.
     pub fn exit_code(&self) -> u8 {
         match self {
             AppError::Problem(_) | AppError::Usage(_) | AppError::Run(RunError::UnstableTimeStep { .. }) => 2,
             AppError::Run(_) => 3,
             AppError::Output(_) => 1,
+            AppError::Strict(_) => 4,
         }
     }
 }
@@ -67,12 +71,12 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             print!("{}", crate::problem::reference::markdown());
             Ok(())
         }
-        Command::Run { scene, out, spacing, model, horizon } => {
+        Command::Run { scene, out, spacing, model, horizon, strict } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
             });
-            let req = run::RunRequest { scene: scene.clone(), out: out.clone(), spacing: *spacing, model, horizon: *horizon };
+            let req = run::RunRequest { scene: scene.clone(), out: out.clone(), spacing: *spacing, model, horizon: *horizon, strict: *strict };
             run::run(req, &term, cli.quiet)
         }
         Command::Compare { scene, m, deltas, levels, quadratures, reference_spacing, out } => {

@@ -8,10 +8,12 @@ use super::terminal::Terminal;
 use super::{create_dir, default_out, AppError};
 use crate::dynamics::driver::{DynamicReport, EnergyRow};
 use crate::model::{self, Outcome};
+use crate::navier::Estimate;
 use crate::output;
 use crate::peridynamics::PdParams;
 use crate::pipeline::{RunError, StageTimings, OUTPUT};
 use crate::problem::{Model, Problem};
+use crate::warnings::{self, Checks};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -23,6 +25,7 @@ pub(super) struct RunRequest {
     pub spacing: Option<f64>,
     pub model: Option<Model>,
     pub horizon: Option<f64>,
+    pub strict: bool,
 }
 
 /// The scene with the command line's overrides applied and checked.
@@ -69,12 +72,14 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
     let seconds = || t_out.elapsed().as_secs_f64();
     match outcome {
         Outcome::NavierStatic(mut sol) => {
+            let checks = warnings::navier_static(&sol, &p.navier, &p.case);
             write_solution(&p, &dir, &sol.nodes.positions, &navier_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
-            write_summary(&dir, &NavierSummary::new(&p, &sol, t0), term, seconds())?;
+            write_summary(&dir, &NavierSummary::new(&p, &sol, &checks, t0), term, seconds())?;
             if !quiet {
                 print_navier(&sol);
             }
+            report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::PdStatic(mut sol) => {
             write_solution(&p, &dir, &sol.nodes.positions[..sol.nodes.free], &pd_fields(&p.case, &sol))?;
@@ -100,6 +105,24 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
             let dynamic = Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings };
             write_dynamic(&p, &dir, dynamic, PdDynamicPart::of(&p, &sim), t0, quiet)?;
         }
+    }
+    Ok(())
+}
+
+/// Print the notes and warnings of `checks` (warnings also under `--quiet`: a doubtful
+/// result is never silent); with `strict`, any warning is an error (exit 4) after the
+/// results were written.
+fn report_checks(checks: &Checks, strict: bool, quiet: bool) -> Result<(), AppError> {
+    if !quiet {
+        for n in &checks.notes {
+            eprintln!("note: {n}");
+        }
+    }
+    for w in &checks.warnings {
+        eprintln!("warning [{}]: {}", w.check, w.message);
+    }
+    if strict && !checks.warnings.is_empty() {
+        return Err(AppError::Strict(checks.warnings.len()));
     }
     Ok(())
 }
@@ -157,6 +180,17 @@ fn print_navier(sol: &crate::navier::Solution) {
             print!("  e_inf(sigma) = {s:.4e}");
         }
         println!();
+    }
+    match &sol.estimate {
+        Estimate::Done(e) => {
+            print!("estimated: e_inf(u) ~ {:.2e}  rel_l2(u) ~ {:.2e}", e.norms.e_inf_u, e.norms.rel_l2_u);
+            if let Some(s) = e.norms.e_inf_sigma {
+                print!("  e_inf(sigma) ~ {s:.2e}");
+            }
+            println!("  ({}, degree {} reference, {:.2} s)", e.method, e.reference_degree, e.seconds);
+        }
+        Estimate::Unavailable(why) => println!("estimated: unavailable ({why})"),
+        Estimate::Off => println!("estimated: off (estimate.method = \"none\")"),
     }
 }
 

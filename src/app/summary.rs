@@ -16,6 +16,7 @@ use crate::peridynamics::{Micromodulus, PdParams, PdSolution};
 use crate::pipeline::StageTimings;
 use crate::post::ErrorNorms;
 use crate::problem::Problem;
+use crate::warnings::Checks;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -98,11 +99,14 @@ pub(super) struct NavierSummary<'a> {
     operators_computed: BTreeMap<String, usize>,
     solver: SolverSummary<'a>,
     errors: Option<ErrorNorms>,
+    estimated_errors: &'a navier::Estimate,
+    #[serde(flatten)]
+    checks: &'a Checks,
     outputs: Outputs,
 }
 
 impl<'a> NavierSummary<'a> {
-    pub(super) fn new(p: &'a Problem, sol: &'a navier::Solution, t0: Instant) -> Self {
+    pub(super) fn new(p: &'a Problem, sol: &'a navier::Solution, checks: &'a Checks, t0: Instant) -> Self {
         NavierSummary {
             header: Header::new(p, &sol.timings, t0),
             nodes: sol.nodes.len(),
@@ -119,6 +123,8 @@ impl<'a> NavierSummary<'a> {
             operators_computed: sol.operators_computed.iter().cloned().collect(),
             solver: SolverSummary { kind: p.navier.solver.kind.method().name(), report: &sol.solver },
             errors: sol.errors,
+            estimated_errors: &sol.estimate,
+            checks,
             outputs: p.case.outputs,
         }
     }

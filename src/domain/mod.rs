@@ -7,6 +7,7 @@
 
 pub mod boundary;
 pub mod cells;
+pub mod corner;
 pub mod density;
 pub mod fill;
 pub mod ghost;

@@ -9,12 +9,14 @@ pub mod basis;
 pub mod ops;
 pub mod rbffd;
 pub mod shapes;
+pub mod stencil;
 pub mod wls;
 
 pub use basis::{Basis, BasisKind, Weight, WeightKind};
 pub use ops::{Op, OpSet};
 pub use rbffd::Radial;
 pub use shapes::{compute_shapes, degenerate_supports, ShapeError, Shapes};
+pub use stencil::{default_rbf_fd_support, default_support};
 
 /// Basis, weight and support size of the local fits.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

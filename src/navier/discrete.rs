@@ -52,15 +52,27 @@ impl Discretisation {
     /// Nodes, ghosts, supports and shapes of `case` with `params`, each stage timed
     /// by `timer`; `exact` gives the values of `"exact"` boundary conditions.
     pub fn new(case: &Case, params: &NavierParams, exact: Option<&dyn ExactSolution>, timer: &mut StageTimer) -> Result<Self, RunError> {
-        let n_support = params.approximation.support;
         let nodes = timer.run(stage::NODES, || {
             let nodes = domain::generate(&case.domain, &params.fill);
-            if nodes.len() < n_support {
-                return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
-            }
             let note = format!("{} nodes ({} on the boundary)", nodes.len(), nodes.boundary.len());
             Ok((nodes, note))
         })?;
+        Self::on_nodes(case, params, nodes, exact, timer)
+    }
+
+    /// The same on a given node set (`params.fill` is not used): ghosts, supports and
+    /// shapes of `params.approximation` on `nodes`.
+    pub fn on_nodes(
+        case: &Case,
+        params: &NavierParams,
+        nodes: NodeSet,
+        exact: Option<&dyn ExactSolution>,
+        timer: &mut StageTimer,
+    ) -> Result<Self, RunError> {
+        let n_support = params.approximation.support;
+        if nodes.len() < n_support {
+            return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
+        }
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
         let (positions, ghost, supports, needs, widened) = timer.run(SUPPORTS, || {

@@ -23,6 +23,7 @@
 pub mod discrete;
 pub mod dynamics;
 pub mod equations;
+pub mod estimate;
 pub mod rows;
 pub mod solve;
 pub mod system;
@@ -32,6 +33,7 @@ use crate::linalg::SolverParams;
 use crate::mlsm::Approximation;
 
 pub use discrete::Discretisation;
+pub use estimate::{Estimate, EstimateMethod, EstimateParams, ErrorEstimate};
 pub use dynamics::{simulate, Simulation};
 pub use solve::{solve, Solution};
 
@@ -45,6 +47,8 @@ pub struct NavierParams {
     pub approximation: Approximation,
     /// Linear solver.
     pub solver: SolverParams,
+    /// Error estimate.
+    pub estimate: EstimateParams,
 }
 
 /// A small case shared by the stage tests of this model.
@@ -88,6 +92,7 @@ pub(crate) mod test_case {
                 ghost_nodes: true,
             },
             solver: SolverParams::default(),
+            estimate: Default::default(),
         };
         (case, params)
     }

@@ -4,12 +4,14 @@
 
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
+use super::estimate::{self, Estimate, EstimateMethod, ESTIMATE};
 use super::system::System;
 use super::NavierParams;
 use crate::case::Case;
 use crate::domain::NodeSet;
 use crate::elasticity::stress::{Gradient, StressField};
-use crate::linalg::{self, SolveReport};
+use crate::exact::ExactSolution;
+use crate::linalg::{self, SolveReport, SolverParams};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 use crate::post::{ErrorNorms, ExactFields};
 
@@ -29,6 +31,8 @@ pub struct Solution {
     pub exact: Option<ExactFields>,
     /// Error norms, when an exact solution is known.
     pub errors: Option<ErrorNorms>,
+    /// Estimated errors (`estimate`), with or without an exact solution.
+    pub estimate: Estimate,
     /// Number of ghost nodes.
     pub ghost_nodes: usize,
     /// Supports widened to determine an RBF-FD polynomial part.
@@ -51,19 +55,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
-        let (triplets, rhs) = System { case, disc: &disc, exact }.assemble()?;
-        let m = linalg::assemble(&triplets)?;
-        let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.compute_nnz());
-        Ok(((m, rhs), note))
-    })?;
-    let nonzeros = matrix.compute_nnz();
-    let (x, report) = timer.run(stage::SOLVE, || {
-        let (x, report) = linalg::solve(&matrix, &rhs, &params.solver)?;
-        let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
-        Ok(((x, report), note))
-    })?;
-    drop(matrix);
+    let Solved { x, nonzeros, report } = assemble_and_solve(case, &disc, exact, &params.solver, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, gradient, stress, exact_fields, errors) = timer.run(stage::POST, || {
@@ -79,6 +71,22 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         Ok(((displacement, gradient, stress, exact_fields, errors), note))
     })?;
 
+    let estimate = match params.estimate.method {
+        EstimateMethod::None => Estimate::Off,
+        EstimateMethod::HigherDegree => timer.run(ESTIMATE, || {
+            let e = estimate::higher_degree(case, params, &disc.nodes, &displacement, stress.as_ref(), exact);
+            let note = match &e {
+                Estimate::Done(e) => match e.norms.e_inf_sigma {
+                    Some(s) => format!("e_inf(u) ~ {:.1e}, e_inf(sigma) ~ {s:.1e}", e.norms.e_inf_u),
+                    None => format!("e_inf(u) ~ {:.1e}", e.norms.e_inf_u),
+                },
+                Estimate::Unavailable(why) => format!("unavailable: {why}"),
+                Estimate::Off => String::new(),
+            };
+            Ok((e, note))
+        })?,
+    };
+
     let ghost_nodes = disc.ghost_count();
     let widened_supports = disc.widened_supports;
     let unknowns = disc.dofs.len();
@@ -91,6 +99,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         stress,
         exact: exact_fields,
         errors,
+        estimate,
         ghost_nodes,
         widened_supports,
         unknowns,
@@ -99,4 +108,37 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         solver: report,
         timings: timer.finish(),
     })
+}
+
+/// An assembled and solved system.
+pub(super) struct Solved {
+    /// The unknowns (displacements of nodes and ghosts).
+    pub x: Vec<f64>,
+    /// Nonzeros of the matrix.
+    pub nonzeros: usize,
+    /// What the solver did.
+    pub report: SolveReport,
+}
+
+/// Assemble the rows of `disc` and solve them with `solver` (stages `assembly`, `solve`).
+pub(super) fn assemble_and_solve(
+    case: &Case,
+    disc: &Discretisation,
+    exact: Option<&dyn ExactSolution>,
+    solver: &SolverParams,
+    timer: &mut StageTimer,
+) -> Result<Solved, RunError> {
+    let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
+        let (triplets, rhs) = System { case, disc, exact }.assemble()?;
+        let m = linalg::assemble(&triplets)?;
+        let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.compute_nnz());
+        Ok(((m, rhs), note))
+    })?;
+    let nonzeros = matrix.compute_nnz();
+    let (x, report) = timer.run(stage::SOLVE, || {
+        let (x, report) = linalg::solve(&matrix, &rhs, solver)?;
+        let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
+        Ok(((x, report), note))
+    })?;
+    Ok(Solved { x, nonzeros, report })
 }

@@ -13,6 +13,7 @@ use crate::elasticity::material::PlaneModel;
 use crate::exact::{ExactKind, ParameterKind};
 use crate::linalg::{PreconditionerKind, SolverMethod};
 use crate::mlsm::{BasisKind, WeightKind};
+use crate::navier::EstimateMethod;
 use crate::peridynamics::{BondForce, KernelKind, Quadrature, SurfaceCorrection};
 
 /// Every option of a scene, in the order of the scene tables.
@@ -30,6 +31,7 @@ pub fn options() -> Vec<OptionDoc> {
         OptionDoc::of::<SolverMethod>(),
         OptionDoc::of::<PreconditionerKind>(),
         OptionDoc::of::<OutputField>(),
+        OptionDoc::of::<EstimateMethod>(),
         OptionDoc::of::<ExactKind>(),
         OptionDoc::of::<Quadrature>(),
         OptionDoc::of::<KernelKind>(),

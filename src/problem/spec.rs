@@ -40,6 +40,19 @@ pub struct SceneSpec {
     pub peridynamics: Option<PeridynamicsSpec>,
     /// Time-dependent run (explicit integration from initial conditions).
     pub dynamics: Option<DynamicsSpec>,
+    /// Error estimate of the Navier model.
+    #[serde(default)]
+    pub estimate: EstimateSpec,
+}
+
+/// `[estimate]`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimateSpec {
+    /// `higher-degree` (default) or `none`.
+    pub method: Option<String>,
+    /// Estimated relative e_inf above which the run is warned (default 1e-2).
+    pub threshold: Option<f64>,
 }
 
 /// An affine field `c0 + cx x + cy y` per component.

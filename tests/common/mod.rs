@@ -6,11 +6,16 @@ use mlsm::problem::Problem;
 use std::path::Path;
 
 /// Load `problems/<name>.toml`, apply `edits` (dotted key -> TOML value; `None`
-/// removes the key) and validate it.
+/// removes the key) and validate it. The error estimate (a second solve) is off
+/// unless the scene or an edit sets `estimate.*`: the tests that measure true errors
+/// do not pay for it; tests/estimate.rs turns it on.
 pub fn scene(name: &str, edits: &[(&str, Option<toml::Value>)]) -> Problem {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml"));
     let text = std::fs::read_to_string(&path).unwrap();
     let mut doc: toml::Table = toml::from_str(&text).unwrap();
+    if !doc.contains_key("estimate") && !edits.iter().any(|(k, _)| k.starts_with("estimate.")) {
+        doc.insert("estimate".into(), toml::Value::Table(toml::toml! { method = "none" }));
+    }
     for (key, value) in edits {
         let parts: Vec<&str> = key.split('.').collect();
         let mut table = &mut doc;

@@ -4,48 +4,9 @@
 use super::{packing, Ctx, MAX_NODES};
 use crate::choice::Choice;
 use crate::domain::{Domain, FillKind, FillParams, Primitive, Refinement};
-use crate::mlsm::{Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
+use crate::mlsm::{default_rbf_fd_support, default_support, Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
 use crate::problem::spec::{ApproximationSpec, NodesSpec, RefineSpec};
 use crate::problem::ProblemError;
-
-/// Default support size for a basis of `m` functions.
-///
-/// Scattered fills: `2 m` (12 for degree-2 monomials), a least-squares fit
-/// over-determined by a factor 2. Grid fills: the smallest complete ring of lattice
-/// neighbours (9, 13, 21, 25, 29, 37, 45, 49, ...) with at least `1.4 m` nodes, because
-/// the `n` nearest of a lattice node are ambiguous when the n-th distance is shared
-/// by several nodes; an arbitrary pick makes stencils asymmetric (measured on
-/// manufactured_traction.toml: order 1.3-1.6 with 12 nodes, 1.9-2.0 with 9).
-pub fn default_support(m: usize, fill: FillKind) -> usize {
-    match fill {
-        FillKind::Scattered => 2 * m,
-        FillKind::Grid => lattice_ring(1.4 * m as f64),
-    }
-}
-
-/// Default stencil of an RBF-FD basis with `m` polynomial terms: `2 m` nodes (Flyer,
-/// Fornberg, Bayona and Barnett), on grids the smallest complete lattice ring of at
-/// least `2 m`.
-pub fn default_rbf_fd_support(m: usize, fill: FillKind) -> usize {
-    match fill {
-        FillKind::Scattered => 2 * m,
-        FillKind::Grid => lattice_ring(2.0 * m as f64),
-    }
-}
-
-/// The node count of the smallest disc of lattice points holding at least `count`.
-fn lattice_ring(count: f64) -> usize {
-    // Count lattice points within radius^2 = r2 for increasing r2.
-    let mut r2 = 1;
-    loop {
-        let k = (r2 as f64).sqrt() as i64;
-        let inside = (-k..=k).flat_map(|i| (-k..=k).map(move |j| i * i + j * j)).filter(|&d| d <= r2).count();
-        if inside as f64 >= count {
-            return inside;
-        }
-        r2 += 1;
-    }
-}
 
 /// Ghost nodes outside traction boundaries unless the scene says otherwise (static
 /// scenes; time-dependent ones default to none).

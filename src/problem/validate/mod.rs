@@ -12,15 +12,17 @@ mod material;
 mod peridynamics;
 mod solver;
 
-pub use approximation::{default_support, expected_nodes, DEFAULT_GHOST_NODES};
+pub use crate::mlsm::default_support;
+pub use approximation::{expected_nodes, DEFAULT_GHOST_NODES};
 pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO};
 
-use super::spec::SceneSpec;
+use super::spec::{EstimateSpec, SceneSpec};
 use super::{Model, Problem, ProblemError};
 use crate::case::{Case, OutputField, Outputs};
 use crate::choice::Choice;
 use crate::domain::{Domain, FillKind};
-use crate::navier::NavierParams;
+use crate::navier::estimate::DEFAULT_THRESHOLD;
+use crate::navier::{EstimateParams, NavierParams};
 use std::path::Path;
 
 /// Largest node count a run may ask for (a sparse LU of 1e8 unknowns does not fit in memory).
@@ -135,10 +137,17 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         name,
         source: path.to_path_buf(),
         case: Case { domain, material, body_force, conditions, exact, outputs, dynamics },
-        navier: NavierParams { fill, approximation, solver },
+        navier: NavierParams { fill, approximation, solver, estimate: estimate(&c, &spec.estimate)? },
         peridynamics,
         model,
     })
+}
+
+/// `[estimate]`: the estimator and the warning threshold.
+fn estimate(c: &Ctx, s: &EstimateSpec) -> Result<EstimateParams, ProblemError> {
+    let method = c.choose("estimate.method", s.method.as_deref())?;
+    let threshold = c.positive("estimate.threshold", s.threshold.unwrap_or(DEFAULT_THRESHOLD))?;
+    Ok(EstimateParams { method, threshold })
 }
 
 /// The scene's name (default: the file stem), which names its output folder.

@@ -1,0 +1,173 @@
+//! What a finished run reports as doubtful: a run never ends with a wrong answer and
+//! nothing said. Each check turns one symptom into a [`Warning`] that names the
+//! symptom, the number behind it and what to try; `summary.json` lists them under
+//! `warnings`, the terminal prints them, and `mlsm run --strict` exits with code 4
+//! when there is any.
+//!
+//! Static Navier checks ([`navier_static`]):
+//! * the error estimate (`navier::estimate`) above `estimate.threshold` (relative
+//!   e_inf of u, and of sigma when stress is computed), with the node where it is
+//!   largest;
+//! * no estimate possible (too few nodes, degree at the limit, reference failed);
+//! * the error against the scene's exact solution above the same threshold;
+//! * nu close to 1/2, where the displacement form loses accuracy (said together with
+//!   the estimate).
+//!
+//! Singular corners: where a clamped part (displacement on both components) meets a
+//! part with a traction component, and at re-entrant corners, the exact stress of a
+//! scene without a closed-form solution is unbounded, so no discretisation makes
+//! e_inf(sigma) small there. The stress check then skips the nodes within
+//! [`SINGULAR_RADIUS`] local spacings of such corners and says so in a note, with the
+//! estimate there. Scenes with an exact solution have no singular corners (their
+//! exact solutions are smooth).
+
+use crate::case::Case;
+use crate::domain::corner::corners;
+use crate::domain::{NodeSet, Point};
+use crate::elasticity::conditions::ComponentCondition;
+use crate::navier::{Estimate, NavierParams, Solution};
+use serde::Serialize;
+
+/// Radius of the neighbourhood of a singular corner that the stress check skips, in
+/// local node spacings (on the steel plate, h = 0.01, the estimated stress error falls
+/// from 0.36 at the clamped corners to 2.2e-3 at ten spacings).
+pub const SINGULAR_RADIUS: f64 = 10.0;
+
+/// A corner where the stress is singular.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SingularCorner {
+    /// Position.
+    pub at: Point,
+    /// Why: `re-entrant` or `clamped meets traction`.
+    pub reason: &'static str,
+    /// Radius skipped by the stress check.
+    pub radius: f64,
+}
+
+/// The checks of one run: warnings (something is doubtful) and notes (something the
+/// user should know to read the result).
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Checks {
+    /// Doubtful results, with what to try.
+    pub warnings: Vec<Warning>,
+    /// Remarks that do not make the run doubtful.
+    pub notes: Vec<String>,
+    /// Corners where the stress is singular.
+    pub singular_corners: Vec<SingularCorner>,
+}
+
+/// The singular corners of `case` on `nodes` (module docs).
+pub fn singular_corners(case: &Case, nodes: &NodeSet) -> Vec<SingularCorner> {
+    if case.exact.is_some() {
+        return Vec::new();
+    }
+    let clamped = |part: usize| case.conditions[part].components.iter().all(|c| *c == ComponentCondition::Displacement);
+    let traction = |part: usize| case.conditions[part].components.contains(&ComponentCondition::Traction);
+    corners(&case.domain, nodes)
+        .into_iter()
+        .filter_map(|c| {
+            let [a, b] = c.parts;
+            let reason = if c.reentrant {
+                "re-entrant"
+            } else if (clamped(a) && traction(b)) || (clamped(b) && traction(a)) {
+                "clamped meets traction"
+            } else {
+                return None;
+            };
+            Some(SingularCorner { at: c.position, reason, radius: SINGULAR_RADIUS * nodes.local_spacing[c.node] })
+        })
+        .collect()
+}
+
+/// One doubtful aspect of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Warning {
+    /// Which check fired (`estimate`, `no-estimate`, `exact-error`).
+    pub check: &'static str,
+    /// What is doubtful, the number behind it, and what to try.
+    pub message: String,
+}
+
+/// Poisson ratio from which the advice mentions near-incompressibility.
+const NEAR_INCOMPRESSIBLE: f64 = 0.45;
+
+/// `x > threshold`, or `x` is NaN (an error that could not be measured is not small).
+fn exceeds(x: f64, threshold: f64) -> bool {
+    x.is_nan() || x > threshold
+}
+
+/// What to try when the error of a static Navier run is too large.
+fn advice(params: &NavierParams, material: &crate::elasticity::material::Material) -> String {
+    let p = params.approximation.basis.polynomial_degree();
+    let mut s = format!("try a smaller nodes.spacing (now {:.3e}) or a higher approximation.degree (now {p})", params.fill.spacing);
+    if material.elastic.poisson >= NEAR_INCOMPRESSIBLE {
+        s.push_str(&format!(
+            "; nu = {} is near the incompressible limit, where the displacement form loses accuracy",
+            material.elastic.poisson
+        ));
+    }
+    s
+}
+
+/// The checks of a static Navier run (module docs).
+pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Checks {
+    let threshold = params.estimate.threshold;
+    let material = &case.material;
+    let mut checks = Checks { singular_corners: singular_corners(case, &sol.nodes), ..Checks::default() };
+    let near_singular = |p: Point| checks.singular_corners.iter().any(|c| (p[0] - c.at[0]).hypot(p[1] - c.at[1]) <= c.radius);
+    match &sol.estimate {
+        Estimate::Done(e) => {
+            let mut over = Vec::new();
+            if exceeds(e.norms.e_inf_u, threshold) {
+                over.push(format!("e_inf(u) ~ {:.1e} (largest at ({:.4e}, {:.4e}))", e.norms.e_inf_u, e.largest_u_at[0], e.largest_u_at[1]));
+            }
+            if let (Some(all), Some(per_node)) = (e.norms.e_inf_sigma, &e.per_node_sigma) {
+                // Largest stress indicator away from singular corners.
+                let away = (0..per_node.len()).filter(|&i| !near_singular(sol.nodes.positions[i])).max_by(|&i, &j| per_node[i].total_cmp(&per_node[j]));
+                if !checks.singular_corners.is_empty() {
+                    let list: Vec<String> =
+                        checks.singular_corners.iter().map(|c| format!("({:.4e}, {:.4e}) {}", c.at[0], c.at[1], c.reason)).collect();
+                    checks.notes.push(format!(
+                        "the stress is singular at {} corner(s): {}; the peak stress there is not a converged quantity (estimated e_inf(sigma) ~ {all:.1e} with them); the stress check skips {SINGULAR_RADIUS} local spacings around them",
+                        list.len(),
+                        list.join(", ")
+                    ));
+                }
+                if let Some(i) = away.filter(|&i| exceeds(per_node[i], threshold)) {
+                    let at = sol.nodes.positions[i];
+                    over.push(format!("e_inf(sigma) ~ {:.1e} (largest at ({:.4e}, {:.4e}))", per_node[i], at[0], at[1]));
+                }
+            }
+            if !over.is_empty() {
+                checks.warnings.push(Warning {
+                    check: "estimate",
+                    message: format!("estimated error above the threshold {threshold:.0e}: {}; {}", over.join(", "), advice(params, material)),
+                });
+            }
+        }
+        Estimate::Unavailable(why) => checks
+            .warnings
+            .push(Warning { check: "no-estimate", message: format!("no error estimate: {why}; the accuracy of this run is unknown") }),
+        Estimate::Off => checks.notes.push("no error estimate (estimate.method = \"none\")".into()),
+    }
+    if let Some(e) = &sol.errors {
+        let mut over = Vec::new();
+        if exceeds(e.e_inf_u, threshold) {
+            over.push(format!("e_inf(u) = {:.2e}", e.e_inf_u));
+        }
+        if let Some(s) = e.e_inf_sigma.filter(|s| exceeds(*s, threshold)) {
+            over.push(format!("e_inf(sigma) = {s:.2e}"));
+        }
+        if !over.is_empty() {
+            checks.warnings.push(Warning {
+                check: "exact-error",
+                message: format!(
+                    "error against the exact solution above the threshold {threshold:.0e}: {}; {}",
+                    over.join(", "),
+                    advice(params, material)
+                ),
+            });
+        }
+    }
+    checks
+}
