@@ -119,11 +119,16 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
         Estimate::Done(e) => {
             let mut over = Vec::new();
             if exceeds(e.norms.e_inf_u, threshold) {
-                over.push(format!("e_inf(u) ~ {:.1e} (largest at ({:.4e}, {:.4e}))", e.norms.e_inf_u, e.largest_u_at[0], e.largest_u_at[1]));
+                over.push(format!(
+                    "e_inf(u) ~ {:.1e} (largest at ({:.4e}, {:.4e}))",
+                    e.norms.e_inf_u, e.largest_u_at[0], e.largest_u_at[1]
+                ));
             }
             if let (Some(all), Some(per_node)) = (e.norms.e_inf_sigma, &e.per_node_sigma) {
                 // Largest stress indicator away from singular corners.
-                let away = (0..per_node.len()).filter(|&i| !near_singular(sol.nodes.positions[i])).max_by(|&i, &j| per_node[i].total_cmp(&per_node[j]));
+                let away = (0..per_node.len())
+                    .filter(|&i| !near_singular(sol.nodes.positions[i]))
+                    .max_by(|&i, &j| per_node[i].total_cmp(&per_node[j]));
                 if !checks.singular_corners.is_empty() {
                     let list: Vec<String> =
                         checks.singular_corners.iter().map(|c| format!("({:.4e}, {:.4e}) {}", c.at[0], c.at[1], c.reason)).collect();
@@ -141,7 +146,11 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
             if !over.is_empty() {
                 checks.warnings.push(Warning {
                     check: "estimate",
-                    message: format!("estimated error above the threshold {threshold:.0e}: {}; {}", over.join(", "), advice(params, material)),
+                    message: format!(
+                        "estimated error above the threshold {threshold:.0e}: {}; {}",
+                        over.join(", "),
+                        advice(params, material)
+                    ),
                 });
             }
         }

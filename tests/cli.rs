@@ -178,7 +178,9 @@ fn run_reports_its_estimate_and_strict_turns_warnings_into_exit_4() {
     }
 
     // Bad [estimate] input: exit 2 naming the field.
-    for (extra, field) in [("[estimate]\nthreshold = -1\n", "estimate.threshold"), ("[estimate]\nmethod = \"richardson\"\n", "estimate.method")] {
+    for (extra, field) in
+        [("[estimate]\nthreshold = -1\n", "estimate.threshold"), ("[estimate]\nmethod = \"richardson\"\n", "estimate.method")]
+    {
         write(tmp.path(), "bad.toml", &scene_plus(extra));
         let o = mlsm(tmp.path(), &["check", "bad.toml"]);
         assert_eq!(o.status.code(), Some(2), "{}", describe(&o));

@@ -17,7 +17,14 @@ fn run_scene(name: &str, edit: impl Fn(String) -> String) -> (tempfile::TempDir,
     let out = dir.path().join("res");
     mlsm::app::run(&Cli {
         quiet: true,
-        command: Command::Run { scene: scene_path.clone(), out: Some(out.clone()), spacing: None, model: None, horizon: None, strict: false },
+        command: Command::Run {
+            scene: scene_path.clone(),
+            out: Some(out.clone()),
+            spacing: None,
+            model: None,
+            horizon: None,
+            strict: false,
+        },
     })
     .unwrap();
     (dir, scene_path, out)

@@ -76,7 +76,8 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
             });
-            let req = run::RunRequest { scene: scene.clone(), out: out.clone(), spacing: *spacing, model, horizon: *horizon, strict: *strict };
+            let req =
+                run::RunRequest { scene: scene.clone(), out: out.clone(), spacing: *spacing, model, horizon: *horizon, strict: *strict };
             run::run(req, &term, cli.quiet)
         }
         Command::Compare { scene, m, deltas, levels, quadratures, reference_spacing, out } => {

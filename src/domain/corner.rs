@@ -50,8 +50,16 @@ mod tests {
     fn the_inner_corner_of_an_l_is_reentrant() {
         let domain = Domain {
             regions: vec![
-                Region { primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [2.0, 2.0] }, op: CsgOp::Union, edge_parts: vec![0, 1, 2, 3] },
-                Region { primitive: Primitive::Rectangle { min: [1.0, 1.0], max: [3.0, 3.0] }, op: CsgOp::Subtract, edge_parts: vec![4, 5, 6, 7] },
+                Region {
+                    primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [2.0, 2.0] },
+                    op: CsgOp::Union,
+                    edge_parts: vec![0, 1, 2, 3],
+                },
+                Region {
+                    primitive: Primitive::Rectangle { min: [1.0, 1.0], max: [3.0, 3.0] },
+                    op: CsgOp::Subtract,
+                    edge_parts: vec![4, 5, 6, 7],
+                },
             ],
             parts: (0..8).map(|k| format!("edge{k}")).collect(),
         };

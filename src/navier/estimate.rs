@@ -163,7 +163,11 @@ pub fn reference_approximation(run: &Approximation, fill: FillKind, nodes: usize
     if p + 1 > MAX_REFERENCE_DEGREE {
         Err(format!("the run's degree {p} leaves no higher degree for a reference (at most {MAX_REFERENCE_DEGREE})"))
     } else {
-        Err(format!("{nodes} nodes are too few for a reference of degree {} (needs at least {})", p + 1, 3 * Basis::RbfFd { radial: Radial::Phs { order: 3 }, degree: p + 1 }.size() / 2))
+        Err(format!(
+            "{nodes} nodes are too few for a reference of degree {} (needs at least {})",
+            p + 1,
+            3 * Basis::RbfFd { radial: Radial::Phs { order: 3 }, degree: p + 1 }.size() / 2
+        ))
     }
 }
 

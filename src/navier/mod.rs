@@ -33,8 +33,8 @@ use crate::linalg::SolverParams;
 use crate::mlsm::Approximation;
 
 pub use discrete::Discretisation;
-pub use estimate::{Estimate, EstimateMethod, EstimateParams, ErrorEstimate};
 pub use dynamics::{simulate, Simulation};
+pub use estimate::{ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
 pub use solve::{solve, Solution};
 
 /// How the Navier model discretises a case: node generation, local approximation,
