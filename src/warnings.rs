@@ -25,6 +25,7 @@ use crate::case::Case;
 use crate::domain::corner::corners;
 use crate::domain::{NodeSet, Point};
 use crate::elasticity::conditions::ComponentCondition;
+use crate::elasticity::material::Material;
 use crate::navier::{Estimate, NavierParams, Solution};
 use serde::Serialize;
 
@@ -97,7 +98,7 @@ fn exceeds(x: f64, threshold: f64) -> bool {
 }
 
 /// What to try when the error of a static Navier run is too large.
-fn advice(params: &NavierParams, material: &crate::elasticity::material::Material) -> String {
+fn advice(params: &NavierParams, material: &Material) -> String {
     let p = params.approximation.basis.polynomial_degree();
     let mut s = format!("try a smaller nodes.spacing (now {:.3e}) or a higher approximation.degree (now {p})", params.fill.spacing);
     if material.elastic.poisson >= NEAR_INCOMPRESSIBLE {
@@ -107,6 +108,22 @@ fn advice(params: &NavierParams, material: &crate::elasticity::material::Materia
         ));
     }
     s
+}
+
+/// The warning `check` for the norms in `over` (none when empty): `what` above the
+/// threshold, and what to try.
+fn above_threshold(
+    check: &'static str,
+    what: &str,
+    over: &[String],
+    threshold: f64,
+    params: &NavierParams,
+    material: &Material,
+) -> Option<Warning> {
+    (!over.is_empty()).then(|| Warning {
+        check,
+        message: format!("{what} above the threshold {threshold:.0e}: {}; {}", over.join(", "), advice(params, material)),
+    })
 }
 
 /// The checks of a static Navier run (module docs).
@@ -143,16 +160,7 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
                     over.push(format!("e_inf(sigma) ~ {:.1e} (largest at ({:.4e}, {:.4e}))", per_node[i], at[0], at[1]));
                 }
             }
-            if !over.is_empty() {
-                checks.warnings.push(Warning {
-                    check: "estimate",
-                    message: format!(
-                        "estimated error above the threshold {threshold:.0e}: {}; {}",
-                        over.join(", "),
-                        advice(params, material)
-                    ),
-                });
-            }
+            checks.warnings.extend(above_threshold("estimate", "estimated error", &over, threshold, params, material));
         }
         Estimate::Unavailable(why) => checks
             .warnings
@@ -167,16 +175,7 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
         if let Some(s) = e.e_inf_sigma.filter(|s| exceeds(*s, threshold)) {
             over.push(format!("e_inf(sigma) = {s:.2e}"));
         }
-        if !over.is_empty() {
-            checks.warnings.push(Warning {
-                check: "exact-error",
-                message: format!(
-                    "error against the exact solution above the threshold {threshold:.0e}: {}; {}",
-                    over.join(", "),
-                    advice(params, material)
-                ),
-            });
-        }
+        checks.warnings.extend(above_threshold("exact-error", "error against the exact solution", &over, threshold, params, material));
     }
     checks
 }

@@ -286,6 +286,12 @@ fn convergence_two_levels() {
     // not yet asymptotic, hence the band [1.5, 2.5] around 2.
     let p = num(&t, "fitted_order_e_inf_u");
     assert!((1.5..=2.5).contains(&p), "fitted order {p}: {t}");
+    // Each level carries its own estimate beside the true error (bands of tests/estimate.rs).
+    assert!(lines[0].contains("estimated_e_inf_u"), "header: {}", lines[0]);
+    for level in t["levels"].as_array().unwrap() {
+        let eff = num(level, "estimated_e_inf_u") / num(level, "e_inf_u");
+        assert!((0.5..=2.0).contains(&eff), "effectivity {eff}: {level}");
+    }
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! `mlsm convergence`: the static Navier solve at K halvings of the node spacing
 //! against the scene's exact solution; errors, per-level and fitted observed orders
-//! (`convergence.csv`, `convergence.json`).
+//! (`convergence.csv`, `convergence.json`), with each level's own error estimate
+//! beside its true error.
 
 use super::summary::Header;
 use super::terminal::Terminal;
@@ -28,6 +29,9 @@ struct Level {
     rel_l2_u: f64,
     order_e_inf_u: Option<f64>,
     order_e_inf_sigma: Option<f64>,
+    /// The run's own error estimate (`estimate.method`), beside the true error.
+    estimated_e_inf_u: Option<f64>,
+    estimated_e_inf_sigma: Option<f64>,
     seconds: f64,
 }
 
@@ -109,6 +113,8 @@ fn solve_levels(p: &Problem, levels: usize, term: &Terminal, quiet: bool) -> Res
             rel_l2_u: e.rel_l2_u,
             order_e_inf_u: order(rows.last().map(|r| r.e_inf_u), Some(e.e_inf_u)),
             order_e_inf_sigma: order(rows.last().and_then(|r| r.e_inf_sigma), e.e_inf_sigma),
+            estimated_e_inf_u: sol.estimate.done().map(|x| x.norms.e_inf_u),
+            estimated_e_inf_sigma: sol.estimate.done().and_then(|x| x.norms.e_inf_sigma),
             seconds: t0.elapsed().as_secs_f64(),
         };
         rows.push(level);
@@ -130,31 +136,51 @@ fn write_csv(rows: &[Level], dir: &Path) -> Result<(), AppError> {
                 l.rel_l2_u,
                 nan(l.order_e_inf_u),
                 nan(l.order_e_inf_sigma),
+                nan(l.estimated_e_inf_u),
+                nan(l.estimated_e_inf_sigma),
                 l.seconds,
             ]
         })
         .collect();
     output::write_csv(
         &dir.join("convergence.csv"),
-        &["nodes", "h", "spacing", "e_inf_u", "e_inf_sigma", "rel_l2_u", "order_e_inf_u", "order_e_inf_sigma", "seconds"],
+        &[
+            "nodes",
+            "h",
+            "spacing",
+            "e_inf_u",
+            "e_inf_sigma",
+            "rel_l2_u",
+            "order_e_inf_u",
+            "order_e_inf_sigma",
+            "estimated_e_inf_u",
+            "estimated_e_inf_sigma",
+            "seconds",
+        ],
         &csv,
     )?;
     Ok(())
 }
 
 fn print_table(table: &ConvergenceTable, dir: &Path) {
-    println!("{:>9} {:>11} {:>11} {:>11} {:>11} {:>7} {:>7}", "nodes", "h", "e_inf_u", "e_inf_sig", "rel_l2_u", "p_u", "p_sig");
+    println!(
+        "{:>9} {:>11} {:>11} {:>11} {:>11} {:>7} {:>7} {:>9} {:>9}",
+        "nodes", "h", "e_inf_u", "e_inf_sig", "rel_l2_u", "p_u", "p_sig", "est_u", "est_sig"
+    );
+    let e = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2e}"));
     let f = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2}"));
     for l in &table.levels {
         println!(
-            "{:>9} {:>11.3e} {:>11.3e} {:>11} {:>11.3e} {:>7} {:>7}",
+            "{:>9} {:>11.3e} {:>11.3e} {:>11} {:>11.3e} {:>7} {:>7} {:>9} {:>9}",
             l.nodes,
             l.h,
             l.e_inf_u,
             l.e_inf_sigma.map_or("-".into(), |v| format!("{v:.3e}")),
             l.rel_l2_u,
             f(l.order_e_inf_u),
-            f(l.order_e_inf_sigma)
+            f(l.order_e_inf_sigma),
+            e(l.estimated_e_inf_u),
+            e(l.estimated_e_inf_sigma)
         );
     }
     println!("fitted order: e_inf(u) {}  e_inf(sigma) {}", f(table.fitted_order_e_inf_u), f(table.fitted_order_e_inf_sigma));
