@@ -105,7 +105,15 @@ impl Outcome {
     /// One line saying what was computed, for tables.
     pub fn describe(&self, problem: &Problem) -> String {
         match self {
-            Outcome::NavierStatic(s) => format!("MLSM solution ({} nodes, spacing {:.3e})", s.nodes.len(), s.nodes.spacing),
+            Outcome::NavierStatic(s) => match s.estimate.done() {
+                Some(e) => format!(
+                    "MLSM solution ({} nodes, spacing {:.3e}, estimated e_inf(u) ~ {:.1e})",
+                    s.nodes.len(),
+                    s.nodes.spacing,
+                    e.norms.e_inf_u
+                ),
+                None => format!("MLSM solution ({} nodes, spacing {:.3e})", s.nodes.len(), s.nodes.spacing),
+            },
             Outcome::NavierDynamic(s) => {
                 let t = s.energies.last().map_or(0.0, |e| e[0]);
                 format!(

@@ -225,14 +225,5 @@ fn per_node<const K: usize>(a: &[[f64; K]], b: &[[f64; K]]) -> Vec<f64> {
 
 /// Index of the largest entry (NaN counts as largest).
 fn argmax(v: &[f64]) -> usize {
-    let mut best = 0;
-    for (i, &x) in v.iter().enumerate() {
-        if x.is_nan() || x > v[best] {
-            best = i;
-            if x.is_nan() {
-                break;
-            }
-        }
-    }
-    best
+    (0..v.len()).max_by(|&i, &j| v[i].abs().total_cmp(&v[j].abs())).unwrap_or(0)
 }
