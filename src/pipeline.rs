@@ -162,8 +162,11 @@ pub enum RunError {
     /// The linear solver failed.
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
-    /// A non-finite coefficient in a row.
-    #[error("non-finite coefficient in the equations of node {node} at ({x:.6e}, {y:.6e})")]
+    /// A non-finite coefficient or right-hand side in a row (an overflow, or NaN).
+    #[error(
+        "non-finite number in the equations of node {node} at ({x:.6e}, {y:.6e}): a coefficient or load \
+         overflowed the double range (1.8e308) or is NaN; rescale the units of the loads and moduli"
+    )]
     NotFinite { node: usize, x: f64, y: f64 },
     /// Writing a snapshot during time integration failed.
     #[error(transparent)]

@@ -55,16 +55,13 @@ impl ErrorNorms {
 /// `(max |a - b| / max |b|, sqrt(sum |a - b|^2 / sum |b|^2))` over all components;
 /// 0 when `a == b` (also when both vanish), infinite when only `b` vanishes.
 pub fn relative_errors<const K: usize>(numerical: &[[f64; K]], exact: &[[f64; K]]) -> (f64, f64) {
-    let (mut max_d, mut max_e, mut sum_d, mut sum_e) = (0.0f64, 0.0f64, 0.0, 0.0);
-    for (a, b) in numerical.iter().zip(exact) {
-        for k in 0..K {
-            let d = (a[k] - b[k]).abs();
-            max_d = max_d.max(d);
-            max_e = max_e.max(b[k].abs());
-            sum_d += d * d;
-            sum_e += b[k] * b[k];
-        }
-    }
+    // Sums of squares are taken relative to the largest entry, so that fields near
+    // the ends of the double range (loads of 1e300 or 1e-300) neither overflow nor
+    // underflow.
+    let pairs = || numerical.iter().zip(exact).flat_map(|(a, b)| (0..K).map(move |k| ((a[k] - b[k]).abs(), b[k].abs())));
+    let (max_d, max_e) = pairs().fold((0.0f64, 0.0f64), |(md, me), (d, e)| (md.max(d), me.max(e)));
+    let unit = if max_e > 0.0 && max_e.is_finite() { max_e } else { 1.0 };
+    let (sum_d, sum_e) = pairs().fold((0.0, 0.0), |(sd, se), (d, e)| (sd + (d / unit).powi(2), se + (e / unit).powi(2)));
     // Both zero (a zero solution reproduced exactly): no error, not 0/0.
     let ratio = |d: f64, e: f64| if d == 0.0 { 0.0 } else { d / e };
     (ratio(max_d, max_e), ratio(sum_d, sum_e).sqrt())

@@ -25,8 +25,13 @@ use crate::case::Case;
 use crate::domain::corner::corners;
 use crate::domain::{NodeSet, Point};
 use crate::elasticity::conditions::ComponentCondition;
-use crate::elasticity::material::Material;
+use crate::elasticity::dofs::Unknowns;
+use crate::elasticity::material::{Material, PlaneModel};
+use crate::mlsm::Basis;
+use crate::navier::formulation::AUTO_FROM_POISSON;
+use crate::linalg::SolveReport;
 use crate::navier::{Estimate, NavierParams, Solution};
+use crate::peridynamics::PdSolution;
 use serde::Serialize;
 
 /// Radius of the neighbourhood of a singular corner that the stress check skips, in
@@ -89,9 +94,6 @@ pub struct Warning {
     pub message: String,
 }
 
-/// Poisson ratio from which the advice mentions near-incompressibility.
-const NEAR_INCOMPRESSIBLE: f64 = 0.45;
-
 /// `x > threshold`, or `x` is NaN (an error that could not be measured is not small).
 fn exceeds(x: f64, threshold: f64) -> bool {
     x.is_nan() || x > threshold
@@ -101,11 +103,19 @@ fn exceeds(x: f64, threshold: f64) -> bool {
 fn advice(params: &NavierParams, material: &Material) -> String {
     let p = params.approximation.basis.polynomial_degree();
     let mut s = format!("try a smaller nodes.spacing (now {:.3e}) or a higher approximation.degree (now {p})", params.fill.spacing);
-    if material.elastic.poisson >= NEAR_INCOMPRESSIBLE {
-        s.push_str(&format!(
-            "; nu = {} is near the incompressible limit, where the displacement form loses accuracy",
-            material.elastic.poisson
-        ));
+    let nu = material.elastic.poisson;
+    if nu >= AUTO_FROM_POISSON && material.plane == PlaneModel::Strain {
+        match params.formulation.unknowns(material) {
+            Unknowns::Displacement => s.push_str(&format!(
+                "; nu = {nu} is near the incompressible limit, where the displacement form loses accuracy: \
+                 try approximation.formulation = \"displacement-pressure\""
+            )),
+            Unknowns::DisplacementPressure if !matches!(params.approximation.basis, Basis::RbfFd { degree: 3.., .. }) => s.push_str(
+                "; near the incompressible limit the displacement-pressure form needs basis = \"phs\" with degree >= 3 \
+                 (README, \"Near-incompressible solids\")",
+            ),
+            Unknowns::DisplacementPressure => {}
+        }
     }
     s
 }
@@ -123,6 +133,19 @@ fn above_threshold(
     (!over.is_empty()).then(|| Warning {
         check,
         message: format!("{what} above the threshold {threshold:.0e}: {}; {}", over.join(", "), advice(params, material)),
+    })
+}
+
+/// Unknowns that underflowed to subnormal numbers (the loads are tiny against the
+/// moduli in these units).
+fn underflow(report: &SolveReport) -> Option<Warning> {
+    (report.subnormal_unknowns > 0).then(|| Warning {
+        check: "underflow",
+        message: format!(
+            "{} unknowns are below the smallest normal double (2.2e-308) and keep fewer than 15 digits; \
+             rescale the units (loads against moduli)",
+            report.subnormal_unknowns
+        ),
     })
 }
 
@@ -167,6 +190,7 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
             .push(Warning { check: "no-estimate", message: format!("no error estimate: {why}; the accuracy of this run is unknown") }),
         Estimate::Off => checks.notes.push("no error estimate (estimate.method = \"none\")".into()),
     }
+    checks.warnings.extend(underflow(&sol.solver));
     if let Some(e) = &sol.errors {
         let mut over = Vec::new();
         if exceeds(e.e_inf_u, threshold) {
@@ -176,6 +200,41 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
             over.push(format!("e_inf(sigma) = {s:.2e}"));
         }
         checks.warnings.extend(above_threshold("exact-error", "error against the exact solution", &over, threshold, params, material));
+    }
+    checks
+}
+
+/// Horizon-to-spacing ratio `m = delta / h` below which the bond-based quadrature
+/// is too coarse to approximate the nonlocal integral (README, "Peridynamics at
+/// m < 3": the error no longer falls with the horizon).
+pub const PD_MIN_RATIO: f64 = 3.0;
+
+/// The checks of a static peridynamic run: `m < 3` is warned (a discretisation that
+/// cannot approximate the nonlocal integral). The difference to an exact *local*
+/// solution is a note, not a warning: at `m >= 3` it is mostly the model difference of
+/// the finite horizon, which the user chose. There is no estimate of the
+/// discretisation error of the nonlocal model (a note).
+pub fn peridynamics_static(sol: &PdSolution, threshold: f64) -> Checks {
+    let mut checks = Checks { warnings: underflow(&sol.solver).into_iter().collect(), ..Checks::default() };
+    let m = sol.params.ratio;
+    if m < PD_MIN_RATIO {
+        checks.warnings.push(Warning {
+            check: "pd-horizon-ratio",
+            message: format!(
+                "peridynamics.m = {m} is below {PD_MIN_RATIO}: a horizon spans too few nodes for the bond quadrature, \
+                 and errors of order 0.1 to 0.5 are to be expected whatever the horizon (README, \"Peridynamics at m < 3\"); \
+                 use m >= 3"
+            ),
+        });
+    }
+    match sol.errors.map(|e| e.0) {
+        Some(e) if exceeds(e.e_inf_u, threshold) => checks.notes.push(format!(
+            "the nonlocal solution differs from the exact local one by e_inf(u) = {:.2e} (above {threshold:.0e}); \
+             at m >= 3 this is mostly the model difference of the horizon {:.3e}, which shrinks with it",
+            e.e_inf_u, sol.params.horizon
+        )),
+        Some(_) => {}
+        None => checks.notes.push("no error estimate for peridynamic runs (compare with the local model: mlsm compare)".into()),
     }
     checks
 }

@@ -87,6 +87,9 @@ pub(super) fn navier_fields(case: &Case, sol: &Solution) -> Vec<PointField> {
     let nb = sol.nodes.boundary.len();
     let mut f = vec![vector("displacement", sol.displacement.iter().copied())];
     f.extend(stress_fields(case, &sol.gradient, &sol.stress));
+    if let Some(p) = &sol.pressure {
+        f.push(scalar("pressure", p.iter().copied()));
+    }
     f.push(integer("node_kind", (0..n).map(|i| if i < nb { node_kind(&sol.boundary_equations[i]) } else { 0 })));
     f.push(integer("boundary_part", (0..n).map(|i| if i < nb { sol.nodes.boundary[i].touches[0].0 as i32 } else { -1 })));
     f.push(vector("normal", (0..n).map(|i| if i < nb { sol.nodes.normal(i) } else { [0.0, 0.0] })));

@@ -82,12 +82,14 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
             report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::PdStatic(mut sol) => {
+            let checks = warnings::peridynamics_static(&sol, p.navier.estimate.threshold);
             write_solution(&p, &dir, &sol.nodes.positions[..sol.nodes.free], &pd_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
-            write_summary(&dir, &PdSummary::new(&p, &sol, t0), term, seconds())?;
+            write_summary(&dir, &PdSummary::new(&p, &sol, &checks, t0), term, seconds())?;
             if !quiet {
                 print_pd(&sol);
             }
+            report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::NavierDynamic(mut sim) => {
             series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
@@ -172,7 +174,7 @@ fn write_dynamic<M: Serialize>(p: &Problem, dir: &Path, d: Dynamic, model: M, t0
 }
 
 fn print_navier(sol: &crate::navier::Solution) {
-    println!("nodes {}  unknowns {}  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.nonzeros);
+    println!("nodes {}  unknowns {} ({})  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.formulation.name(), sol.nonzeros);
     println!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
     if let Some(e) = &sol.errors {
         print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", e.e_inf_u, e.rel_l2_u);

@@ -90,6 +90,7 @@ pub(super) struct NavierSummary<'a> {
     ghost_nodes: usize,
     widened_supports: usize,
     unknowns: usize,
+    formulation: &'static str,
     nonzeros: usize,
     spacing: f64,
     fill: crate::domain::FillKind,
@@ -114,6 +115,7 @@ impl<'a> NavierSummary<'a> {
             ghost_nodes: sol.ghost_nodes,
             widened_supports: sol.widened_supports,
             unknowns: sol.unknowns,
+            formulation: sol.formulation.name(),
             nonzeros: sol.nonzeros,
             spacing: p.navier.fill.spacing,
             fill: p.navier.fill.kind,
@@ -151,11 +153,13 @@ pub(super) struct PdSummary<'a> {
     solver: &'a SolveReport,
     errors: Option<ErrorNorms>,
     errors_interior: Option<ErrorNorms>,
+    #[serde(flatten)]
+    checks: &'a Checks,
     outputs: Outputs,
 }
 
 impl<'a> PdSummary<'a> {
-    pub(super) fn new(p: &'a Problem, sol: &'a PdSolution, t0: Instant) -> Self {
+    pub(super) fn new(p: &'a Problem, sol: &'a PdSolution, checks: &'a Checks, t0: Instant) -> Self {
         PdSummary {
             header: Header::new(p, &sol.timings, t0),
             model: "peridynamics",
@@ -174,6 +178,7 @@ impl<'a> PdSummary<'a> {
             solver: &sol.solver,
             errors: sol.errors.map(|e| e.0),
             errors_interior: sol.errors.and_then(|e| e.1),
+            checks,
             outputs: p.case.outputs,
         }
     }

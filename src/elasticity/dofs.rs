@@ -13,6 +13,14 @@ pub enum Unknowns {
 }
 
 impl Unknowns {
+    /// Name in summaries and scene files: `displacement`, `displacement-pressure`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Unknowns::Displacement => "displacement",
+            Unknowns::DisplacementPressure => "displacement-pressure",
+        }
+    }
+
     /// Unknowns per node.
     pub const fn per_node(self) -> usize {
         match self {

@@ -75,6 +75,26 @@ impl Material {
         Lame { lambda, mu: self.mu() }
     }
 
+    /// Weights `(a, b) = (lambda / (lambda + mu), mu / (lambda + mu))` of the
+    /// constitutive pressure equation of the displacement-pressure form,
+    /// `p = -lambda div u`  <=>  `a mu div u + b p = 0`, finite for every `nu` in
+    /// `(-1, 1/2]`: plane strain `(2 nu, 1 - 2 nu)`, plane stress
+    /// `(2 nu / (1 + nu), (1 - nu) / (1 + nu))`. At `nu = 1/2` in plane strain the
+    /// equation is the incompressibility constraint `div u = 0`.
+    pub fn pressure_weights(&self) -> (f64, f64) {
+        let nu = self.elastic.poisson;
+        match self.plane {
+            PlaneModel::Strain => (2.0 * nu, 1.0 - 2.0 * nu),
+            PlaneModel::Stress => (2.0 * nu / (1.0 + nu), (1.0 - nu) / (1.0 + nu)),
+        }
+    }
+
+    /// Whether the solid is incompressible in its planar model (`nu = 1/2` in plane
+    /// strain): `lambda` is infinite and only the displacement-pressure form applies.
+    pub fn is_incompressible(&self) -> bool {
+        self.plane == PlaneModel::Strain && self.elastic.poisson >= 0.5
+    }
+
     /// Out-of-plane normal stress: `nu (sigma_xx + sigma_yy)` in plane strain, 0 in plane stress.
     pub fn sigma_zz(&self, sxx: f64, syy: f64) -> f64 {
         match self.plane {
@@ -118,6 +138,12 @@ impl Lame {
         let div = g[0][0] + g[1][1];
         [self.lambda * div + 2.0 * self.mu * g[0][0], self.lambda * div + 2.0 * self.mu * g[1][1], self.mu * (g[0][1] + g[1][0])]
     }
+
+    /// Cauchy stress of the displacement-pressure form, `sigma = -p I + mu (g + g^T)`
+    /// (equal to [`Lame::stress`] when `p = -lambda div u`; finite at `lambda = inf`).
+    pub fn stress_with_pressure(&self, g: [[f64; 2]; 2], p: f64) -> [f64; 3] {
+        [-p + 2.0 * self.mu * g[0][0], -p + 2.0 * self.mu * g[1][1], self.mu * (g[0][1] + g[1][0])]
+    }
 }
 
 #[cfg(test)]
@@ -138,6 +164,26 @@ mod tests {
         let strain = Material { elastic: YoungPoisson { young: 1.0, poisson: 0.3 }, plane: PlaneModel::Strain };
         let ps = strain.as_plane_stress().elastic;
         assert!((ps.young - 1.0 / 0.91).abs() < 1e-15 && (ps.poisson - 0.3 / 0.7).abs() < 1e-15);
+    }
+
+    /// `a mu div u + b p = 0` is `p = -lambda div u` for finite lambda, and the two
+    /// stress forms agree there; at nu = 1/2 (plane strain) it is `div u = 0`.
+    #[test]
+    fn pressure_weights_are_the_constitutive_pressure_equation() {
+        let g = [[1e-3, 2e-4], [-5e-4, 3e-4]];
+        for plane in [PlaneModel::Stress, PlaneModel::Strain] {
+            for nu in [-0.5, 0.0, 0.3, 0.49] {
+                let m = Material { elastic: YoungPoisson { young: 7.0, poisson: nu }, plane };
+                let (lame, (a, b)) = (m.lame(), m.pressure_weights());
+                let p = -lame.lambda * (g[0][0] + g[1][1]);
+                assert!((a * lame.mu * (g[0][0] + g[1][1]) + b * p).abs() < 1e-15, "{plane:?} nu = {nu}");
+                let (s, t) = (lame.stress(g), lame.stress_with_pressure(g, p));
+                assert!((0..3).all(|k| (s[k] - t[k]).abs() < 1e-14), "{plane:?} nu = {nu}: {s:?} vs {t:?}");
+            }
+        }
+        let m = Material { elastic: YoungPoisson { young: 7.0, poisson: 0.5 }, plane: PlaneModel::Strain };
+        assert_eq!(m.pressure_weights(), (1.0, 0.0));
+        assert!(m.is_incompressible());
     }
 
     #[test]

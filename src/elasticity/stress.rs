@@ -37,7 +37,18 @@ impl StressField {
     /// Hooke's law in the planar model of `material` at every gradient.
     pub fn from_gradients(material: &Material, gradients: &[Gradient]) -> Self {
         let lame = material.lame();
-        let sigma: Vec<[f64; 3]> = gradients.iter().map(|g| lame.stress(*g)).collect();
+        Self::from_sigma(material, gradients.iter().map(|g| lame.stress(*g)).collect())
+    }
+
+    /// The displacement-pressure form's stress `-p I + mu (g + g^T)` at every
+    /// gradient `g` with its pressure `p` (finite up to `nu = 1/2`).
+    pub fn from_gradients_and_pressure(material: &Material, gradients: &[Gradient], pressure: &[f64]) -> Self {
+        let lame = material.lame();
+        Self::from_sigma(material, gradients.iter().zip(pressure).map(|(g, p)| lame.stress_with_pressure(*g, *p)).collect())
+    }
+
+    /// `sigma_zz` and von Mises of the in-plane stresses `sigma`.
+    fn from_sigma(material: &Material, sigma: Vec<[f64; 3]>) -> Self {
         let sigma_zz: Vec<f64> = sigma.iter().map(|s| material.sigma_zz(s[0], s[1])).collect();
         let von_mises = sigma.iter().zip(&sigma_zz).map(|(s, z)| von_mises(*s, *z)).collect();
         StressField { sigma, sigma_zz, von_mises }

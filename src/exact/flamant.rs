@@ -63,9 +63,10 @@ impl Flamant {
 
     /// `(A, k1, k2)` of the module formula.
     fn constants(&self) -> (f64, f64, f64) {
-        let lame = self.material.lame();
-        let (lambda, mu) = (lame.lambda, lame.mu);
-        (-self.load / (4.0 * PI * mu), 2.0 * mu / (lambda + mu), (lambda + 2.0 * mu) / (lambda + mu))
+        // k1 = 2 mu / (lambda + mu) = 2 b, k2 = (lambda + 2 mu) / (lambda + mu) = 1 + b,
+        // finite at lambda = inf (nu = 1/2 in plane strain).
+        let (_, b) = self.material.pressure_weights();
+        (-self.load / (4.0 * PI * self.material.mu()), 2.0 * b, 1.0 + b)
     }
 }
 

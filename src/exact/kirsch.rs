@@ -223,7 +223,10 @@ mod tests {
     fn constructor_rejects_nonphysical_parameters() {
         let m = plate(PlaneModel::Strain).material;
         assert_eq!(Kirsch::new(1.0, 0.0, m).unwrap_err().parameter, "radius");
-        let bad = Material { elastic: YoungPoisson { young: 1.0, poisson: 0.5 }, ..m };
+        // nu = 0.5 is incompressible plane strain (accepted), but not a plane-stress material.
+        let incompressible = Material { elastic: YoungPoisson { young: 1.0, poisson: 0.5 }, ..m };
+        assert!(Kirsch::new(1.0, 1.0, incompressible).is_ok());
+        let bad = Material { plane: PlaneModel::Stress, ..incompressible };
         assert_eq!(Kirsch::new(1.0, 1.0, bad).unwrap_err().parameter, "poisson");
     }
 }

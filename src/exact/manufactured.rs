@@ -30,7 +30,7 @@ pub struct Manufactured {
 impl Manufactured {
     /// Checked constructor.
     pub fn new(material: Material) -> Result<Self, ParameterError> {
-        Check("manufactured").material(&material)?;
+        Check("manufactured").compressible_material(&material)?;
         Ok(Manufactured { material })
     }
 

@@ -125,11 +125,22 @@ impl Check {
         self.require(parameter, value, value.is_finite() && value > 0.0, "must be positive and finite")
     }
 
+    /// `E > 0` and `-1 < nu < 1/2`, or `nu = 1/2` in plane strain (incompressible:
+    /// the closed-form solutions stay finite there).
     pub(crate) fn material(&self, material: &Material) -> Result<(), ParameterError> {
         self.positive("young", material.elastic.young)?;
         let nu = material.elastic.poisson;
-        let ok = nu.is_finite() && nu > -1.0 && nu < 0.5;
-        self.require("poisson", nu, ok, "must lie in (-1, 0.5)")
+        let ok = nu.is_finite() && nu > -1.0 && (nu < 0.5 || material.is_incompressible() && nu == 0.5);
+        self.require("poisson", nu, ok, "must lie in (-1, 0.5), or be 0.5 in plane strain")
+    }
+
+    /// [`Check::material`] and `nu < 1/2`, for a field that is not divergence-free: its
+    /// stress `lambda div u` is infinite in an incompressible solid.
+    pub(crate) fn compressible_material(&self, material: &Material) -> Result<(), ParameterError> {
+        self.material(material)?;
+        let nu = material.elastic.poisson;
+        let requirement = "must lie below 0.5: the field is not divergence-free, so its stress lambda div u is infinite at nu = 0.5";
+        self.require("poisson", nu, !material.is_incompressible(), requirement)
     }
 
     pub(crate) fn require(&self, parameter: &'static str, value: f64, ok: bool, requirement: &'static str) -> Result<(), ParameterError> {

@@ -49,7 +49,7 @@ impl Polynomial {
         for c in ux.iter().chain(&uy) {
             check.finite("coefficient", *c)?;
         }
-        check.material(&material)?;
+        check.compressible_material(&material)?;
         Ok(Polynomial { ux, uy, material })
     }
 

@@ -74,6 +74,9 @@ pub struct SolveReport {
     /// Number of BiCGSTAB restarts triggered because the true residual was
     /// above the tolerance when the recursive one claimed convergence.
     pub restarts: usize,
+    /// Unknowns whose value fell below the smallest normal double (2.2e-308) when
+    /// scaled back to the loads' units: they keep fewer than 15 digits.
+    pub subnormal_unknowns: usize,
 }
 
 /// Why [`solve`] or [`assemble`] failed. Messages are plain language and say
@@ -104,20 +107,30 @@ pub enum SolveError {
     /// BiCGSTAB did not reach the tolerance; `relative_residual` is the TRUE
     /// relative residual of the solved (equilibrated) system at the last iterate.
     #[error(
-        "{method} did not converge in {iterations} iterations: true relative residual \
-         {relative_residual:.1e} (tolerance {tolerance:e}); try lu, a stronger preconditioner \
-         (ilut with smaller drop / larger fill) or more iterations"
+        "{method} did not converge in {iterations} iterations ({restarts} restarts), stopped by {limit}: \
+         true relative residual {relative_residual:.1e} (tolerance {tolerance:e}); try lu, a stronger \
+         preconditioner (ilut with smaller drop / larger fill) or more iterations"
     )]
     NoConvergence {
         /// Iterations performed (the budget, unless the restart limit was hit
         /// first).
         iterations: usize,
+        /// Verification restarts performed.
+        restarts: usize,
+        /// The limit that stopped it: the iteration budget or the restart cap.
+        limit: String,
         /// True `‖b − A x‖₂/‖b‖₂` of the solved system at the last iterate.
         relative_residual: f64,
         /// e.g. `BiCGSTAB+ILU(0)`.
         method: String,
         /// The requested tolerance.
         tolerance: f64,
+    },
+    /// The solution exceeds the double range (the loads are too large in these units).
+    #[error("overflow: {detail}")]
+    Overflow {
+        /// Which unknown overflowed and what to do.
+        detail: String,
     },
     /// Inconsistent sizes (non-square matrix, wrong right-hand-side length,
     /// triplet index out of range), other invalid input (non-finite
@@ -159,7 +172,35 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// Solve `A x = b`.
+/// Solve `A x = b` in the scale of the loads: `b` is multiplied by the power of two
+/// `s = 2^-e` that brings `max |b_i|` into `[1, 2)` (exact in binary floating point),
+/// `A x' = s b` is solved by [`solve_scaled`], and `x = x' / s`. Loads from 1e-300 to
+/// 1e300 then give the same digits (no overflow or underflow in the residual norms),
+/// and a solution beyond the double range is reported as [`SolveError::Overflow`].
+pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
+    }
+    let b_max = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
+    let scale = |x: f64, e: i32| x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
+    let scaled: Vec<f64> = b.iter().map(|v| scale(*v, -exponent)).collect();
+    let (x, report) = solve_scaled(a, &scaled, params)?;
+    if let Some(i) = x.iter().position(|v| !scale(*v, exponent).is_finite()) {
+        return Err(SolveError::Overflow {
+            detail: format!(
+                "unknown {i} is {:.3e} x 2^{exponent}, beyond the largest double (1.8e308): the loads are too \
+                 large for the moduli in these units; rescale them",
+                x[i].abs()
+            ),
+        });
+    }
+    let x: Vec<f64> = x.into_iter().map(|v| scale(v, exponent)).collect();
+    let subnormal_unknowns = x.iter().filter(|v| v.is_subnormal()).count();
+    Ok((x, SolveReport { subnormal_unknowns, ..report }))
+}
+
+/// Solve `A x = b` (the loads already scaled, [`solve`]).
 ///
 /// 1. Checks that `A` is square, `b` has length `n`, every stored entry is
 ///    finite and no row is entirely zero.
@@ -180,7 +221,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// the infinitely many solutions, rigid-body component included.
 ///
 /// An empty system (`n = 0`) returns an empty solution.
-pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
+pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let n = a.nrows();
     if a.ncols() != n {
         return Err(SolveError::Dimension { detail: format!("matrix is {}x{}, expected square", n, a.ncols()) });
@@ -209,6 +250,7 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
             equilibrated: params.equilibrate,
             preconditioner_nonzeros: None,
             restarts: 0,
+            subnormal_unknowns: 0,
         };
         return Ok((Vec::new(), report));
     }
@@ -247,6 +289,7 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
                     equilibrated: params.equilibrate,
                     preconditioner_nonzeros: None,
                     restarts: 0,
+                    subnormal_unknowns: 0,
                 },
             ))
         }
@@ -271,9 +314,20 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
                         equilibrated: params.equilibrate,
                         preconditioner_nonzeros: Some(pc.nonzeros()),
                         restarts: out.restarts,
+                        subnormal_unknowns: 0,
                     },
                 )),
                 bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
+                    limit: if out.iterations >= max_iterations {
+                        format!("the iteration limit (solver.max_iterations = {max_iterations})")
+                    } else {
+                        format!(
+                            "the restart limit ({} verification restarts: the recursive residual claimed \
+                             convergence each time, the true residual did not follow)",
+                            bicgstab::MAX_RESTARTS
+                        )
+                    },
+                    restarts: out.restarts,
                     iterations: out.iterations,
                     relative_residual: out.relative_residual,
                     method: name,

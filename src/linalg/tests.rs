@@ -343,6 +343,7 @@ fn no_convergence_reports_the_true_residual() {
     assert_eq!(iterations, 2);
     assert_eq!(method, "BiCGSTAB+Jacobi");
     assert!(msg.contains("did not converge in 2 iterations"), "{msg}");
+    assert!(msg.contains("stopped by the iteration limit (solver.max_iterations = 2)"), "{msg}");
     assert!(relative_residual > tol);
     // faer alone would report the INITIAL residual (exactly 1 for x₀ = 0);
     // re-run the same deterministic iteration to get the final iterate and

@@ -11,13 +11,16 @@
 //!
 //! plus `d1` everywhere when post-processing needs the gradient. Ghost nodes are
 //! nodes `n..` of the supports and shapes; they carry no operators of their own.
+//! In the displacement-pressure form every node carries a continuity row, so every
+//! node needs `d1`.
 
 use super::equations::{resolve, ComponentEquation};
 use super::NavierParams;
 use crate::case::Case;
 use crate::domain::{self, ghost::place_ghosts, neighbors::Supports, NodeSet, Point};
-use crate::elasticity::dofs::DofMap;
-use crate::elasticity::stress::Gradient;
+use crate::elasticity::dofs::{DofMap, Unknowns, PRESSURE};
+use crate::elasticity::material::Material;
+use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::mlsm::{compute_shapes, degenerate_supports, Basis, Op, OpSet, Shapes};
 use crate::pipeline::{stage, RunError, Stage, StageTimer};
@@ -70,6 +73,7 @@ impl Discretisation {
         timer: &mut StageTimer,
     ) -> Result<Self, RunError> {
         let n_support = params.approximation.support;
+        let unknowns = params.formulation.unknowns(&case.material);
         if nodes.len() < n_support {
             return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
         }
@@ -77,7 +81,7 @@ impl Discretisation {
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
         let (positions, ghost, supports, needs, widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
-            let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len());
+            let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len(), unknowns);
             let (supports, widened) =
                 widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &needs);
             let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
@@ -94,7 +98,7 @@ impl Discretisation {
             .filter(|op| shapes.operators().contains(**op))
             .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
             .collect();
-        let dofs = DofMap::displacement_only(positions.len());
+        let dofs = DofMap::new(positions.len(), unknowns);
         Ok(Discretisation { nodes, boundary_equations, ghost, supports, widened_supports: widened, shapes, operators_computed, dofs })
     }
 
@@ -106,6 +110,23 @@ impl Discretisation {
     /// Whether node `i` carries the Navier equation (interior, or boundary with a ghost).
     pub fn has_navier_row(&self, i: usize) -> bool {
         i < self.nodes.len() && (!self.nodes.is_boundary(i) || self.ghost[i].is_some())
+    }
+
+    /// Nodal pressures `p = -lambda div u` (nodes, ghosts excluded) from the global
+    /// vector `x`, in the displacement-pressure form (whose unknown is `p / mu`, `rows`).
+    pub fn pressure(&self, material: &Material, x: &[f64]) -> Option<Vec<f64>> {
+        let mu = material.mu();
+        (self.dofs.unknowns() == Unknowns::DisplacementPressure)
+            .then(|| (0..self.nodes.len()).map(|i| mu * x[self.dofs.dof(i, PRESSURE)]).collect())
+    }
+
+    /// Stress at every node from the gradients and, in the displacement-pressure form,
+    /// the pressures of `x` (`sigma = -p I + mu (g + g^T)`, finite at `nu = 1/2`).
+    pub fn stress(&self, material: &Material, gradients: &[Gradient], x: &[f64]) -> StressField {
+        match self.pressure(material, x) {
+            Some(p) => StressField::from_gradients_and_pressure(material, gradients, &p),
+            None => StressField::from_gradients(material, gradients),
+        }
     }
 
     /// Displacement gradient `[[u_x, u_y], [v_x, v_y]]` at every node (ghosts
@@ -187,7 +208,24 @@ fn widen_degenerate(mut supports: Supports, positions: &[Point], basis: &Basis, 
 }
 
 /// The operators each of the `total` nodes and ghosts needs (module docs).
-fn shape_needs(case: &Case, nodes: &NodeSet, equations: &[[ComponentEquation; 2]], ghost: &[Option<usize>], total: usize) -> Vec<OpSet> {
+fn shape_needs(
+    case: &Case,
+    nodes: &NodeSet,
+    equations: &[[ComponentEquation; 2]],
+    ghost: &[Option<usize>],
+    total: usize,
+    unknowns: Unknowns,
+) -> Vec<OpSet> {
+    // The displacement-pressure form has a continuity row (div u) at every node and ghost.
+    let pressure = unknowns == Unknowns::DisplacementPressure;
+    if pressure {
+        let ops = |i: usize| match (i < nodes.len(), !nodes.is_boundary(i) || ghost[i].is_some()) {
+            (false, _) => OpSet::EMPTY,
+            (true, true) => OpSet::D1 | OpSet::D2,
+            (true, false) => OpSet::D1,
+        };
+        return (0..total).map(ops).collect();
+    }
     let gradient_needed = case.outputs.needs_gradient();
     let has_traction = |i: usize| nodes.is_boundary(i) && equations[i].iter().any(ComponentEquation::is_traction);
     (0..total)

@@ -195,7 +195,7 @@ pub fn higher_degree(
     };
     let n = nodes.len();
     let u_ref = disc.dofs.displacements(&solved.x, n);
-    let sigma_ref = stress.map(|_| StressField::from_gradients(&case.material, &disc.gradients(&solved.x)));
+    let sigma_ref = stress.map(|_| disc.stress(&case.material, &disc.gradients(&solved.x), &solved.x));
     let reference = ExactFields { displacement: u_ref, stress: sigma_ref.map(|s| s.sigma) };
     let norms = ErrorNorms::against(displacement, stress, &reference);
     let per_node_u = per_node(displacement, &reference.displacement);

@@ -24,6 +24,7 @@ pub mod discrete;
 pub mod dynamics;
 pub mod equations;
 pub mod estimate;
+pub mod formulation;
 pub mod rows;
 pub mod solve;
 pub mod system;
@@ -35,6 +36,7 @@ use crate::mlsm::Approximation;
 pub use discrete::Discretisation;
 pub use dynamics::{simulate, Simulation};
 pub use estimate::{ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
+pub use formulation::Formulation;
 pub use solve::{solve, Solution};
 
 /// How the Navier model discretises a case: node generation, local approximation,
@@ -45,6 +47,8 @@ pub struct NavierParams {
     pub fill: FillParams,
     /// Local approximation (basis, weight, support, ghost nodes).
     pub approximation: Approximation,
+    /// Unknowns: displacement, or displacement and pressure.
+    pub formulation: Formulation,
     /// Linear solver.
     pub solver: SolverParams,
     /// Error estimate.
@@ -91,6 +95,7 @@ pub(crate) mod test_case {
                 support,
                 ghost_nodes: true,
             },
+            formulation: super::Formulation::Displacement,
             solver: SolverParams::default(),
             estimate: Default::default(),
         };

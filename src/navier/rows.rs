@@ -9,9 +9,15 @@
 //!   `sigma_yy = lambda u_x + (lambda+2mu) v_y`, `sigma_xy = mu (u_y + v_x)`:
 //!   x: `sigma_xx n_x + sigma_xy n_y = t_x`, y: `sigma_xy n_x + sigma_yy n_y = t_y`;
 //! * displacement, `u_c = g_c`.
+//!
+//! In the displacement-pressure form (`navier::formulation`) the displacement terms
+//! are those above with `lambda = 0`, the Navier rows gain `-grad p`, the traction rows
+//! `-p n`, and every node and ghost a continuity row `a div u + b p / mu = 0`. The
+//! pressure unknown is `p / mu` (a strain, like the displacement gradient), so that
+//! the columns of `u` and `p` have comparable scales whatever the units.
 
 use crate::domain::neighbors::Supports;
-use crate::elasticity::dofs::DofMap;
+use crate::elasticity::dofs::{DofMap, Unknowns, PRESSURE};
 use crate::elasticity::material::Lame;
 use crate::mlsm::{Op, Shapes};
 
@@ -24,6 +30,8 @@ pub struct RowWriter<'a> {
     pub dofs: DofMap,
     /// Material in the planar model.
     pub lame: Lame,
+    /// Weights `(a, b)` of the continuity row (`Material::pressure_weights`).
+    pub pressure_weights: (f64, f64),
     /// Support of each node.
     pub supports: &'a Supports,
     /// Shape functions.
@@ -31,10 +39,26 @@ pub struct RowWriter<'a> {
 }
 
 impl RowWriter<'_> {
+    /// Whether the unknowns include the pressure.
+    fn has_pressure(&self) -> bool {
+        self.dofs.unknowns() == Unknowns::DisplacementPressure
+    }
+
+    /// The Lame parameters of the displacement terms: `lambda = 0` in the
+    /// displacement-pressure form, where `lambda div u` is the unknown `-p`.
+    fn displacement_lame(&self) -> Lame {
+        if self.has_pressure() {
+            Lame { lambda: 0.0, mu: self.lame.mu }
+        } else {
+            self.lame
+        }
+    }
+
     /// Navier rows (x and y) at node `i` with body force `f`, written in the rows of
     /// node `row_node` (`i` itself, or its ghost); returns the right-hand sides.
     pub fn navier(&self, i: usize, row_node: usize, f: [f64; 2], out: &mut Entries) -> [f64; 2] {
-        let Lame { lambda, mu } = self.lame;
+        let Lame { lambda, mu } = self.displacement_lame();
+        let pressure = self.has_pressure();
         let (xx, xy, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dxy), self.shapes.get(i, Op::Dyy));
         let (rx, ry) = (self.dofs.dof(row_node, 0), self.dofs.dof(row_node, 1));
         for (k, &j) in self.supports.of(i).iter().enumerate() {
@@ -44,13 +68,21 @@ impl RowWriter<'_> {
             out.push((ry, uj, (lambda + mu) * xy[k]));
             out.push((ry, vj, mu * xx[k] + (lambda + 2.0 * mu) * yy[k]));
         }
+        if pressure {
+            let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
+            for (k, &j) in self.supports.of(i).iter().enumerate() {
+                let pj = self.dofs.dof(j as usize, PRESSURE);
+                out.push((rx, pj, -mu * dx[k]));
+                out.push((ry, pj, -mu * dy[k]));
+            }
+        }
         [-f[0], -f[1]]
     }
 
     /// Traction row of component `c` at node `i`, `(sigma(u) n)_c = t`, written in row `c`
     /// of node `row_node` (`i` itself, or its ghost); returns the right-hand side.
     pub fn traction(&self, i: usize, row_node: usize, c: usize, n: [f64; 2], t: f64, out: &mut Entries) -> f64 {
-        let Lame { lambda, mu } = self.lame;
+        let Lame { lambda, mu } = self.displacement_lame();
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
         let r = self.dofs.dof(row_node, c);
         for (k, &j) in self.supports.of(i).iter().enumerate() {
@@ -63,7 +95,42 @@ impl RowWriter<'_> {
             out.push((r, uj, cu));
             out.push((r, vj, cv));
         }
+        if self.has_pressure() {
+            out.push((r, self.dofs.dof(i, PRESSURE), -mu * n[c]));
+        }
         t
+    }
+
+    /// Continuity row of the displacement-pressure form at node `i`,
+    /// `a mu div u + b p = 0` divided by `mu`, written in its own pressure row;
+    /// returns the right-hand side (0).
+    pub fn continuity(&self, i: usize, out: &mut Entries) -> f64 {
+        let (a, b) = self.pressure_weights;
+        let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
+        let r = self.dofs.dof(i, PRESSURE);
+        for (k, &j) in self.supports.of(i).iter().enumerate() {
+            out.push((r, self.dofs.dof(j as usize, 0), a * dx[k]));
+            out.push((r, self.dofs.dof(j as usize, 1), a * dy[k]));
+        }
+        out.push((r, r, b));
+        0.0
+    }
+
+    /// Normal derivative of the continuity row at boundary node `i` with outward
+    /// normal `n`, `d/dn (a div u + b p / mu) = 0`, written in the pressure row of
+    /// `row_node` (its ghost); returns the right-hand side (0).
+    pub fn continuity_normal_derivative(&self, i: usize, row_node: usize, n: [f64; 2], out: &mut Entries) -> f64 {
+        let (a, b) = self.pressure_weights;
+        let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
+        let (xx, xy, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dxy), self.shapes.get(i, Op::Dyy));
+        let r = self.dofs.dof(row_node, PRESSURE);
+        for (k, &j) in self.supports.of(i).iter().enumerate() {
+            let j = j as usize;
+            out.push((r, self.dofs.dof(j, 0), a * (n[0] * xx[k] + n[1] * xy[k])));
+            out.push((r, self.dofs.dof(j, 1), a * (n[0] * xy[k] + n[1] * yy[k])));
+            out.push((r, self.dofs.dof(j, PRESSURE), b * (n[0] * dx[k] + n[1] * dy[k])));
+        }
+        0.0
     }
 
     /// Displacement row of component `c` at node `i`, `u_c = g`, written in row `c` of
@@ -112,7 +179,7 @@ mod tests {
         let (positions, supports, shapes) = lattice();
         let lame = Lame { lambda: 2.0, mu: 0.7 };
         let dofs = DofMap::displacement_only(positions.len());
-        let writer = RowWriter { dofs, lame, supports: &supports, shapes: &shapes };
+        let writer = RowWriter { dofs, lame, pressure_weights: (0.0, 1.0), supports: &supports, shapes: &shapes };
         // u = x + 0.5 x^2 - xy + 2 y^2, v = -y + 3 x y + 0.25 x^2.
         let field =
             |p: [f64; 2]| [p[0] + 0.5 * p[0] * p[0] - p[0] * p[1] + 2.0 * p[1] * p[1], -p[1] + 3.0 * p[0] * p[1] + 0.25 * p[0] * p[0]];

@@ -9,6 +9,7 @@ use super::system::System;
 use super::NavierParams;
 use crate::case::Case;
 use crate::domain::NodeSet;
+use crate::elasticity::dofs::Unknowns;
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport, SolverParams};
@@ -23,6 +24,8 @@ pub struct Solution {
     pub boundary_equations: Vec<[ComponentEquation; 2]>,
     /// Nodal displacements.
     pub displacement: Vec<[f64; 2]>,
+    /// Nodal pressures `p = -lambda div u`, in the displacement-pressure form.
+    pub pressure: Option<Vec<f64>>,
     /// Displacement gradients, when post-processing needed them.
     pub gradient: Option<Vec<Gradient>>,
     /// Stresses, when gradients exist.
@@ -39,6 +42,8 @@ pub struct Solution {
     pub widened_supports: usize,
     /// Number of unknowns.
     pub unknowns: usize,
+    /// What each node carries (the resolved formulation).
+    pub formulation: Unknowns,
     /// Nonzeros of the assembled matrix.
     pub nonzeros: usize,
     /// Operators computed, with the number of nodes each was computed at.
@@ -58,17 +63,18 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let Solved { x, nonzeros, report } = assemble_and_solve(case, &disc, exact, &params.solver, &mut timer)?;
 
     let n = disc.nodes.len();
-    let (displacement, gradient, stress, exact_fields, errors) = timer.run(stage::POST, || {
+    let (displacement, pressure, gradient, stress, exact_fields, errors) = timer.run(stage::POST, || {
         let displacement = disc.dofs.displacements(&x, n);
+        let pressure = disc.pressure(&case.material, &x);
         let gradient = case.outputs.needs_gradient().then(|| disc.gradients(&x));
-        let stress = gradient.as_ref().map(|g| StressField::from_gradients(&case.material, g));
+        let stress = gradient.as_ref().map(|g| disc.stress(&case.material, g, &x));
         let exact_fields = exact.map(|e| ExactFields::at(e, &disc.nodes.positions, true));
         let errors = exact_fields.as_ref().map(|ef| ErrorNorms::against(&displacement, stress.as_ref(), ef));
         let note = match &errors {
             Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
             None => String::new(),
         };
-        Ok(((displacement, gradient, stress, exact_fields, errors), note))
+        Ok(((displacement, pressure, gradient, stress, exact_fields, errors), note))
     })?;
 
     let estimate = match params.estimate.method {
@@ -90,11 +96,13 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let ghost_nodes = disc.ghost_count();
     let widened_supports = disc.widened_supports;
     let unknowns = disc.dofs.len();
+    let formulation = disc.dofs.unknowns();
     let Discretisation { nodes, boundary_equations, operators_computed, .. } = disc;
     Ok(Solution {
         nodes,
         boundary_equations,
         displacement,
+        pressure,
         gradient,
         stress,
         exact: exact_fields,
@@ -103,6 +111,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         ghost_nodes,
         widened_supports,
         unknowns,
+        formulation,
         nonzeros,
         operators_computed,
         solver: report,

@@ -11,6 +11,7 @@ use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::rows::{Entries, RowWriter};
 use crate::case::Case;
+use crate::elasticity::dofs::{Unknowns, PRESSURE};
 use crate::exact::{self, ExactSolution};
 use crate::linalg::Triplets;
 use crate::pipeline::RunError;
@@ -47,6 +48,14 @@ impl System<'_> {
             let r = writer.navier(i, i, f, &mut e);
             rhs.extend([(dofs.dof(i, 0), r[0]), (dofs.dof(i, 1), r[1])]);
         }
+        if dofs.unknowns() == Unknowns::DisplacementPressure {
+            let r = writer.continuity(i, &mut e);
+            rhs.push((dofs.dof(i, PRESSURE), r));
+            if let Some(g) = disc.ghost.get(i).copied().flatten() {
+                let r = writer.continuity_normal_derivative(i, g, disc.nodes.normal(i), &mut e);
+                rhs.push((dofs.dof(g, PRESSURE), r));
+            }
+        }
         (e, rhs)
     }
 
@@ -54,7 +63,14 @@ impl System<'_> {
     /// or the first node whose equations hold a non-finite number.
     pub fn assemble(&self) -> Result<(Triplets, Vec<f64>), RunError> {
         let (disc, dofs) = (self.disc, self.disc.dofs);
-        let writer = RowWriter { dofs, lame: self.case.material.lame(), supports: &disc.supports, shapes: &disc.shapes };
+        let material = &self.case.material;
+        let writer = RowWriter {
+            dofs,
+            lame: material.lame(),
+            pressure_weights: material.pressure_weights(),
+            supports: &disc.supports,
+            shapes: &disc.shapes,
+        };
         let per_node: Vec<(Entries, Vec<(usize, f64)>)> =
             (0..disc.nodes.len()).into_par_iter().map(|i| self.node_rows(&writer, i)).collect();
         let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();

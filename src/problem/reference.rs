@@ -13,7 +13,7 @@ use crate::elasticity::material::PlaneModel;
 use crate::exact::{ExactKind, ParameterKind};
 use crate::linalg::{PreconditionerKind, SolverMethod};
 use crate::mlsm::{BasisKind, WeightKind};
-use crate::navier::EstimateMethod;
+use crate::navier::{EstimateMethod, Formulation};
 use crate::peridynamics::{BondForce, KernelKind, Quadrature, SurfaceCorrection};
 
 /// Every option of a scene, in the order of the scene tables.
@@ -25,6 +25,7 @@ pub fn options() -> Vec<OptionDoc> {
         OptionDoc::of::<FillKind>(),
         OptionDoc::of::<BasisKind>(),
         OptionDoc::of::<WeightKind>(),
+        OptionDoc::of::<Formulation>(),
         OptionDoc::of::<PlaneModel>(),
         OptionDoc::of::<ConditionKind>(),
         OptionDoc::of::<ComponentCondition>(),

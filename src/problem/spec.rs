@@ -211,6 +211,8 @@ pub struct ApproximationSpec {
     pub support: Option<usize>,
     /// Ghost nodes outside traction boundaries.
     pub ghost_nodes: Option<bool>,
+    /// `auto`, `displacement` or `displacement-pressure`.
+    pub formulation: Option<String>,
 }
 
 /// `[material]`.

@@ -4,7 +4,10 @@
 use super::{packing, Ctx, MAX_NODES};
 use crate::choice::Choice;
 use crate::domain::{Domain, FillKind, FillParams, Primitive, Refinement};
+use crate::elasticity::dofs::Unknowns;
+use crate::elasticity::material::Material;
 use crate::mlsm::{default_rbf_fd_support, default_support, Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
+use crate::navier::Formulation;
 use crate::problem::spec::{ApproximationSpec, NodesSpec, RefineSpec};
 use crate::problem::ProblemError;
 
@@ -245,4 +248,33 @@ pub(super) fn check_node_count(
         );
     }
     Ok(())
+}
+
+/// `approximation.formulation`, resolved against the material and the run:
+/// explicit dynamics runs the displacement form (`auto` included); an incompressible
+/// solid (`nu = 1/2`, plane strain) needs the displacement-pressure form.
+pub(super) fn formulation(c: &Ctx, s: &ApproximationSpec, material: &Material, dynamic: bool) -> Result<Formulation, ProblemError> {
+    let chosen: Formulation = c.choose("approximation.formulation", s.formulation.as_deref())?;
+    let formulation = match (chosen, dynamic) {
+        (Formulation::Auto, true) => Formulation::Displacement,
+        (Formulation::DisplacementPressure, true) => {
+            return c.err(
+                "approximation.formulation",
+                "explicit dynamics runs the displacement form only; remove formulation or set it to \"displacement\"",
+            )
+        }
+        (f, _) => f,
+    };
+    if material.is_incompressible() && formulation.unknowns(material) == Unknowns::Displacement {
+        let (field, why) = if dynamic {
+            ("material.nu", "nu = 0.5 (incompressible) has no displacement form and explicit dynamics has no other; use nu < 0.5")
+        } else {
+            (
+                "approximation.formulation",
+                "nu = 0.5 (incompressible) has infinite lambda: use formulation = \"displacement-pressure\" (or \"auto\")",
+            )
+        };
+        return c.err(field, why);
+    }
+    Ok(formulation)
 }

@@ -2,7 +2,7 @@
 //! planar model.
 
 use super::Ctx;
-use crate::elasticity::material::{Material, YoungPoisson};
+use crate::elasticity::material::{Material, PlaneModel, YoungPoisson};
 use crate::problem::spec::MaterialSpec;
 use crate::problem::ProblemError;
 
@@ -12,8 +12,10 @@ pub(super) fn material(c: &Ctx, s: &MaterialSpec) -> Result<Material, ProblemErr
     let elastic = match (s.young, s.nu, s.lambda, s.mu) {
         (Some(e), Some(nu), None, None) => {
             c.positive("material.E", e)?;
-            if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
-                return c.err("material.nu", format!("Poisson's ratio must lie in (-1, 0.5), got {nu}"));
+            let incompressible = nu == 0.5 && plane == PlaneModel::Strain;
+            if !(nu.is_finite() && nu > -1.0 && (nu < 0.5 || incompressible)) {
+                let why = if nu == 0.5 { " (0.5, incompressible, is allowed in plane strain only)" } else { "" };
+                return c.err("material.nu", format!("Poisson's ratio must lie in (-1, 0.5), got {nu}{why}"));
             }
             YoungPoisson { young: e, poisson: nu }
         }

@@ -77,15 +77,28 @@ impl Ctx<'_> {
 
     fn positive(&self, field: &str, v: f64) -> Result<f64, ProblemError> {
         if v.is_finite() && v > 0.0 {
+            self.finite(field, &[v])?;
             Ok(v)
         } else {
             self.err(field, format!("must be a positive finite number, got {v}"))
         }
     }
 
+    /// Every number finite and none subnormal (`0 < |x| < 2.2e-308`, where a double
+    /// keeps fewer than 15 significant digits and products underflow to zero).
     fn finite(&self, field: &str, v: &[f64]) -> Result<(), ProblemError> {
-        match v.iter().find(|x| !x.is_finite()) {
-            Some(x) => self.err(field, format!("must be finite, got {x}")),
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return self.err(field, format!("must be finite, got {x}"));
+        }
+        match v.iter().find(|x| x.is_subnormal()) {
+            Some(x) => self.err(
+                field,
+                format!(
+                    "{x:e} is below the smallest normal double ({:e}): it keeps fewer than 15 digits and its \
+                     products underflow; rescale the units (e.g. loads in kN or MPa)",
+                    f64::MIN_POSITIVE
+                ),
+            ),
             None => Ok(()),
         }
     }
@@ -118,6 +131,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     let approximation = approximation::approximation(&c, &spec.approximation, fill.kind, dynamic)?;
     approximation::check_node_count(&c, &domain, &fill, &approximation, area)?;
     let material = material::material(&c, &spec.material)?;
+    let formulation = approximation::formulation(&c, &spec.approximation, &material, dynamic)?;
     let exact = spec.exact.as_ref().map(|e| exact::exact(&c, e, material)).transpose()?;
     let body_force = exact::body_force(&c, spec.body_force.as_ref(), exact.as_ref())?;
     let dynamics = spec.dynamics.as_ref().map(|d| dynamics::dynamics(&c, d)).transpose()?;
@@ -137,7 +151,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         name,
         source: path.to_path_buf(),
         case: Case { domain, material, body_force, conditions, exact, outputs, dynamics },
-        navier: NavierParams { fill, approximation, solver, estimate: estimate(&c, &spec.estimate)? },
+        navier: NavierParams { fill, approximation, formulation, solver, estimate: estimate(&c, &spec.estimate)? },
         peridynamics,
         model,
     })

@@ -1,0 +1,58 @@
+//! Which unknowns the Navier model solves for.
+//!
+//! * **Displacement** (`u, v` per node): `(lambda + mu) grad div u + mu lap u + f = 0`.
+//!   As `nu -> 1/2` in plane strain, `lambda / mu -> inf`: the stress `lambda div u`
+//!   multiplies a small, inaccurate divergence and the errors grow like `lambda / mu`
+//!   (README, "Near-incompressible solids").
+//! * **Displacement-pressure** (`u, v, p` per node) with `p = -lambda div u`:
+//!
+//!   ```text
+//!   mu lap u + mu grad div u - grad p + f = 0      (momentum, where Navier rows are)
+//!   a mu div u + b p = 0                            (continuity, every node)
+//!   d/dn (a mu div u + b p) = 0                      (in the ghost's row, nodes with a ghost)
+//!   sigma = -p I + mu (grad u + grad u^T)           (tractions and stress)
+//!   ```
+//!
+//!   with `a = lambda / (lambda + mu)`, `b = mu / (lambda + mu)`
+//!   ([`Material::pressure_weights`]), finite up to and including `nu = 1/2`, where
+//!   the continuity row is `div u = 0`. The pressure lives on the same nodes as the
+//!   displacement (equal order); the continuity rows at boundary nodes close it
+//!   without a pressure boundary condition. A ghost's third unknown takes the normal
+//!   derivative of the continuity equation at its boundary node: the continuity
+//!   equation written at the ghost itself (an extrapolating stencil) gave 5x larger
+//!   errors at `nu = 1/2` (Lame, PHS p = 4, h = 2.5e-4: e_inf(u) 1.3e-3 against
+//!   2.6e-4; README, "Near-incompressible solids").
+
+use crate::choice::choice;
+use crate::elasticity::dofs::Unknowns;
+use crate::elasticity::material::{Material, PlaneModel};
+
+choice! {
+    /// The unknowns of the Navier model (module docs).
+    pub enum Formulation("approximation.formulation", default Some(Formulation::Auto), serde "kebab-case") {
+        Auto = "auto" => "displacement-pressure in plane strain from nu = 0.45 on (static runs), displacement otherwise",
+        Displacement = "displacement" => "u, v per node: the Navier equation; errors grow like lambda / mu as nu -> 0.5",
+        DisplacementPressure = "displacement-pressure" => "u, v, p per node with p = -lambda div u; valid up to nu = 0.5 (static plane strain)",
+    }
+}
+
+/// Poisson's ratio from which `auto` takes the displacement-pressure form in plane
+/// strain (README, "Near-incompressible solids": where the two forms' errors cross).
+pub const AUTO_FROM_POISSON: f64 = 0.45;
+
+impl Formulation {
+    /// The unknowns this choice solves for with `material` (`auto` resolved).
+    pub fn unknowns(self, material: &Material) -> Unknowns {
+        match self {
+            Formulation::Displacement => Unknowns::Displacement,
+            Formulation::DisplacementPressure => Unknowns::DisplacementPressure,
+            Formulation::Auto => {
+                if material.plane == PlaneModel::Strain && material.elastic.poisson >= AUTO_FROM_POISSON {
+                    Unknowns::DisplacementPressure
+                } else {
+                    Unknowns::Displacement
+                }
+            }
+        }
+    }
+}
