@@ -660,6 +660,27 @@ fn failed_run_leaves_earlier_results_alone() {
     assert_eq!(std::fs::read(res.join("solution.vtu")).unwrap(), vtu, "solution.vtu changed");
 }
 
+/// A level that fails (BiCGSTAB capped at 100 iterations: 31 and 66 at h = 0.1 and
+/// 0.05, over 100 at 0.025) leaves the finished levels in convergence.csv/json,
+/// marked incomplete.
+#[test]
+fn convergence_keeps_finished_levels_when_a_later_one_fails() {
+    let tmp = TempDir::new().unwrap();
+    let text = scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"jacobi\"\nmax_iterations = 100\n")
+        .replace("spacing = 0.05", "spacing = 0.1");
+    write(tmp.path(), "scene.toml", &text);
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["--quiet", "convergence", "scene.toml", "--levels", "2", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(3), "{}", describe(&o));
+    assert!(stderr(&o).contains("the 2 finished level(s) are in"), "{}", describe(&o));
+    let csv = std::fs::read_to_string(res.join("convergence.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "header and two levels: {csv}");
+    let t = read_json(&res.join("convergence.json"));
+    assert_eq!(t["complete"], false);
+    assert_eq!(t["levels_requested"], 3);
+    assert_eq!(t["levels"].as_array().unwrap().len(), 2);
+}
+
 #[test]
 fn solver_failure_exits_3() {
     let tmp = TempDir::new().unwrap();

@@ -1,7 +1,9 @@
 //! `mlsm convergence`: the static Navier solve at K halvings of the node spacing
 //! against the scene's exact solution; errors, per-level and fitted observed orders
 //! (`convergence.csv`, `convergence.json`), with each level's own error estimate
-//! beside its true error.
+//! beside its true error. Both files are rewritten after every level (atomically,
+//! `complete: false` until the last), so a failure or a kill at a fine level loses
+//! nothing that finished.
 
 use super::summary::Header;
 use super::terminal::Terminal;
@@ -19,7 +21,7 @@ use std::time::Instant;
 const LEVELS: Stage = Stage::new("levels");
 
 /// One row of a convergence table.
-#[derive(Serialize)]
+#[derive(Serialize, Clone)]
 struct Level {
     nodes: usize,
     h: f64,
@@ -39,6 +41,10 @@ struct Level {
 struct ConvergenceTable<'a> {
     #[serde(flatten)]
     header: Header<'a>,
+    /// Levels asked for (`--levels` + 1 runs).
+    levels_requested: usize,
+    /// Whether every requested level finished.
+    complete: bool,
     levels: Vec<Level>,
     fitted_order_e_inf_u: Option<f64>,
     fitted_order_e_inf_sigma: Option<f64>,
@@ -60,66 +66,82 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
     }
     // Refuse an unaffordable finest level before solving the coarse ones.
     p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?;
+    create_dir(dir)?;
     let t0 = Instant::now();
+    let area = p.case.domain.area_estimate(400);
+    let mut rows: Vec<Level> = Vec::new();
+    for k in 0..=levels {
+        match solve_level(p, k, rows.last(), area, term, quiet) {
+            Ok(level) => rows.push(level),
+            Err(e) => {
+                if !rows.is_empty() {
+                    eprintln!("level {k} failed; the {} finished level(s) are in {}", rows.len(), dir.join("convergence.csv").display());
+                }
+                return Err(e);
+            }
+        }
+        write_tables(p, &rows, levels + 1, dir, t0, k == levels && !quiet)?;
+    }
+    Ok(())
+}
+
+/// Write `convergence.csv` and `convergence.json` for the levels finished so far (and
+/// print the table when `print`).
+fn write_tables(p: &Problem, rows: &[Level], requested: usize, dir: &Path, t0: Instant, print: bool) -> Result<(), AppError> {
     let mut timings = StageTimings::default();
-    let rows = solve_levels(p, levels, term, quiet)?;
-    timings.record(LEVELS, t0.elapsed().as_secs_f64());
+    timings.record(LEVELS, rows.iter().map(|r| r.seconds).sum());
     let h: Vec<f64> = rows.iter().map(|r| r.h).collect();
     let fitted_u = observed_order(&h, &rows.iter().map(|r| r.e_inf_u).collect::<Vec<_>>());
     let es: Vec<f64> = rows.iter().map(|r| r.e_inf_sigma.unwrap_or(f64::NAN)).collect();
     let fitted_sigma = if es.iter().all(|e| e.is_finite()) { observed_order(&h, &es) } else { None };
-    create_dir(dir)?;
     let t_out = Instant::now();
-    write_csv(&rows, dir)?;
+    write_csv(rows, dir)?;
     timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
     let table = ConvergenceTable {
         header: Header::new(p, &timings, t0),
-        levels: rows,
+        levels_requested: requested,
+        complete: rows.len() == requested,
+        levels: rows.to_vec(),
         fitted_order_e_inf_u: fitted_u,
         fitted_order_e_inf_sigma: fitted_sigma,
     };
     output::write_json(&dir.join("convergence.json"), &table)?;
-    if !quiet {
+    if print {
         print_table(&table, dir);
     }
     Ok(())
 }
 
-/// Solve every level; orders between successive levels use the effective spacing
-/// `sqrt(area / N)`, so that scattered fills are compared fairly.
-fn solve_levels(p: &Problem, levels: usize, term: &Terminal, quiet: bool) -> Result<Vec<Level>, AppError> {
-    let area = p.case.domain.area_estimate(400);
-    let mut rows: Vec<Level> = Vec::new();
-    for k in 0..=levels {
-        let spacing = p.navier.fill.spacing / 2f64.powi(k as i32);
-        if !quiet {
-            eprintln!("level {k}: spacing {spacing:.4e}");
-        }
-        let t0 = Instant::now();
-        let q = p.with_spacing(spacing)?;
-        let sol = navier::solve(&q.case, &q.navier, term)?;
-        let e = sol.errors.expect("exact solution present");
-        let h = (area / sol.nodes.len() as f64).sqrt();
-        let order = |prev: Option<f64>, cur: Option<f64>| match (rows.last(), prev, cur) {
-            (Some(last), Some(a), Some(b)) if a > 0.0 && b > 0.0 => Some((a / b).ln() / (last.h / h).ln()),
-            _ => None,
-        };
-        let level = Level {
-            nodes: sol.nodes.len(),
-            h,
-            spacing,
-            e_inf_u: e.e_inf_u,
-            e_inf_sigma: e.e_inf_sigma,
-            rel_l2_u: e.rel_l2_u,
-            order_e_inf_u: order(rows.last().map(|r| r.e_inf_u), Some(e.e_inf_u)),
-            order_e_inf_sigma: order(rows.last().and_then(|r| r.e_inf_sigma), e.e_inf_sigma),
-            estimated_e_inf_u: sol.estimate.done().map(|x| x.norms.e_inf_u),
-            estimated_e_inf_sigma: sol.estimate.done().and_then(|x| x.norms.e_inf_sigma),
-            seconds: t0.elapsed().as_secs_f64(),
-        };
-        rows.push(level);
+/// Solve level `k` (spacing halved `k` times); its orders against the level before
+/// use the effective spacing `sqrt(area / N)`, so that scattered fills are compared
+/// fairly.
+fn solve_level(p: &Problem, k: usize, before: Option<&Level>, area: f64, term: &Terminal, quiet: bool) -> Result<Level, AppError> {
+    let spacing = p.navier.fill.spacing / 2f64.powi(k as i32);
+    if !quiet {
+        eprintln!("level {k}: spacing {spacing:.4e}");
     }
-    Ok(rows)
+    let t0 = Instant::now();
+    let q = p.with_spacing(spacing)?;
+    let sol = navier::solve(&q.case, &q.navier, term)?;
+    let e = sol.errors.expect("exact solution present");
+    let h = (area / sol.nodes.len() as f64).sqrt();
+    let order = |prev: Option<f64>, cur: Option<f64>| match (before, prev, cur) {
+        (Some(last), Some(a), Some(b)) if a > 0.0 && b > 0.0 => Some((a / b).ln() / (last.h / h).ln()),
+        _ => None,
+    };
+    Ok(Level {
+        nodes: sol.nodes.len(),
+        h,
+        spacing,
+        e_inf_u: e.e_inf_u,
+        e_inf_sigma: e.e_inf_sigma,
+        rel_l2_u: e.rel_l2_u,
+        order_e_inf_u: order(before.map(|r| r.e_inf_u), Some(e.e_inf_u)),
+        order_e_inf_sigma: order(before.and_then(|r| r.e_inf_sigma), e.e_inf_sigma),
+        estimated_e_inf_u: sol.estimate.done().map(|x| x.norms.e_inf_u),
+        estimated_e_inf_sigma: sol.estimate.done().and_then(|x| x.norms.e_inf_sigma),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 fn write_csv(rows: &[Level], dir: &Path) -> Result<(), AppError> {

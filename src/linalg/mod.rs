@@ -75,7 +75,8 @@ pub struct SolveReport {
     /// above the tolerance when the recursive one claimed convergence.
     pub restarts: usize,
     /// Unknowns whose value fell below the smallest normal double (2.2e-308) when
-    /// scaled back to the loads' units: they keep fewer than 15 digits.
+    /// scaled back to the loads' units, while above 1e-12 of the largest: they keep
+    /// fewer than 15 digits.
     pub subnormal_unknowns: usize,
 }
 
@@ -196,7 +197,10 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
         });
     }
     let x: Vec<f64> = x.into_iter().map(|v| scale(v, exponent)).collect();
-    let subnormal_unknowns = x.iter().filter(|v| v.is_subnormal()).count();
+    // Entries below 1e-12 of the largest are round-off of a zero (a symmetry line);
+    // only significant entries that lost digits count.
+    let largest = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let subnormal_unknowns = x.iter().filter(|v| v.is_subnormal() && v.abs() > 1e-12 * largest).count();
     Ok((x, SolveReport { subnormal_unknowns, ..report }))
 }
 
