@@ -46,6 +46,9 @@ pub enum Command {
         /// Exit with code 4 when the run ends with warnings (results are still written).
         #[arg(long)]
         strict: bool,
+        /// Allow an explicit dynamic run of more than 1e8 time steps.
+        #[arg(long)]
+        allow_long: bool,
     },
     /// Print every option word a scene file may use, with its default and meaning (Markdown).
     Options,

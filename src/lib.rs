@@ -53,6 +53,7 @@ pub mod peridynamics;
 
 // Floor 8
 pub mod problem;
+pub mod resources;
 pub mod warnings;
 
 // Floor 9

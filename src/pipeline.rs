@@ -150,6 +150,11 @@ pub enum RunError {
     /// A fixed time step above the stability limit of the scheme.
     #[error("time step {given:.3e} s exceeds the stable step {limit:.3e} s of the {integrator} scheme (central-difference bound sqrt(2 rho / max_i sum_j |c_ij| |xi|^2)); use a smaller dynamics.time_step or leave it out")]
     UnstableTimeStep { given: f64, limit: f64, integrator: &'static str },
+    /// An explicit run longer than `dynamics::driver::MAX_STEPS` steps without `--allow-long`.
+    #[error(
+        "the run needs {steps:.2e} steps of {dt:.3e} s (more than 1e8): shorten dynamics.end_time, coarsen the nodes, or pass --allow-long"
+    )]
+    TooManySteps { steps: f64, dt: f64 },
     /// The solution became non-finite during time integration.
     #[error("the solution became non-finite at step {step} (t = {t:.4e} s): the time integration diverged")]
     Diverged { step: usize, t: f64 },

@@ -32,6 +32,8 @@ use crate::mlsm::Basis;
 use crate::navier::formulation::AUTO_FROM_POISSON;
 use crate::navier::{Estimate, NavierParams, Solution};
 use crate::peridynamics::PdSolution;
+use crate::problem::Problem;
+use crate::resources;
 use serde::Serialize;
 
 /// Radius of the neighbourhood of a singular corner that the stress check skips, in
@@ -237,4 +239,20 @@ pub fn peridynamics_static(sol: &PdSolution, threshold: f64) -> Checks {
         None => checks.notes.push("no error estimate for peridynamic runs (compare with the local model: mlsm compare)".into()),
     }
     checks
+}
+
+/// A run whose memory estimate exceeds half the available memory (`resources`).
+pub fn memory(p: &Problem) -> Option<Warning> {
+    let e = resources::of(p);
+    resources::above_half(&e).map(|available| Warning {
+        check: "memory",
+        message: format!(
+            "the run was estimated at {:.1} GB ({}), more than half of the {:.1} GB available; \
+             a larger problem would not fit (see {})",
+            e.peak_bytes / 1e9,
+            resources::describe(&e),
+            available / 1e9,
+            e.driver
+        ),
+    })
 }

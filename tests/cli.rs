@@ -681,6 +681,24 @@ fn convergence_keeps_finished_levels_when_a_later_one_fails() {
     assert_eq!(t["levels"].as_array().unwrap().len(), 2);
 }
 
+/// An explicit run of more than 1e8 steps (steel_plate_dynamic to t = 1000 s: 1.3e8
+/// steps) is refused before the first step (exit 2, asking for --allow-long), and
+/// writes nothing.
+#[test]
+fn a_run_of_more_than_1e8_steps_asks_for_allow_long() {
+    let tmp = TempDir::new().unwrap();
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    assert!(text.contains("end_time = 1e-3"));
+    write(tmp.path(), "long.toml", &text.replace("end_time = 1e-3", "end_time = 1e3"));
+    let res = tmp.path().join("res");
+    let t0 = std::time::Instant::now();
+    let o = mlsm(tmp.path(), &["--quiet", "run", "long.toml", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    assert!(stderr(&o).contains("--allow-long") && stderr(&o).contains("steps"), "{}", describe(&o));
+    assert!(t0.elapsed().as_secs_f64() < 10.0, "refused only after {:?}", t0.elapsed());
+    assert!(!res.exists(), "a refused run wrote output");
+}
+
 #[test]
 fn solver_failure_exits_3() {
     let tmp = TempDir::new().unwrap();

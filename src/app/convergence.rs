@@ -65,7 +65,7 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
         return Err(AppError::Usage(format!("--levels {levels}: at most 8 halvings (each multiplies the node count by 4)")));
     }
     // Refuse an unaffordable finest level before solving the coarse ones.
-    p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?;
+    crate::resources::check(&p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?)?;
     create_dir(dir)?;
     let t0 = Instant::now();
     let area = p.case.domain.area_estimate(400);

@@ -54,7 +54,10 @@ impl AppError {
     /// included), 3 solver failure, 4 warnings under `--strict`, 1 anything else.
     pub fn exit_code(&self) -> u8 {
         match self {
-            AppError::Problem(_) | AppError::Usage(_) | AppError::Run(RunError::UnstableTimeStep { .. }) => 2,
+            AppError::Problem(_)
+            | AppError::Usage(_)
+            | AppError::Run(RunError::UnstableTimeStep { .. })
+            | AppError::Run(RunError::TooManySteps { .. }) => 2,
             AppError::Run(_) => 3,
             AppError::Output(_) => 1,
             AppError::Strict(_) => 4,
@@ -71,13 +74,20 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             print!("{}", crate::problem::reference::markdown());
             Ok(())
         }
-        Command::Run { scene, out, spacing, model, horizon, strict } => {
+        Command::Run { scene, out, spacing, model, horizon, strict, allow_long } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
             });
-            let req =
-                run::RunRequest { scene: scene.clone(), out: out.clone(), spacing: *spacing, model, horizon: *horizon, strict: *strict };
+            let req = run::RunRequest {
+                scene: scene.clone(),
+                out: out.clone(),
+                spacing: *spacing,
+                model,
+                horizon: *horizon,
+                strict: *strict,
+                allow_long: *allow_long,
+            };
             run::run(req, &term, cli.quiet)
         }
         Command::Compare { scene, m, deltas, levels, quadratures, reference_spacing, out } => {

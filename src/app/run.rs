@@ -26,11 +26,15 @@ pub(super) struct RunRequest {
     pub model: Option<Model>,
     pub horizon: Option<f64>,
     pub strict: bool,
+    pub allow_long: bool,
 }
 
 /// The scene with the command line's overrides applied and checked.
 fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
     let mut p = Problem::from_file(&req.scene)?;
+    if let Some(d) = p.case.dynamics.as_mut() {
+        d.allow_long = req.allow_long;
+    }
     if let Some(m) = req.model {
         p.model = m;
     }
@@ -55,6 +59,7 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
             }
         }
     }
+    crate::resources::check(&p)?;
     Ok(p)
 }
 
@@ -72,7 +77,8 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
     let seconds = || t_out.elapsed().as_secs_f64();
     match outcome {
         Outcome::NavierStatic(mut sol) => {
-            let checks = warnings::navier_static(&sol, &p.navier, &p.case);
+            let mut checks = warnings::navier_static(&sol, &p.navier, &p.case);
+            checks.warnings.extend(warnings::memory(&p));
             write_solution(&p, &dir, &sol.nodes.positions, &navier_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
             write_summary(&dir, &NavierSummary::new(&p, &sol, &checks, t0), term, seconds())?;
@@ -82,7 +88,8 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
             report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::PdStatic(mut sol) => {
-            let checks = warnings::peridynamics_static(&sol, p.navier.estimate.threshold);
+            let mut checks = warnings::peridynamics_static(&sol, p.navier.estimate.threshold);
+            checks.warnings.extend(warnings::memory(&p));
             write_solution(&p, &dir, &sol.nodes.positions[..sol.nodes.free], &pd_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
             write_summary(&dir, &PdSummary::new(&p, &sol, &checks, t0), term, seconds())?;

@@ -30,6 +30,8 @@ pub(super) struct Header<'a> {
     seed: u64,
     threads: usize,
     peak_memory_bytes: Option<u64>,
+    /// The estimate made before the run (`resources`), for comparison with the peak.
+    estimated_peak_memory_bytes: f64,
     timings_s: Timings<'a>,
 }
 
@@ -51,6 +53,7 @@ impl<'a> Header<'a> {
             seed: p.navier.fill.seed,
             threads: rayon::current_num_threads(),
             peak_memory_bytes: output::peak_memory_bytes(),
+            estimated_peak_memory_bytes: crate::resources::of(p).peak_bytes.round(),
             timings_s: Timings { stages: timings, total: t0.elapsed().as_secs_f64() },
         }
     }

@@ -56,18 +56,28 @@ pub struct TimeGrid {
     pub stable: f64,
 }
 
+/// Step count above which an explicit run must be asked for (`--allow-long`): at
+/// 1e8 steps even a 1e3-node run takes hours.
+pub const MAX_STEPS: f64 = 1e8;
+
 /// The step of `params` (fixed, or `safety` times the scheme's limit `stable x
-/// stability_factor`), refused when a fixed step exceeds the limit.
+/// stability_factor`), refused when a fixed step exceeds the limit, or when the run
+/// has more than [`MAX_STEPS`] steps and `params.allow_long` is off.
 pub fn time_grid(stable: f64, params: &DynamicsParams) -> Result<TimeGrid, RunError> {
     let limit = stable * params.integrator.stability_factor();
-    match params.time_step {
-        Some(dt) if dt > limit => Err(RunError::UnstableTimeStep { given: dt, limit, integrator: params.integrator.name() }),
-        Some(dt) => Ok(TimeGrid { dt, steps: (params.end_time / dt).round().max(1.0) as usize, stable }),
-        None => {
-            let steps = (params.end_time / (params.safety * limit)).ceil().max(1.0) as usize;
-            Ok(TimeGrid { dt: params.end_time / steps as f64, steps, stable })
-        }
+    let dt = match params.time_step {
+        Some(dt) if dt > limit => return Err(RunError::UnstableTimeStep { given: dt, limit, integrator: params.integrator.name() }),
+        Some(dt) => dt,
+        None => params.safety * limit,
+    };
+    let steps = (params.end_time / dt).ceil().max(1.0);
+    if steps > MAX_STEPS && !params.allow_long {
+        return Err(RunError::TooManySteps { steps, dt });
     }
+    Ok(match params.time_step {
+        Some(dt) => TimeGrid { dt, steps: (params.end_time / dt).round().max(1.0) as usize, stable },
+        None => TimeGrid { dt: params.end_time / steps, steps: steps as usize, stable },
+    })
 }
 
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling

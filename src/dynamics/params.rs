@@ -44,4 +44,7 @@ pub struct DynamicsParams {
     pub snapshots: usize,
     /// A snapshot every k steps, when given (instead of `snapshots`).
     pub snapshot_every: Option<usize>,
+    /// Run more than [`MAX_STEPS`](crate::dynamics::driver::MAX_STEPS) steps
+    /// (`mlsm run --allow-long`).
+    pub allow_long: bool,
 }

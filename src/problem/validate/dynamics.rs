@@ -48,6 +48,7 @@ pub(super) fn dynamics(c: &Ctx, s: &DynamicsSpec) -> Result<DynamicsParams, Prob
         return c.err("dynamics.snapshots", format!("{snapshots} snapshots; at most 10000"));
     }
     Ok(DynamicsParams {
+        allow_long: false,
         density,
         end_time,
         integrator,

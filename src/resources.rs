@@ -1,0 +1,146 @@
+//! Memory a run will need, estimated from the scene before any heavy stage, against
+//! the memory the machine has available.
+//!
+//! The model (bytes), with `n` nodes, `k` unknowns per node, support `s`:
+//!
+//! ```text
+//! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
+//! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32)
+//! solve, LU    = Z (40 + 34 N^0.26)       (triplets and matrix, 40 B per nonzero; the LU
+//!                                          factors of faer, fitted: see below)
+//! solve, BiCGSTAB = Z (40 + 48)           (matrix and an ILU of about three times its size)
+//! peak         = max(run, error-estimate reference) + 16 MB
+//! ```
+//!
+//! and for peridynamics `n = area / h^2`, `pi m^2` bonds per node (32 B each),
+//! `Z = 4 n (pi m^2 + 1)`, the same solver terms with `N = 2 n`. The LU term was fitted
+//! on the Kirsch plate (PHS p = 4) at 3.8e4 and 1.5e5 unknowns (measured peaks 1.27 and
+//! 7.10 GB; the constant came out 33.5 and 34.6); the test `memory_estimate_tracks_the_measured_peak`
+//! checks the whole model within 2x on three sizes.
+
+use crate::case::Case;
+use crate::linalg::SolverKind;
+use crate::navier::estimate::reference_approximation;
+use crate::navier::{EstimateMethod, NavierParams};
+use crate::peridynamics::PdParams;
+use crate::problem::{validate, Problem, ProblemError};
+use serde::Serialize;
+
+/// The estimate of one run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MemoryEstimate {
+    /// Nodes.
+    pub nodes: f64,
+    /// Unknowns.
+    pub unknowns: f64,
+    /// Nonzeros of the system matrix.
+    pub nonzeros: f64,
+    /// Bonds (peridynamics).
+    pub bonds: Option<f64>,
+    /// Peak resident memory, bytes.
+    pub peak_bytes: f64,
+    /// The scene setting that drives it.
+    #[serde(skip)]
+    pub driver: &'static str,
+}
+
+/// Bytes per nonzero of the solver: assembly and matrix, plus factors or preconditioner.
+fn solver_bytes_per_nonzero(kind: &SolverKind, unknowns: f64) -> f64 {
+    match kind {
+        SolverKind::Lu => 40.0 + 34.0 * unknowns.powf(0.26),
+        SolverKind::Bicgstab { .. } => 88.0,
+    }
+}
+
+/// Process, code and small arrays.
+const BASE_BYTES: f64 = 16e6;
+
+/// A static or dynamic Navier run of `case` with `params` on about `nodes` nodes.
+pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate {
+    let k = params.formulation.unknowns(&case.material).per_node() as f64;
+    let dynamic = case.dynamics.is_some();
+    let one = |support: usize| {
+        let s = support as f64;
+        // Navier rows couple k unknowns of s nodes (u-p: the continuity row only 2).
+        let nonzeros = (k * k - (k - 2.0)) * nodes * s;
+        let solve = if dynamic { 40.0 * nonzeros } else { nonzeros * solver_bytes_per_nonzero(&params.solver.kind, k * nodes) };
+        (nonzeros, nodes * s * 44.0 + solve)
+    };
+    let (nonzeros, mut bytes) = one(params.approximation.support);
+    if params.estimate.method == EstimateMethod::HigherDegree && !dynamic {
+        if let Ok(reference) = reference_approximation(&params.approximation, params.fill.kind, nodes as usize) {
+            bytes = bytes.max(one(reference.support).1);
+        }
+    }
+    let driver = if params.approximation.support > 100 { "approximation.support" } else { "nodes.spacing" };
+    MemoryEstimate { nodes, unknowns: k * nodes, nonzeros, bonds: None, peak_bytes: bytes + BASE_BYTES, driver }
+}
+
+/// A peridynamic run with `params` on the domain of `case`.
+pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
+    let h = params.horizon / params.ratio;
+    let nodes = case.domain.area_estimate(400) / (h * h);
+    let per_node = std::f64::consts::PI * params.ratio * params.ratio;
+    let bonds = nodes * per_node;
+    let nonzeros = 4.0 * nodes * (per_node + 1.0);
+    let peak_bytes = bonds * 32.0 + nonzeros * solver_bytes_per_nonzero(&params.solver.kind, 2.0 * nodes) + BASE_BYTES;
+    MemoryEstimate { nodes, unknowns: 2.0 * nodes, nonzeros, bonds: Some(bonds), peak_bytes, driver: "peridynamics.horizon" }
+}
+
+/// The estimate for the model `p` runs.
+pub fn of(p: &Problem) -> MemoryEstimate {
+    match (&p.model, &p.peridynamics) {
+        (crate::problem::Model::Peridynamics, Some(pd)) => peridynamics(&p.case, pd),
+        _ => {
+            let nodes = validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
+            navier(&p.case, &p.navier, nodes)
+        }
+    }
+}
+
+/// Memory available to a run, bytes: `MLSM_MEMORY_LIMIT` if set (a number of bytes,
+/// e.g. `4e9`), else Linux's `MemAvailable`; `None` when neither is known.
+pub fn available_bytes() -> Option<f64> {
+    if let Ok(v) = std::env::var("MLSM_MEMORY_LIMIT") {
+        return v.trim().parse::<f64>().ok().filter(|x| *x > 0.0);
+    }
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
+/// The estimate of `p`, or a refusal naming the setting that drives it when it
+/// exceeds the available memory.
+pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
+    let e = of(p);
+    match available_bytes() {
+        Some(available) if e.peak_bytes > available => Err(ProblemError {
+            file: p.source.clone(),
+            field: e.driver.into(),
+            reason: format!(
+                "the run needs about {:.1} GB ({}), more than the {:.1} GB available; {}",
+                e.peak_bytes / 1e9,
+                describe(&e),
+                available / 1e9,
+                match e.driver {
+                    "approximation.support" => "use a smaller support",
+                    "peridynamics.horizon" => "use a larger horizon or a smaller m",
+                    _ => "use a larger spacing, solver kind = \"bicgstab\" (no factors), or [estimate] method = \"none\" (its reference solve has the larger stencils)",
+                }
+            ),
+        }),
+        _ => Ok(e),
+    }
+}
+
+/// `N nodes, U unknowns, Z nonzeros[, B bonds]`.
+pub fn describe(e: &MemoryEstimate) -> String {
+    let bonds = e.bonds.map(|b| format!(", {b:.1e} bonds")).unwrap_or_default();
+    format!("{:.1e} nodes, {:.1e} unknowns, {:.1e} nonzeros{bonds}", e.nodes, e.unknowns, e.nonzeros)
+}
+
+/// Whether `e` needs more than half the available memory (a warning).
+pub fn above_half(e: &MemoryEstimate) -> Option<f64> {
+    available_bytes().filter(|a| e.peak_bytes > 0.5 * a)
+}
