@@ -24,6 +24,7 @@ fn run_scene(name: &str, edit: impl Fn(String) -> String) -> (tempfile::TempDir,
             model: None,
             horizon: None,
             strict: false,
+            allow_long: false,
         },
     })
     .unwrap();
