@@ -17,11 +17,12 @@
 //! 6. [`case`]: the physical problem of a scene, independent of any discretisation;
 //! 7. the models: [`navier`] (MLSM collocation, static and elastodynamic) and
 //!    [`peridynamics`] (linear bond-based, static and dynamic);
-//! 8. [`problem`]: scene file (TOML) -> validated [`problem::Problem`]; [`warnings`]:
-//!    the checks that turn a doubtful result into a warning;
-//! 9. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
-//! 10. [`compare`]: the nonlocal-to-local comparison;
-//! 11. [`app`]: the commands (the only printing).
+//! 8. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
+//! 9. [`resources`]: the memory a run will need, checked before it starts;
+//! 10. [`warnings`]: the checks that turn a doubtful result into a warning;
+//! 11. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
+//! 12. [`compare`]: the nonlocal-to-local comparison;
+//! 13. [`app`]: the commands (the only printing).
 
 // Floor 1
 pub mod choice;
@@ -53,14 +54,18 @@ pub mod peridynamics;
 
 // Floor 8
 pub mod problem;
-pub mod resources;
-pub mod warnings;
 
 // Floor 9
-pub mod model;
+pub mod resources;
 
 // Floor 10
-pub mod compare;
+pub mod warnings;
 
 // Floor 11
+pub mod model;
+
+// Floor 12
+pub mod compare;
+
+// Floor 13
 pub mod app;
