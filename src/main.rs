@@ -1,5 +1,6 @@
 //! `mlsm`: parse the command line, run, print the error chain, exit with its code
-//! (0 success, 1 output or other failure, 2 invalid input, 3 solver failure).
+//! (0 success, 1 output or other failure, 2 invalid input, 3 solver failure, 4 warnings
+//! under `--strict`, 130 interrupted).
 
 use clap::Parser;
 use std::process::ExitCode;
@@ -12,6 +13,13 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
+    // Ctrl-C: a time loop stops between steps and removes its partial snapshot series
+    // (exit 130); anywhere else the process ends at once, as without a handler.
+    let _ = ctrlc::set_handler(|| {
+        if !mlsm::pipeline::interrupt::request() {
+            std::process::exit(130);
+        }
+    });
     let cli = mlsm::cli::Cli::parse();
     match mlsm::app::run(&cli) {
         Ok(()) => ExitCode::SUCCESS,

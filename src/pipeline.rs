@@ -13,6 +13,48 @@ use serde::ser::SerializeMap;
 use serde::Serialize;
 use std::time::Instant;
 
+/// Interruption (Ctrl-C) of a time loop: while an [`interrupt::Interruptible`] guard
+/// lives, an interrupt only raises a flag that the loop polls once per step, so the run
+/// ends as [`RunError::Interrupted`] and its writer can remove what it staged; outside a
+/// time loop the command line ends the process at once (nothing is half written:
+/// files are written atomically).
+pub mod interrupt {
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    static LISTENING: AtomicBool = AtomicBool::new(false);
+    static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+    /// Ask the running time loop to stop; `false` when no loop listens (the caller
+    /// should then end the process itself).
+    pub fn request() -> bool {
+        REQUESTED.store(true, Ordering::SeqCst);
+        LISTENING.load(Ordering::SeqCst)
+    }
+
+    /// Whether a stop was requested since the guard was made.
+    pub fn requested() -> bool {
+        REQUESTED.load(Ordering::Relaxed)
+    }
+
+    /// Listens for interrupts while it lives (one time loop).
+    pub struct Interruptible(());
+
+    impl Interruptible {
+        /// Start listening (an earlier, unheeded request is forgotten).
+        pub fn listen() -> Self {
+            REQUESTED.store(false, Ordering::SeqCst);
+            LISTENING.store(true, Ordering::SeqCst);
+            Interruptible(())
+        }
+    }
+
+    impl Drop for Interruptible {
+        fn drop(&mut self) {
+            LISTENING.store(false, Ordering::SeqCst);
+        }
+    }
+}
+
 /// A named stage of a run (`nodes`, `shapes`, `families`, `solve`, ...).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Stage(&'static str);
@@ -176,6 +218,9 @@ pub enum RunError {
     /// Writing a snapshot during time integration failed.
     #[error(transparent)]
     Snapshot(OutputError),
+    /// The user interrupted the time loop (Ctrl-C).
+    #[error("interrupted at step {step} (t = {t:.4e} s); the partial snapshot series was removed, earlier results are untouched")]
+    Interrupted { step: usize, t: f64 },
 }
 
 #[cfg(test)]

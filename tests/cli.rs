@@ -860,3 +860,54 @@ fn dynamic_compare_against_mlsm_elastodynamics() {
     // amplified by the phase error it causes over 2.5 periods of the axial mode.
     assert!(e[1] < 0.6 * e[0] && e[2] < 0.6 * e[1], "{e:?}");
 }
+
+/// Ctrl-C (SIGINT) during a dynamic run: exit 130 with a message, no partial snapshot
+/// series (neither `snapshots/` nor the staging folder), and the series of an earlier
+/// finished run in the same folder untouched (`series.pvd` and every file it lists).
+#[cfg(unix)]
+#[test]
+fn an_interrupted_dynamic_run_leaves_no_partial_series() {
+    let tmp = TempDir::new().unwrap();
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    assert!(text.contains("end_time = 1e-3"));
+    write(tmp.path(), "short.toml", &text);
+    // 500 times longer: about 1.7e6 steps, minutes; interrupted after two snapshots.
+    write(tmp.path(), "long.toml", &text.replace("end_time = 1e-3", "end_time = 0.5"));
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["--quiet", "run", "short.toml", "--out", res.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", describe(&o));
+    let listed = |res: &Path| -> Vec<(String, Vec<u8>)> {
+        let pvd = std::fs::read_to_string(res.join("series.pvd")).unwrap();
+        let mut files: Vec<(String, Vec<u8>)> = pvd
+            .split("file=\"")
+            .skip(1)
+            .map(|s| s.split('"').next().unwrap().to_string())
+            .map(|f| (f.clone(), std::fs::read(res.join(&f)).unwrap()))
+            .collect();
+        files.push(("series.pvd".into(), pvd.into_bytes()));
+        files
+    };
+    let before = listed(&res);
+    assert!(before.len() > 3, "an earlier series: {:?}", before.iter().map(|f| &f.0).collect::<Vec<_>>());
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mlsm"))
+        .current_dir(tmp.path())
+        .args(["--quiet", "run", "long.toml", "--out", res.to_str().unwrap()])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let staging = res.join(".snapshots.partial");
+    let t0 = std::time::Instant::now();
+    while std::fs::read_dir(&staging).map(|d| d.count()).unwrap_or(0) < 2 {
+        assert!(t0.elapsed().as_secs() < 120, "no snapshots staged after 120 s");
+        assert!(child.try_wait().unwrap().is_none(), "the long run ended early");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    // SAFETY: sending a signal to our own child process.
+    assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) }, 0);
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", describe(&o));
+    assert!(stderr(&o).contains("interrupted at step"), "{}", describe(&o));
+    assert!(!staging.exists(), "the staging folder was left behind");
+    assert_eq!(listed(&res), before, "the earlier series changed");
+}

@@ -58,6 +58,7 @@ impl AppError {
             | AppError::Usage(_)
             | AppError::Run(RunError::UnstableTimeStep { .. })
             | AppError::Run(RunError::TooManySteps { .. }) => 2,
+            AppError::Run(RunError::Interrupted { .. }) => 130,
             AppError::Run(_) => 3,
             AppError::Output(_) => 1,
             AppError::Strict(_) => 4,

@@ -201,6 +201,12 @@ fn print_navier(sol: &crate::navier::Solution) {
         Estimate::Unavailable(why) => println!("estimated: unavailable ({why})"),
         Estimate::Off => println!("estimated: off (estimate.method = \"none\")"),
     }
+    if let Some(q) = &sol.equilibrium {
+        println!(
+            "equilibrium: reactions ({:.3e}, {:.3e}) + loads ({:.3e}, {:.3e}) + body ({:.3e}, {:.3e}), relative imbalance {:.1e}",
+            q.reactions[0], q.reactions[1], q.applied[0], q.applied[1], q.body[0], q.body[1], q.relative
+        );
+    }
 }
 
 fn print_pd(sol: &crate::peridynamics::PdSolution) {

@@ -104,6 +104,7 @@ pub(super) struct NavierSummary<'a> {
     solver: SolverSummary<'a>,
     errors: Option<ErrorNorms>,
     estimated_errors: &'a navier::Estimate,
+    equilibrium: Option<navier::equilibrium::Equilibrium>,
     #[serde(flatten)]
     checks: &'a Checks,
     outputs: Outputs,
@@ -129,6 +130,7 @@ impl<'a> NavierSummary<'a> {
             solver: SolverSummary { kind: p.navier.solver.kind.method().name(), report: &sol.solver },
             errors: sol.errors,
             estimated_errors: &sol.estimate,
+            equilibrium: sol.equilibrium,
             checks,
             outputs: p.case.outputs,
         }

@@ -3,7 +3,7 @@
 
 use super::{DynamicsParams, Integrator, SecondOrderSystem, State};
 use crate::choice::Choice;
-use crate::pipeline::{RunError, Stage, StageTimer};
+use crate::pipeline::{interrupt, RunError, Stage, StageTimer};
 use serde::Serialize;
 
 /// The stage of the time loop (shown with a progress bar).
@@ -85,7 +85,8 @@ pub fn time_grid(stable: f64, params: &DynamicsParams) -> Result<TimeGrid, RunEr
 /// spaced steps (and always at the start and the end)
 /// and recording `energies` (kinetic, elastic, external) at every step (every
 /// `ceil(steps / 1000)`-th step for longer runs). The loop is the [`INTEGRATE`] stage
-/// of `timer`. Returns the report and the history.
+/// of `timer`, interruptible by Ctrl-C between steps (`pipeline::interrupt`). Returns
+/// the report and the history.
 pub fn integrate(
     system: &dyn SecondOrderSystem,
     energies: &dyn Fn(&State) -> (f64, f64, f64),
@@ -107,9 +108,13 @@ pub fn integrate(
     record(state, &mut history);
     snapshot(0, state)?;
     let progress = timer.progress();
+    let _listening = interrupt::Interruptible::listen();
     let looped = timer.run(INTEGRATE, || {
         let mut looped = 0.0;
         for step in 1..=steps {
+            if interrupt::requested() {
+                return Err(RunError::Interrupted { step, t: state.t });
+            }
             let ts = std::time::Instant::now();
             params.integrator.step(system, state, dt);
             looped += ts.elapsed().as_secs_f64();

@@ -140,7 +140,9 @@ impl SparseLu {
 ///   [`CONDITION_LIMIT`]. This catches a singular but *consistent* system
 ///   (e.g. a pure-traction problem with self-equilibrated loads), for which LU
 ///   returns a small residual but an arbitrary rigid-body component.
-pub fn check_solution(lu: &SparseLu, a: &SparseMatrix, x: &[f64], b: &[f64], relres: f64) -> Result<(), SolveError> {
+///
+/// Returns the κ₁ estimate of an accepted solution.
+pub fn check_solution(lu: &SparseLu, a: &SparseMatrix, x: &[f64], b: &[f64], relres: f64) -> Result<f64, SolveError> {
     const HINT: &str = "check the boundary conditions (a pure-traction problem has rigid-body \
                         modes; every node needs exactly one equation per displacement component)";
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
@@ -183,7 +185,7 @@ pub fn check_solution(lu: &SparseLu, a: &SparseMatrix, x: &[f64], b: &[f64], rel
     if kappa.is_nan() || kappa > CONDITION_LIMIT {
         return Err(too_ill(kappa, "estimated condition number κ₁(A) ≈"));
     }
-    Ok(())
+    Ok(kappa)
 }
 
 #[cfg(test)]

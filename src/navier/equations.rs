@@ -73,7 +73,8 @@ mod tests {
     }
 
     fn corner(touches: Vec<(usize, [f64; 2])>) -> BoundarySample {
-        BoundarySample { position: [1.0, 1.0], touches }
+        let lengths = vec![0.05; touches.len()];
+        BoundarySample { position: [1.0, 1.0], touches, lengths }
     }
 
     #[test]
@@ -114,13 +115,13 @@ mod tests {
         let material = Material { elastic: YoungPoisson { young: 10.0, poisson: 0.25 }, plane: PlaneModel::Strain };
         let exact = Polynomial::quadratic([0.0, 1.0, 2.0, 0.5, 0.0, 0.0], [1.0, 0.0, -1.0, 0.0, 0.25, 0.0], material).unwrap();
         let disp = [BoundaryCondition { components: [ComponentCondition::Displacement; 2], value: Value::Exact }];
-        let sample = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, -1.0])] };
+        let sample = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, -1.0])], lengths: vec![0.1] };
         let eq = resolve(&sample, &disp, Some(&exact));
         let u = exact.displacement(sample.position);
         assert_eq!(eq, [ComponentEquation::Displacement { value: u[0] }, ComponentEquation::Displacement { value: u[1] }]);
         // A zero-thickness slit: opposite normals of two traction parts.
         let trac = [BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Exact }; 2];
-        let slit = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, 1.0]), (1, [0.0, -1.0])] };
+        let slit = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, 1.0]), (1, [0.0, -1.0])], lengths: vec![0.1, 0.1] };
         let eq = resolve(&slit, &trac, Some(&exact));
         let t = exact.traction(slit.position, [0.0, 1.0]);
         assert_eq!(eq[1], ComponentEquation::Traction { normal: [0.0, 1.0], value: t[1] });

@@ -16,13 +16,15 @@
 //!    operators each node needs (`mlsm`);
 //! 2. [`rows`] and [`system`]: one row per unknown (Navier, traction, displacement),
 //!    assembled into a sparse matrix;
-//! 3. [`solve`]: the static run (solve, strain, stress, errors);
+//! 3. [`solve`]: the static run (solve, strain, stress, errors, the global force
+//!    balance of [`equilibrium`]);
 //! 4. [`dynamics`]: explicit elastodynamics `rho u_tt = Navier(u) + f` with the
 //!    boundary rows as constraints.
 
 pub mod discrete;
 pub mod dynamics;
 pub mod equations;
+pub mod equilibrium;
 pub mod estimate;
 pub mod formulation;
 pub mod rows;

@@ -4,6 +4,7 @@
 
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
+use super::equilibrium::{self, Equilibrium};
 use super::estimate::{self, Estimate, EstimateMethod, ESTIMATE};
 use super::system::System;
 use super::NavierParams;
@@ -34,6 +35,8 @@ pub struct Solution {
     pub exact: Option<ExactFields>,
     /// Error norms, when an exact solution is known.
     pub errors: Option<ErrorNorms>,
+    /// Global force balance, when stresses exist (`equilibrium`).
+    pub equilibrium: Option<Equilibrium>,
     /// Estimated errors (`estimate`), with or without an exact solution.
     pub estimate: Estimate,
     /// Number of ghost nodes.
@@ -63,18 +66,19 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let Solved { x, nonzeros, report } = assemble_and_solve(case, &disc, exact, &params.solver, &mut timer)?;
 
     let n = disc.nodes.len();
-    let (displacement, pressure, gradient, stress, exact_fields, errors) = timer.run(stage::POST, || {
+    let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium) = timer.run(stage::POST, || {
         let displacement = disc.dofs.displacements(&x, n);
         let pressure = disc.pressure(&case.material, &x);
         let gradient = case.outputs.needs_gradient().then(|| disc.gradients(&x));
         let stress = gradient.as_ref().map(|g| disc.stress(&case.material, g, &x));
         let exact_fields = exact.map(|e| ExactFields::at(e, &disc.nodes.positions, true));
         let errors = exact_fields.as_ref().map(|ef| ErrorNorms::against(&displacement, stress.as_ref(), ef));
+        let equilibrium = stress.as_ref().map(|s| equilibrium::balance(case, &disc.nodes, s, exact));
         let note = match &errors {
             Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
             None => String::new(),
         };
-        Ok(((displacement, pressure, gradient, stress, exact_fields, errors), note))
+        Ok(((displacement, pressure, gradient, stress, exact_fields, errors, equilibrium), note))
     })?;
 
     let estimate = match params.estimate.method {
@@ -107,6 +111,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         stress,
         exact: exact_fields,
         errors,
+        equilibrium,
         estimate,
         ghost_nodes,
         widened_supports,
