@@ -18,6 +18,8 @@
 //!   condition estimate `κ₁ ε` above [`DIGITS_LIMIT`] (fewer than about 6 digits
 //!   certain), and unknowns that underflowed.
 //!
+//! Dynamic runs ([`dynamic`]): the drift of the total energy above the threshold.
+//!
 //! Singular corners: where a clamped part (displacement on both components) meets a
 //! part with a traction component, and at re-entrant corners, the exact stress of a
 //! scene without a closed-form solution is unbounded, so no discretisation makes
@@ -33,6 +35,7 @@
 use crate::case::Case;
 use crate::domain::corner::corners;
 use crate::domain::{NodeSet, Point};
+use crate::dynamics::driver::EnergyRow;
 use crate::elasticity::conditions::ComponentCondition;
 use crate::elasticity::dofs::Unknowns;
 use crate::elasticity::material::{Material, PlaneModel};
@@ -319,6 +322,43 @@ pub fn peridynamics_static(sol: &PdSolution, threshold: f64) -> Checks {
     checks
 }
 
+/// The largest change of the total energy (kinetic + elastic + external) over the
+/// history, relative to the largest sum of the magnitudes of its three parts: the
+/// integrators conserve it up to their time-discretisation error (there is no
+/// damping, and the external part is the potential of the loads).
+pub fn energy_drift(energies: &[EnergyRow]) -> f64 {
+    let total = |e: &EnergyRow| e[1] + e[2] + e[3];
+    let Some(first) = energies.first() else { return 0.0 };
+    let scale = energies.iter().map(|e| e[1].abs() + e[2].abs() + e[3].abs()).fold(0.0, f64::max);
+    let change = energies.iter().map(|e| (total(e) - total(first)).abs()).fold(0.0, f64::max);
+    if scale > 0.0 {
+        change / scale
+    } else {
+        0.0
+    }
+}
+
+/// The checks of a time-dependent run: the energy drift ([`energy_drift`]) above
+/// `threshold` is warned. There is no estimate of the discretisation error of a
+/// dynamic run (a note).
+pub fn dynamic(energies: &[EnergyRow], threshold: f64) -> Checks {
+    let mut checks = Checks::default();
+    let drift = energy_drift(energies);
+    if exceeds(drift, threshold) {
+        checks.warnings.push(Warning {
+            check: "energy-drift",
+            message: format!(
+                "the total energy changed by up to {drift:.1e} of its scale over the run (threshold {threshold:.0e}): \
+                 the time integration is inaccurate; try dynamics.integrator = \"rk4\" or a smaller dynamics.time_step"
+            ),
+        });
+    }
+    checks.notes.push(format!(
+        "no estimate of the discretisation error for dynamic runs; the total energy is conserved to {drift:.1e} (energies.csv)"
+    ));
+    checks
+}
+
 /// A run whose memory estimate exceeds half the available memory (`resources`).
 pub fn memory(p: &Problem) -> Option<Warning> {
     let e = resources::of(p);
@@ -333,4 +373,23 @@ pub fn memory(p: &Problem) -> Option<Warning> {
             e.driver
         ),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Energy exchanged between kinetic and elastic at constant total: no drift; a total
+    /// that wanders by 3 % of the scale at one row: drift 0.03, warned at 1e-2.
+    #[test]
+    fn energy_drift_is_the_largest_change_of_the_total() {
+        let conserved: Vec<EnergyRow> =
+            (0..50).map(|k| (k as f64 * 0.1).sin()).map(|s| [0.0, 100.0 * s * s, 100.0 * (1.0 - s * s), 0.0]).collect();
+        assert!(energy_drift(&conserved) < 1e-14);
+        assert!(dynamic(&conserved, 1e-2).warnings.is_empty());
+        let mut wandering = conserved.clone();
+        wandering[20][1] += 3.0;
+        assert!((energy_drift(&wandering) - 3.0 / 103.0).abs() < 1e-3 * 0.03, "{}", energy_drift(&wandering));
+        assert_eq!(dynamic(&wandering, 1e-2).warnings[0].check, "energy-drift");
+    }
 }

@@ -3,15 +3,15 @@
 
 use super::fields::{navier_fields, pd_fields, write_points_vtu};
 use super::series::Series;
-use super::summary::{DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
+use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::terminal::Terminal;
 use super::{create_dir, default_out, AppError};
-use crate::dynamics::driver::{DynamicReport, EnergyRow};
+use crate::dynamics::driver::EnergyRow;
 use crate::model::{self, Outcome};
 use crate::navier::Estimate;
 use crate::output;
 use crate::peridynamics::PdParams;
-use crate::pipeline::{RunError, StageTimings, OUTPUT};
+use crate::pipeline::{RunError, OUTPUT};
 use crate::problem::{Model, Problem};
 use crate::warnings::{self, Checks};
 use serde::Serialize;
@@ -102,7 +102,7 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
             series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
             sim.timings.record(OUTPUT, seconds());
             let dynamic = Dynamic { nodes: sim.positions.len(), report: &sim.report, energies: &sim.energies, timings: &sim.timings };
-            write_dynamic(&p, &dir, dynamic, NavierDynamicPart::of(&p, &sim), t0, quiet)?;
+            write_dynamic(&p, &dir, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
@@ -112,7 +112,7 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
             let dynamic = Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings };
-            write_dynamic(&p, &dir, dynamic, PdDynamicPart::of(&p, &sim), t0, quiet)?;
+            write_dynamic(&p, &dir, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
     }
     Ok(())
@@ -149,17 +149,19 @@ fn write_summary(dir: &Path, summary: &impl Serialize, term: &Terminal, seconds:
     Ok(())
 }
 
-/// What every time-dependent run reports.
-struct Dynamic<'a> {
-    nodes: usize,
-    report: &'a DynamicReport,
-    energies: &'a [EnergyRow],
-    timings: &'a StageTimings,
-}
-
-/// `summary.json` of a time-dependent run, and its terminal lines.
-fn write_dynamic<M: Serialize>(p: &Problem, dir: &Path, d: Dynamic, model: M, t0: Instant, quiet: bool) -> Result<(), AppError> {
-    let summary = DynamicSummary::new(p, d.nodes, d.report, d.energies, d.timings, model, t0);
+/// `summary.json` of a time-dependent run with its checks, and its terminal lines.
+fn write_dynamic<M: Serialize>(
+    p: &Problem,
+    dir: &Path,
+    d: Dynamic,
+    model: M,
+    t0: Instant,
+    req: &RunRequest,
+    quiet: bool,
+) -> Result<(), AppError> {
+    let mut checks = warnings::dynamic(d.energies, p.navier.estimate.threshold);
+    checks.warnings.extend(warnings::memory(p));
+    let summary = DynamicSummary::new(p, &d, model, &checks, t0);
     output::write_json(&dir.join("summary.json"), &summary)?;
     if !quiet {
         let (e0, e1) = (d.energies[0], d.energies.last().expect("recorded"));
@@ -177,7 +179,7 @@ fn write_dynamic<M: Serialize>(p: &Problem, dir: &Path, d: Dynamic, model: M, t0
         let per = r.seconds / r.steps.max(1) as f64 / d.nodes.max(1) as f64;
         println!("{per:.2e} s per step per node; written: {}", dir.display());
     }
-    Ok(())
+    report_checks(&checks, req.strict, quiet)
 }
 
 fn print_navier(sol: &crate::navier::Solution) {

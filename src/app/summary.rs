@@ -240,6 +240,15 @@ impl NavierDynamicPart {
     }
 }
 
+/// What every time-dependent run reports.
+#[derive(Clone, Copy)]
+pub(super) struct Dynamic<'a> {
+    pub nodes: usize,
+    pub report: &'a DynamicReport,
+    pub energies: &'a [EnergyRow],
+    pub timings: &'a StageTimings,
+}
+
 /// `summary.json` of a time-dependent run.
 #[derive(Serialize)]
 pub(super) struct DynamicSummary<'a, M: Serialize> {
@@ -254,18 +263,13 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
     material: MaterialSummary,
     #[serde(flatten)]
     model: M,
+    #[serde(flatten)]
+    checks: &'a Checks,
 }
 
 impl<'a, M: Serialize> DynamicSummary<'a, M> {
-    pub(super) fn new(
-        p: &'a Problem,
-        nodes: usize,
-        report: &'a DynamicReport,
-        energies: &[EnergyRow],
-        timings: &'a StageTimings,
-        model: M,
-        t0: Instant,
-    ) -> Self {
+    pub(super) fn new(p: &'a Problem, d: &Dynamic<'a>, model: M, checks: &'a Checks, t0: Instant) -> Self {
+        let Dynamic { nodes, report, energies, timings } = *d;
         DynamicSummary {
             header: Header::new(p, timings, t0),
             nodes,
@@ -276,6 +280,7 @@ impl<'a, M: Serialize> DynamicSummary<'a, M> {
             energy_last: *energies.last().expect("initial energy recorded"),
             material: MaterialSummary::of(&p.case.material),
             model,
+            checks,
         }
     }
 }
