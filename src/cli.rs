@@ -49,6 +49,10 @@ pub enum Command {
         /// Allow an explicit dynamic run of more than 1e8 time steps.
         #[arg(long)]
         allow_long: bool,
+        /// Also write the assembled system A x = b of a static Navier run into this folder
+        /// (MatrixMarket and PETSc binary, with the unknowns' nodes and positions).
+        #[arg(long, value_name = "DIR")]
+        export_system: Option<PathBuf>,
     },
     /// Print every option word a scene file may use, with its default and meaning (Markdown).
     Options,

@@ -25,6 +25,7 @@ fn run_scene(name: &str, edit: impl Fn(String) -> String) -> (tempfile::TempDir,
             horizon: None,
             strict: false,
             allow_long: false,
+            export_system: None,
         },
     })
     .unwrap();

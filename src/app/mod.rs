@@ -6,6 +6,7 @@
 mod check;
 mod compare;
 mod convergence;
+mod export;
 mod fields;
 mod run;
 mod series;
@@ -75,7 +76,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             print!("{}", crate::problem::reference::markdown());
             Ok(())
         }
-        Command::Run { scene, out, spacing, model, horizon, strict, allow_long } => {
+        Command::Run { scene, out, spacing, model, horizon, strict, allow_long, export_system } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
@@ -88,6 +89,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 horizon: *horizon,
                 strict: *strict,
                 allow_long: *allow_long,
+                export_system: export_system.clone(),
             };
             run::run(req, &term, cli.quiet)
         }

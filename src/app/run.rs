@@ -5,7 +5,7 @@ use super::fields::{navier_fields, pd_fields, write_points_vtu};
 use super::series::Series;
 use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::terminal::Terminal;
-use super::{create_dir, default_out, AppError};
+use super::{create_dir, default_out, export, AppError};
 use crate::dynamics::driver::EnergyRow;
 use crate::model::{self, Outcome};
 use crate::navier::Estimate;
@@ -27,6 +27,7 @@ pub(super) struct RunRequest {
     pub horizon: Option<f64>,
     pub strict: bool,
     pub allow_long: bool,
+    pub export_system: Option<PathBuf>,
 }
 
 /// The scene with the command line's overrides applied and checked.
@@ -59,6 +60,14 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
             }
         }
     }
+    if req.export_system.is_some() {
+        if p.model != Model::Navier || p.case.dynamics.is_some() {
+            return Err(AppError::Usage(
+                "--export-system writes the system of a static Navier run; this run is dynamic or peridynamic".into(),
+            ));
+        }
+        p.navier.keep_system = true;
+    }
     crate::resources::check(&p)?;
     Ok(p)
 }
@@ -82,6 +91,12 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
             write_solution(&p, &dir, &sol.nodes.positions, &navier_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
             write_summary(&dir, &NavierSummary::new(&p, &sol, &checks, t0), term, seconds())?;
+            if let (Some(to), Some(system)) = (&req.export_system, &sol.system) {
+                export::write(to, system, &sol.solver)?;
+                if !quiet {
+                    println!("system written: {}", to.display());
+                }
+            }
             if !quiet {
                 print_navier(&sol);
             }

@@ -39,6 +39,8 @@ pub struct Discretisation {
     pub boundary_equations: Vec<[ComponentEquation; 2]>,
     /// Ghost node of each node, if it has one (ghosts are nodes `n..`).
     pub ghost: Vec<Option<usize>>,
+    /// Positions of the ghosts (ghost `n + k` at `ghost_positions[k]`).
+    pub ghost_positions: Vec<Point>,
     /// Supports over nodes and ghosts.
     pub supports: Supports,
     /// Supports widened because they could not determine an RBF-FD polynomial part.
@@ -99,7 +101,28 @@ impl Discretisation {
             .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
             .collect();
         let dofs = DofMap::new(positions.len(), unknowns);
-        Ok(Discretisation { nodes, boundary_equations, ghost, supports, widened_supports: widened, shapes, operators_computed, dofs })
+        let ghost_positions = positions[n..].to_vec();
+        Ok(Discretisation {
+            nodes,
+            boundary_equations,
+            ghost,
+            ghost_positions,
+            supports,
+            widened_supports: widened,
+            shapes,
+            operators_computed,
+            dofs,
+        })
+    }
+
+    /// Position of node or ghost `i`.
+    pub fn point(&self, i: usize) -> Point {
+        let n = self.nodes.len();
+        if i < n {
+            self.nodes.positions[i]
+        } else {
+            self.ghost_positions[i - n]
+        }
     }
 
     /// Number of ghost nodes.

@@ -185,10 +185,10 @@ pub fn higher_degree(
         Ok(a) => a,
         Err(reason) => return Estimate::Unavailable(reason),
     };
-    let reference_params = NavierParams { approximation, ..params.clone() };
+    let reference_params = NavierParams { approximation, keep_system: false, ..params.clone() };
     let mut timer = StageTimer::new(&Silent);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
-        .and_then(|disc| assemble_and_solve(case, &disc, exact, &reference_params.solver, &mut timer).map(|s| (disc, s)));
+        .and_then(|disc| assemble_and_solve(case, &disc, exact, &reference_params.solver, false, &mut timer).map(|s| (disc, s)));
     let (disc, solved) = match solved {
         Ok(s) => s,
         Err(e) => return Estimate::Unavailable(format!("the reference ({}) failed: {e}", approximation.basis.describe())),

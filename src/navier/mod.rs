@@ -55,6 +55,8 @@ pub struct NavierParams {
     pub solver: SolverParams,
     /// Error estimate.
     pub estimate: EstimateParams,
+    /// Keep the assembled system in the solution (`mlsm run --export-system`).
+    pub keep_system: bool,
 }
 
 /// A small case shared by the stage tests of this model.
@@ -100,6 +102,7 @@ pub(crate) mod test_case {
             formulation: super::Formulation::Displacement,
             solver: SolverParams::default(),
             estimate: Default::default(),
+            keep_system: false,
         };
         (case, params)
     }

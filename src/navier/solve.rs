@@ -9,11 +9,11 @@ use super::estimate::{self, Estimate, EstimateMethod, ESTIMATE};
 use super::system::System;
 use super::NavierParams;
 use crate::case::Case;
-use crate::domain::NodeSet;
-use crate::elasticity::dofs::Unknowns;
+use crate::domain::{NodeSet, Point};
+use crate::elasticity::dofs::{DofMap, Unknowns};
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
-use crate::linalg::{self, SolveReport, SolverParams};
+use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 use crate::post::{ErrorNorms, ExactFields};
 
@@ -53,8 +53,26 @@ pub struct Solution {
     pub operators_computed: Vec<(String, usize)>,
     /// Solver report.
     pub solver: SolveReport,
+    /// The assembled system, when `params.keep_system` asked for it.
+    pub system: Option<LinearSystem>,
     /// Stage timings.
     pub timings: StageTimings,
+}
+
+/// The assembled system `A x = b` of a run, with what each unknown is.
+pub struct LinearSystem {
+    /// `A`, as assembled (before the solver's row equilibration).
+    pub matrix: SparseMatrix,
+    /// `b`.
+    pub rhs: Vec<f64>,
+    /// The solution `x`.
+    pub x: Vec<f64>,
+    /// Unknown layout over nodes and ghosts.
+    pub dofs: DofMap,
+    /// Position of every node and ghost (ghosts after the nodes).
+    pub points: Vec<Point>,
+    /// Number of nodes (the rest of `points` are ghosts).
+    pub nodes: usize,
 }
 
 /// Run every stage of `case` with `params`.
@@ -63,7 +81,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let Solved { x, nonzeros, report } = assemble_and_solve(case, &disc, exact, &params.solver, &mut timer)?;
+    let Solved { x, nonzeros, report, system } = assemble_and_solve(case, &disc, exact, &params.solver, params.keep_system, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium) = timer.run(stage::POST, || {
@@ -97,6 +115,14 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         })?,
     };
 
+    let system = system.map(|(matrix, rhs)| LinearSystem {
+        matrix,
+        rhs,
+        x: x.clone(),
+        dofs: disc.dofs,
+        points: (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect(),
+        nodes: disc.nodes.len(),
+    });
     let ghost_nodes = disc.ghost_count();
     let widened_supports = disc.widened_supports;
     let unknowns = disc.dofs.len();
@@ -120,6 +146,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         nonzeros,
         operators_computed,
         solver: report,
+        system,
         timings: timer.finish(),
     })
 }
@@ -132,14 +159,18 @@ pub(super) struct Solved {
     pub nonzeros: usize,
     /// What the solver did.
     pub report: SolveReport,
+    /// The matrix and right-hand side, when kept.
+    pub system: Option<(SparseMatrix, Vec<f64>)>,
 }
 
-/// Assemble the rows of `disc` and solve them with `solver` (stages `assembly`, `solve`).
+/// Assemble the rows of `disc` and solve them with `solver` (stages `assembly`, `solve`);
+/// `keep`: return the system too.
 pub(super) fn assemble_and_solve(
     case: &Case,
     disc: &Discretisation,
     exact: Option<&dyn ExactSolution>,
     solver: &SolverParams,
+    keep: bool,
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
     let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
@@ -154,5 +185,5 @@ pub(super) fn assemble_and_solve(
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report), note))
     })?;
-    Ok(Solved { x, nonzeros, report })
+    Ok(Solved { x, nonzeros, report, system: keep.then_some((matrix, rhs)) })
 }

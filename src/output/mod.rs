@@ -9,6 +9,8 @@
 //!   written with `vtkio` (inline base64, Float64/Int32 arrays, so values are bit-exact).
 //! * [`write_pvd`]: a ParaView collection (time series) file, written by hand.
 //! * [`write_loglog_svg`]: log-log convergence plots (SVG, plotters).
+//! * [`write_system`]: an assembled linear system for other solvers (MatrixMarket by
+//!   `nalgebra-sparse`, PETSc binary).
 //! * [`peak_memory_bytes`]: peak resident memory of the process (Linux `VmHWM`).
 //!
 //! Errors are reported as [`OutputError`]; every variant names the file or field concerned.
@@ -21,11 +23,13 @@ use std::path::PathBuf;
 mod atomic;
 mod memory;
 mod plot;
+mod system;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
 pub use memory::peak_memory_bytes;
 pub use plot::{write_loglog_svg, Series};
+pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};
 pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};
 
 /// Error returned by every fallible function of this module.

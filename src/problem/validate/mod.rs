@@ -151,7 +151,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         name,
         source: path.to_path_buf(),
         case: Case { domain, material, body_force, conditions, exact, outputs, dynamics },
-        navier: NavierParams { fill, approximation, formulation, solver, estimate: estimate(&c, &spec.estimate)? },
+        navier: NavierParams { fill, approximation, formulation, solver, estimate: estimate(&c, &spec.estimate)?, keep_system: false },
         peridynamics,
         model,
     })
