@@ -108,9 +108,10 @@ impl Progress for Silent {
 }
 
 /// Wall-clock seconds per stage, in the order the stages ran; serialised as a map
-/// `{stage name: seconds}`.
+/// `{stage name: seconds}`. Beside them, the peak resident memory of each stage
+/// ([`StageTimings::peaks`]).
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct StageTimings(Vec<(Stage, f64)>);
+pub struct StageTimings(Vec<(Stage, f64)>, Vec<(Stage, u64)>);
 
 impl StageTimings {
     /// Add `seconds` to `stage` (a stage that runs twice is summed).
@@ -129,6 +130,33 @@ impl StageTimings {
     /// Stages in the order they ran, with their seconds.
     pub fn iter(&self) -> impl Iterator<Item = (Stage, f64)> + '_ {
         self.0.iter().copied()
+    }
+
+    /// Keep `bytes` as the peak of `stage` if larger than the one recorded.
+    pub fn record_peak(&mut self, stage: Stage, bytes: u64) {
+        match self.1.iter_mut().find(|(s, _)| *s == stage) {
+            Some((_, b)) => *b = (*b).max(bytes),
+            None => self.1.push((stage, bytes)),
+        }
+    }
+
+    /// Peak resident memory of each stage that ran under a [`StageTimer`], in bytes,
+    /// serialised as a map `{stage name: bytes}`.
+    pub fn peaks(&self) -> StagePeaks<'_> {
+        StagePeaks(&self.1)
+    }
+}
+
+/// Peak memory per stage (see [`StageTimings::peaks`]).
+pub struct StagePeaks<'a>(&'a [(Stage, u64)]);
+
+impl Serialize for StagePeaks<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (stage, bytes) in self.0 {
+            map.serialize_entry(stage.name(), bytes)?;
+        }
+        map.end()
     }
 }
 
@@ -160,12 +188,17 @@ impl<'a> StageTimer<'a> {
     }
 
     /// Run `work` as `stage`; it returns its value and a short note for the terminal.
+    /// Records its seconds and its peak resident memory.
     pub fn run<T>(&mut self, stage: Stage, work: impl FnOnce() -> Result<(T, String), RunError>) -> Result<T, RunError> {
         self.progress.start(stage);
+        let mark = crate::output::restart_peak();
         let t0 = Instant::now();
         let (value, note) = work()?;
         let seconds = t0.elapsed().as_secs_f64();
         self.timings.record(stage, seconds);
+        if let Some(bytes) = crate::output::peak_since(mark) {
+            self.timings.record_peak(stage, bytes);
+        }
         self.progress.finish(stage, seconds, &note);
         Ok(value)
     }

@@ -13,7 +13,7 @@ use crate::navier;
 use crate::output;
 use crate::peridynamics::solve::WeightsSummary;
 use crate::peridynamics::{Micromodulus, PdParams, PdSolution};
-use crate::pipeline::StageTimings;
+use crate::pipeline::{StagePeaks, StageTimings};
 use crate::post::ErrorNorms;
 use crate::problem::Problem;
 use crate::warnings::Checks;
@@ -32,6 +32,8 @@ pub(super) struct Header<'a> {
     peak_memory_bytes: Option<u64>,
     /// The estimate made before the run (`resources`), for comparison with the peak.
     estimated_peak_memory_bytes: f64,
+    /// Peak resident memory of each stage.
+    peak_memory_by_stage_bytes: StagePeaks<'a>,
     timings_s: Timings<'a>,
 }
 
@@ -54,6 +56,7 @@ impl<'a> Header<'a> {
             threads: rayon::current_num_threads(),
             peak_memory_bytes: output::peak_memory_bytes(),
             estimated_peak_memory_bytes: crate::resources::of(p).peak_bytes.round(),
+            peak_memory_by_stage_bytes: timings.peaks(),
             timings_s: Timings { stages: timings, total: t0.elapsed().as_secs_f64() },
         }
     }

@@ -1,12 +1,55 @@
-//! Process memory statistics.
+//! Process memory statistics: the peak resident memory of the process, and of a
+//! stretch of it (a stage).
+//!
+//! Linux resets the high-water mark `VmHWM` to the current resident size when "5" is
+//! written to `/proc/self/clear_refs`. [`restart_peak`] does that after folding the
+//! peak so far into a log, so the process peak ([`peak_memory_bytes`]) is the largest
+//! of the log and the current `VmHWM`, and the peak since a mark ([`peak_since`]) is
+//! the largest of the current `VmHWM` and what was folded after the mark (nested
+//! stretches stay correct). Where the reset is not allowed, `VmHWM` keeps growing and
+//! [`peak_since`] is the process peak so far (an upper bound).
 
-/// Peak resident memory of this process in bytes (VmHWM from /proc/self/status) if the platform exposes it.
+use std::sync::Mutex;
+
+/// Peaks folded by [`restart_peak`], in order.
+static FOLDED: Mutex<Vec<u64>> = Mutex::new(Vec::new());
+
+/// `VmHWM` now, in bytes.
+fn high_water_mark() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    parse_vm_hwm(&status)
+}
+
+/// Peak resident memory of this process in bytes (module docs), if the platform
+/// exposes `VmHWM` in /proc/self/status.
 ///
 /// Returns `None` where `/proc/self/status` does not exist or has no parsable `VmHWM` line
 /// (non-Linux systems, some sandboxes).
 pub fn peak_memory_bytes() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    parse_vm_hwm(&status)
+    let now = high_water_mark()?;
+    let folded = FOLDED.lock().map(|f| f.iter().copied().max().unwrap_or(0)).unwrap_or(0);
+    Some(now.max(folded))
+}
+
+/// A point from which [`peak_since`] measures.
+#[derive(Debug, Clone, Copy)]
+pub struct PeakMark(usize);
+
+/// Start measuring a peak from now (module docs).
+pub fn restart_peak() -> PeakMark {
+    let Ok(mut folded) = FOLDED.lock() else { return PeakMark(usize::MAX) };
+    if let Some(now) = high_water_mark() {
+        folded.push(now);
+        let _ = std::fs::write("/proc/self/clear_refs", "5");
+    }
+    PeakMark(folded.len())
+}
+
+/// Peak resident memory in bytes since `mark` (module docs).
+pub fn peak_since(mark: PeakMark) -> Option<u64> {
+    let now = high_water_mark()?;
+    let folded = FOLDED.lock().map(|f| f.get(mark.0..).map_or(0, |tail| tail.iter().copied().max().unwrap_or(0))).unwrap_or(0);
+    Some(now.max(folded))
 }
 
 /// Extracts `VmHWM` (reported in kB, i.e. KiB) from the text of `/proc/<pid>/status`.
@@ -48,5 +91,30 @@ mod tests {
         assert!(after >= size as u64, "peak {after} < {size}");
         assert!(after >= before);
         drop(v);
+    }
+
+    /// After a restart the stretch's peak sees what it touched and not more than the
+    /// process peak; the process peak survives the restart.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_restarted_peak_measures_its_stretch() {
+        let size = 96 << 20;
+        let mut v = vec![0u8; size];
+        for i in (0..size).step_by(4096) {
+            v[i] = 1;
+        }
+        std::hint::black_box(&v);
+        drop(v);
+        let process = peak_memory_bytes().unwrap();
+        let mark = restart_peak();
+        assert!(peak_memory_bytes().unwrap() >= process, "the process peak is kept");
+        let mut w = vec![0u8; size / 2];
+        for i in (0..size / 2).step_by(4096) {
+            w[i] = 1;
+        }
+        std::hint::black_box(&w);
+        let stretch = peak_since(mark).unwrap();
+        assert!(stretch >= (size / 2) as u64, "{stretch}");
+        assert!(stretch <= peak_memory_bytes().unwrap());
     }
 }

@@ -11,7 +11,8 @@
 //! * [`write_loglog_svg`]: log-log convergence plots (SVG, plotters).
 //! * [`write_system`]: an assembled linear system for other solvers (MatrixMarket by
 //!   `nalgebra-sparse`, PETSc binary).
-//! * [`peak_memory_bytes`]: peak resident memory of the process (Linux `VmHWM`).
+//! * [`peak_memory_bytes`], [`restart_peak`], [`peak_since`]: peak resident memory of
+//!   the process and of one stage (Linux `VmHWM`, reset through `clear_refs`).
 //!
 //! Errors are reported as [`OutputError`]; every variant names the file or field concerned.
 //! I/O and JSON errors keep the underlying error as [`std::error::Error::source`] rather than
@@ -27,7 +28,7 @@ mod system;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
-pub use memory::peak_memory_bytes;
+pub use memory::{peak_memory_bytes, peak_since, restart_peak, PeakMark};
 pub use plot::{write_loglog_svg, Series};
 pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};
 pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};
