@@ -9,6 +9,7 @@
 //! solve, LU    = Z (40 + 34 N^0.26)       (triplets and matrix, 40 B per nonzero; the LU
 //!                                          factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (40 + 48)           (matrix and an ILU of about three times its size)
+//! solve, auto  = LU or BiCGSTAB as `SolverKind::resolve` will choose
 //! peak         = max(run, error-estimate reference) + 16 MB
 //! ```
 //!
@@ -19,7 +20,7 @@
 //! checks the whole model within 2x on three sizes.
 
 use crate::case::Case;
-use crate::linalg::SolverKind;
+use crate::linalg::{lu_factor_bytes, SolverKind};
 use crate::navier::estimate::reference_approximation;
 use crate::navier::{EstimateMethod, NavierParams};
 use crate::peridynamics::PdParams;
@@ -44,11 +45,12 @@ pub struct MemoryEstimate {
     pub driver: &'static str,
 }
 
-/// Bytes per nonzero of the solver: assembly and matrix, plus factors or preconditioner.
-fn solver_bytes_per_nonzero(kind: &SolverKind, unknowns: f64) -> f64 {
-    match kind {
-        SolverKind::Lu => 40.0 + 34.0 * unknowns.powf(0.26),
-        SolverKind::Bicgstab { .. } => 88.0,
+/// Bytes of the solver for `nonzeros` and `unknowns`: assembly and matrix, plus
+/// factors or preconditioner (`auto` resolved as the solve will resolve it).
+fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
+    match kind.resolve(unknowns, nonzeros, available_bytes()).0 {
+        SolverKind::Bicgstab { .. } => 88.0 * nonzeros,
+        _ => 40.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
     }
 }
 
@@ -63,7 +65,7 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         let s = support as f64;
         // Navier rows couple k unknowns of s nodes (u-p: the continuity row only 2).
         let nonzeros = (k * k - (k - 2.0)) * nodes * s;
-        let solve = if dynamic { 40.0 * nonzeros } else { nonzeros * solver_bytes_per_nonzero(&params.solver.kind, k * nodes) };
+        let solve = if dynamic { 40.0 * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros) };
         (nonzeros, nodes * s * 44.0 + solve)
     };
     let (nonzeros, mut bytes) = one(params.approximation.support);
@@ -83,7 +85,7 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     let per_node = std::f64::consts::PI * params.ratio * params.ratio;
     let bonds = nodes * per_node;
     let nonzeros = 4.0 * nodes * (per_node + 1.0);
-    let peak_bytes = bonds * 32.0 + nonzeros * solver_bytes_per_nonzero(&params.solver.kind, 2.0 * nodes) + BASE_BYTES;
+    let peak_bytes = bonds * 32.0 + solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros) + BASE_BYTES;
     MemoryEstimate { nodes, unknowns: 2.0 * nodes, nonzeros, bonds: Some(bonds), peak_bytes, driver: "peridynamics.horizon" }
 }
 
@@ -98,16 +100,9 @@ pub fn of(p: &Problem) -> MemoryEstimate {
     }
 }
 
-/// Memory available to a run, bytes: `MLSM_MEMORY_LIMIT` if set (a number of bytes,
-/// e.g. `4e9`), else Linux's `MemAvailable`; `None` when neither is known.
+/// Memory available to a run, bytes (`output::available_memory_bytes`).
 pub fn available_bytes() -> Option<f64> {
-    if let Ok(v) = std::env::var("MLSM_MEMORY_LIMIT") {
-        return v.trim().parse::<f64>().ok().filter(|x| *x > 0.0);
-    }
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
+    crate::output::available_memory_bytes()
 }
 
 /// The estimate of `p`, or a refusal naming the setting that drives it when it
@@ -126,7 +121,7 @@ pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
                 match e.driver {
                     "approximation.support" => "use a smaller support",
                     "peridynamics.horizon" => "use a larger horizon or a smaller m",
-                    _ => "use a larger spacing, solver kind = \"bicgstab\" (no factors), or [estimate] method = \"none\" (its reference solve has the larger stencils)",
+                    _ => "use a larger spacing, solver.kind = \"auto\" or \"bicgstab\" (no factors), or [estimate] method = \"none\" (its reference solve has the larger stencils)",
                 }
             ),
         }),

@@ -200,6 +200,9 @@ fn write_dynamic<M: Serialize>(
 fn print_navier(sol: &crate::navier::Solution) {
     println!("nodes {}  unknowns {} ({})  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.formulation.name(), sol.nonzeros);
     println!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
+    if let Some(why) = &sol.solver.choice {
+        println!("  ({why})");
+    }
     if let Some(e) = &sol.errors {
         print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", e.e_inf_u, e.rel_l2_u);
         if let Some(s) = e.e_inf_sigma {

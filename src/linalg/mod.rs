@@ -32,7 +32,7 @@ mod tests;
 
 use std::time::Instant;
 
-pub use params::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams};
+pub use params::{lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE};
 pub use rowmat::{mul_add, row_matrix, RowMatrix};
 pub use triplets::{assemble, Triplets};
 
@@ -51,6 +51,8 @@ pub const LU_RESIDUAL_LIMIT: f64 = 1e-6;
 pub struct SolveReport {
     /// e.g. `"lu"`, `"bicgstab+ilut(drop=1e-5,fill=20)"`.
     pub method: String,
+    /// Why `kind = "auto"` chose `method` (`None` for an explicit kind).
+    pub choice: Option<String>,
     /// Krylov iterations (BiCGSTAB, summed over restarts); 1 for LU.
     pub iterations: usize,
     /// True `‖b − A x‖₂ / ‖b‖₂` of the system actually solved: the
@@ -239,16 +241,18 @@ pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Resul
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
-    if let SolverKind::Bicgstab { tolerance, .. } = params.kind {
+    let (kind, choice) = params.kind.resolve(n as f64, a.compute_nnz() as f64, crate::output::available_memory_bytes());
+    if let SolverKind::Bicgstab { tolerance, .. } = kind {
         if !(tolerance > 0.0 && tolerance.is_finite()) {
             return Err(SolveError::Dimension { detail: format!("BiCGSTAB tolerance must be positive and finite, got {tolerance}") });
         }
     }
 
-    let method = params.kind.label();
+    let method = kind.label();
     if n == 0 {
         let report = SolveReport {
             method,
+            choice,
             iterations: 0,
             relative_residual: 0.0,
             original_relative_residual: 0.0,
@@ -275,7 +279,8 @@ pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Resul
         (a, std::borrow::Cow::Borrowed(b))
     };
 
-    match params.kind {
+    match kind {
+        SolverKind::Auto { .. } => unreachable!("resolved above"),
         SolverKind::Lu => {
             let lu = lu::SparseLu::factor(a_work)?;
             let setup_seconds = t_setup.elapsed().as_secs_f64();
@@ -289,6 +294,7 @@ pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Resul
                 x,
                 SolveReport {
                     method,
+                    choice,
                     iterations: 1,
                     relative_residual: relres,
                     original_relative_residual,
@@ -315,6 +321,7 @@ pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Resul
                     out.x,
                     SolveReport {
                         method,
+                        choice,
                         iterations: out.iterations,
                         relative_residual: out.relative_residual,
                         original_relative_residual,

@@ -63,7 +63,27 @@ pub enum SolverKind {
         /// = 2 preconditioner applications + 2 products with `A`).
         max_iterations: usize,
     },
+    /// LU while its factors fit comfortably, else BiCGSTAB with these settings
+    /// ([`SolverKind::resolve`]).
+    Auto {
+        /// Right preconditioner of the iterative choice.
+        preconditioner: Preconditioner,
+        /// Its target true relative residual.
+        tolerance: f64,
+        /// Its iteration budget.
+        max_iterations: usize,
+    },
 }
+
+/// Estimated bytes of faer's sparse-LU factors of a matrix with `nonzeros` entries and
+/// `unknowns` rows: `34 N^0.26` per nonzero, fitted on the Kirsch plate (PHS p = 4,
+/// 3.8e4 and 1.5e5 unknowns, measured peaks 1.27 and 7.10 GB; see `resources`).
+pub fn lu_factor_bytes(nonzeros: f64, unknowns: f64) -> f64 {
+    nonzeros * 34.0 * unknowns.max(1.0).powf(0.26)
+}
+
+/// Fraction of the available memory that `auto` lets the LU factors take.
+pub const AUTO_LU_SHARE: f64 = 0.5;
 
 impl SolverKind {
     /// Its name in a scene.
@@ -71,6 +91,36 @@ impl SolverKind {
         match self {
             SolverKind::Lu => SolverMethod::Lu,
             SolverKind::Bicgstab { .. } => SolverMethod::Bicgstab,
+            SolverKind::Auto { .. } => SolverMethod::Auto,
+        }
+    }
+
+    /// The solver that runs on a system of `unknowns` rows and `nonzeros` entries with
+    /// `available` bytes of memory, and for `Auto` why: LU when its estimated factors
+    /// ([`lu_factor_bytes`]) take at most [`AUTO_LU_SHARE`] of the available memory
+    /// (or the available memory is unknown), else BiCGSTAB with the `Auto` settings.
+    pub fn resolve(&self, unknowns: f64, nonzeros: f64, available: Option<f64>) -> (SolverKind, Option<String>) {
+        let SolverKind::Auto { preconditioner, tolerance, max_iterations } = *self else { return (*self, None) };
+        let factors = lu_factor_bytes(nonzeros, unknowns);
+        match available {
+            Some(a) if factors > AUTO_LU_SHARE * a => (
+                SolverKind::Bicgstab { preconditioner, tolerance, max_iterations },
+                Some(format!(
+                    "auto: LU factors estimated at {:.2} GB, more than {AUTO_LU_SHARE} of the {:.2} GB available: BiCGSTAB+{}",
+                    factors / 1e9,
+                    a / 1e9,
+                    preconditioner.display_name()
+                )),
+            ),
+            Some(a) => (
+                SolverKind::Lu,
+                Some(format!(
+                    "auto: LU factors estimated at {:.2} GB, within {AUTO_LU_SHARE} of the {:.2} GB available",
+                    factors / 1e9,
+                    a / 1e9
+                )),
+            ),
+            None => (SolverKind::Lu, Some("auto: available memory unknown, LU".to_string())),
         }
     }
 
@@ -84,6 +134,7 @@ impl SolverKind {
     pub fn label(&self) -> String {
         match self {
             SolverKind::Lu => "lu".to_string(),
+            SolverKind::Auto { preconditioner, .. } => format!("auto(lu|bicgstab+{})", preconditioner.label()),
             SolverKind::Bicgstab { preconditioner, .. } => {
                 format!("bicgstab+{}", preconditioner.label())
             }
@@ -93,7 +144,8 @@ impl SolverKind {
 
 choice! {
     /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
-    pub enum SolverMethod("solver.kind", default Some(SolverMethod::Lu), note "\"lu\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"") {
+    pub enum SolverMethod("solver.kind", default Some(SolverMethod::Auto), note "\"auto\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"") {
+        Auto = "auto" => "LU while its estimated factors take at most half the available memory, else BiCGSTAB with the preconditioner, tolerance and max_iterations given (reason in summary.json, `solver.choice`)",
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
     }

@@ -356,3 +356,22 @@ fn no_convergence_reports_the_true_residual() {
     assert!((relative_residual - independent).abs() <= 10.0 * residual_floor(&t, &out.x, &b));
     assert!((relative_residual - 1.0).abs() > 1e-3, "looks like the initial residual");
 }
+
+/// `auto` takes LU while the estimated factors need at most half the available memory
+/// and the iterative settings above it, and says why; with the memory unknown it takes
+/// LU; an explicit kind is never changed.
+#[test]
+fn auto_resolves_by_the_memory_of_the_factors() {
+    let auto = SolverKind::Auto { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 };
+    let (n, nnz) = (1e5, 2.5e6);
+    let factors = lu_factor_bytes(nnz, n);
+    assert!(factors > 1e9 && factors < 1e10, "{factors}");
+    let (kind, why) = auto.resolve(n, nnz, Some(4.0 * factors));
+    assert_eq!(kind, SolverKind::Lu);
+    assert!(why.unwrap().contains("within"));
+    let (kind, why) = auto.resolve(n, nnz, Some(1.5 * factors));
+    assert_eq!(kind, SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 });
+    assert!(why.unwrap().contains("BiCGSTAB+ILU(0)"));
+    assert_eq!(auto.resolve(n, nnz, None).0, SolverKind::Lu);
+    assert_eq!(SolverKind::Lu.resolve(n, nnz, Some(1.0)), (SolverKind::Lu, None));
+}

@@ -31,6 +31,18 @@ pub fn peak_memory_bytes() -> Option<u64> {
     Some(now.max(folded))
 }
 
+/// Memory available to a run, bytes: `MLSM_MEMORY_LIMIT` if set (a number of bytes,
+/// e.g. `4e9`), else Linux's `MemAvailable`; `None` when neither is known.
+pub fn available_memory_bytes() -> Option<f64> {
+    if let Ok(v) = std::env::var("MLSM_MEMORY_LIMIT") {
+        return v.trim().parse::<f64>().ok().filter(|x| *x > 0.0);
+    }
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
 /// A point from which [`peak_since`] measures.
 #[derive(Debug, Clone, Copy)]
 pub struct PeakMark(usize);

@@ -28,7 +28,7 @@ mod system;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
-pub use memory::{peak_memory_bytes, peak_since, restart_peak, PeakMark};
+pub use memory::{available_memory_bytes, peak_memory_bytes, peak_since, restart_peak, PeakMark};
 pub use plot::{write_loglog_svg, Series};
 pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};
 pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};

@@ -7,7 +7,8 @@ use crate::linalg::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod
 use crate::problem::spec::SolverSpec;
 use crate::problem::ProblemError;
 
-/// The BiCGSTAB settings of `s`, defaults from [`SolverKind::default_bicgstab`].
+/// The BiCGSTAB settings of `s` (also those of `auto`'s iterative choice), defaults
+/// from [`SolverKind::default_bicgstab`].
 fn bicgstab(c: &Ctx, s: &SolverSpec) -> Result<SolverKind, ProblemError> {
     let SolverKind::Bicgstab { preconditioner: default_p, tolerance: default_t, max_iterations: default_m } =
         SolverKind::default_bicgstab()
@@ -67,11 +68,17 @@ pub(super) fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemErr
                 ("max_iterations", s.max_iterations.is_some()),
             ];
             if let Some((k, _)) = iterative_only.iter().find(|(_, p)| *p) {
-                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\"");
+                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\" or \"auto\"");
             }
             SolverKind::Lu
         }
         SolverMethod::Bicgstab => bicgstab(c, s)?,
+        SolverMethod::Auto => match bicgstab(c, s)? {
+            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
+                SolverKind::Auto { preconditioner, tolerance, max_iterations }
+            }
+            other => other,
+        },
     };
     Ok(SolverParams { kind, equilibrate })
 }
