@@ -16,8 +16,8 @@
 //!   we always pass an explicitly zeroed `x` with `MaybeNonZero`.
 //!
 //! The wrapper: run faer's BiCGSTAB; whenever it claims convergence, compute
-//! the true residual of the **original** system (`accept`, supplied by the
-//! caller). If it is above the tolerance, restart from the current `x` with a
+//! the true residual (`accept`, supplied by the caller: `linalg::solve` passes
+//! that of the equilibrated system it iterates on). If it is above the tolerance, restart from the current `x` with a
 //! tightened inner tolerance (restarting also replaces the drifted recursive
 //! residual by the true one, cf. van der Vorst & Ye, *SIAM J. Sci. Comput.* 22
 //! (2000) 1035–1062), until the iteration budget or [`MAX_RESTARTS`] is spent.
@@ -57,7 +57,7 @@ pub struct BicgstabOutcome {
     pub status: Status,
     /// Total BiCGSTAB iterations over all restarts.
     pub iterations: usize,
-    /// `accept(x)`: true relative residual of the original system.
+    /// `accept(x)`: the true relative residual the caller measures by.
     pub relative_residual: f64,
     /// Restarts caused by recursive-vs-true residual disagreement.
     pub restarts: usize,
@@ -66,12 +66,12 @@ pub struct BicgstabOutcome {
 /// Solve `a x = b` by right-preconditioned BiCGSTAB from `x₀ = 0`.
 ///
 /// `a`, `b` are the system actually iterated on (possibly row-equilibrated);
-/// `accept(x)` must return the true relative residual of the **original**
-/// system, and convergence means `accept(x) ≤ tolerance`. The inner faer
+/// `accept(x)` returns a true relative residual (of this system, or of the
+/// original one), and convergence means `accept(x) ≤ tolerance`. The inner faer
 /// tolerance starts at `tolerance` and, after a false convergence claim, is
 /// tightened to `½ · tolerance · (scaled residual / original residual)`
-/// (floored at machine ε) so that the original-system target is met even when
-/// row scaling weights the two residual norms differently.
+/// (floored at machine ε) so that the target is met even when `accept`
+/// measures a differently scaled system.
 pub fn solve_bicgstab(
     a: &SparseMatrix,
     b: &[f64],

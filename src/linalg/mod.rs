@@ -312,7 +312,11 @@ pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Resul
             let pc = precond::BuiltPreconditioner::build(a_work, preconditioner)?;
             let setup_seconds = t_setup.elapsed().as_secs_f64();
             let t_solve = Instant::now();
-            let out = bicgstab::solve_bicgstab(a_work, &b_work, &pc, tolerance, max_iterations, |x| relative_residual(a, x, b));
+            // Converged means the true residual of the solved (equilibrated) system is
+            // within the tolerance, the same measure LU's checks use: the original
+            // system's residual is dominated by its largest rows (LU's accepted
+            // solutions of the shipped scenes leave 3e-14 to 7e-9 there).
+            let out = bicgstab::solve_bicgstab(a_work, &b_work, &pc, tolerance, max_iterations, |x| relative_residual(a_work, x, &b_work));
             let solve_seconds = t_solve.elapsed().as_secs_f64();
             let name = format!("BiCGSTAB+{}", preconditioner.display_name());
             let original_relative_residual = relative_residual(a, &out.x, b);

@@ -56,8 +56,8 @@ pub enum SolverKind {
     Bicgstab {
         /// Right preconditioner.
         preconditioner: Preconditioner,
-        /// Target TRUE relative residual `‖b − A x‖₂/‖b‖₂` of the original
-        /// system (`> 0`).
+        /// Target true relative residual `‖b − A x‖₂/‖b‖₂` of the solved
+        /// (row-equilibrated, when equilibration is on) system (`> 0`).
         tolerance: f64,
         /// Iteration budget, summed over verification restarts (one iteration
         /// = 2 preconditioner applications + 2 products with `A`).

@@ -64,6 +64,26 @@ pub enum BuiltPreconditioner {
     Ilut(Ilut),
 }
 
+/// `a` with an explicit zero stored at every missing diagonal entry, or `None` when
+/// every diagonal entry is already stored.
+fn with_stored_diagonal(a: &SparseMatrix) -> Result<Option<SparseMatrix>, SolveError> {
+    let n = a.ncols();
+    let missing: Vec<usize> = (0..n).filter(|&j| a.symbolic().row_idx_of_col_raw(j).binary_search(&j).is_err()).collect();
+    if missing.is_empty() {
+        return Ok(None);
+    }
+    let mut t = super::Triplets::new(n);
+    for j in 0..n {
+        for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+            t.push(i, j, v);
+        }
+    }
+    for j in missing {
+        t.push(j, j, 0.0);
+    }
+    super::assemble(&t).map(Some)
+}
+
 impl BuiltPreconditioner {
     /// Build the preconditioner `kind` for `a`.
     /// Errors: [`SolveError::Singular`] for zero pivots / missing diagonals.
@@ -71,6 +91,12 @@ impl BuiltPreconditioner {
         Ok(match kind {
             Preconditioner::Jacobi => BuiltPreconditioner::Jacobi(Jacobi::try_new(a)?),
             Preconditioner::Ilu0 => {
+                // Ghost-node rows carry no diagonal entry (their unknown is coupled only
+                // through the stencils of other nodes); ILU(0) on the pattern of A + 0 I
+                // updates those pivots during elimination like any other (Kirsch: 133
+                // BiCGSTAB iterations where the bare pattern is refused).
+                let padded = with_stored_diagonal(a)?;
+                let a = padded.as_ref().unwrap_or(a);
                 let p = Ilu0::try_new(a.as_ref()).map_err(|e| match e {
                     Ilu0Error::MissingDiagonal { col } => SolveError::Singular {
                         detail: format!(
