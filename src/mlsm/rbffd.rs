@@ -11,7 +11,7 @@
 //!
 //! so that `L` is exact on the radial functions and on every polynomial of degree `p`;
 //! physical weights are `w / s^order(L)`. The system is solved by LU with partial
-//! pivoting. `P` must have full column rank (checked by QR, like the least-squares
+//! pivoting (faer). `P` must have full column rank (checked by QR, like the least-squares
 //! bases), and the solve is refused when the weights show that the system lost more
 //! than [`AMPLIFICATION_LIMIT`] of the precision (flat Gaussian, MQ or IMQ kernels).
 //!
@@ -80,7 +80,11 @@ impl Radial {
                     // Every derivative up to second order vanishes at the centre for b >= 3.
                     return (0.0, 0.0, 0.0);
                 }
-                (r.powf(b), b * r.powf(b - 2.0), b * (b - 2.0) * r.powf(b - 4.0))
+                // Integer powers by multiplication (`powf` was most of the cost of a
+                // stencil: 1.95 s -> see BENCHMARKS.md, "Shapes per node").
+                let k = order as i32;
+                let rk2 = r.powi(k - 2);
+                (rk2 * r * r, b * rk2, b * (b - 2.0) * rk2 / (r * r))
             }
             Radial::Gaussian { .. } => {
                 let f = (-(r * r) / (c * c)).exp();
@@ -147,19 +151,25 @@ pub fn shape_functions(
     }
 
     let size = n + m;
-    let mut sys = DMatrix::<f64>::zeros(size, size);
+    // faer's dense LU (blocked, vectorised): about twice as fast as nalgebra's at
+    // these sizes (n + m ~ 50; BENCHMARKS.md, "Shapes per node").
+    let mut sys = faer::Mat::<f64>::zeros(size, size);
     for i in 0..n {
-        for j in 0..n {
+        // A is symmetric: evaluate each pair once.
+        for j in 0..i {
             let r = (z[i][0] - z[j][0]).hypot(z[i][1] - z[j][1]);
-            sys[(i, j)] = radial.profile(r, c).0;
+            let v = radial.profile(r, c).0;
+            sys[(i, j)] = v;
+            sys[(j, i)] = v;
         }
+        sys[(i, i)] = radial.profile(0.0, c).0;
         for k in 0..m {
             sys[(i, n + k)] = p_mat[(i, k)];
             sys[(n + k, i)] = p_mat[(i, k)];
         }
     }
     let fact = |k: u32| (1..=k).product::<u32>() as f64;
-    let mut rhs = DMatrix::<f64>::zeros(size, ops.len());
+    let mut rhs = faer::Mat::<f64>::zeros(size, ops.len());
     for (col, &op) in ops.iter().enumerate() {
         for j in 0..n {
             rhs[(j, col)] = radial.operator_at_centre(op, z[j], c);
@@ -169,12 +179,24 @@ pub fn shape_functions(
             rhs[(n + k, col)] = if (a, b) == target { fact(a) * fact(b) } else { 0.0 };
         }
     }
-    let norm = |m: &DMatrix<f64>| m.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    let solution = sys.clone().lu().solve(&rhs).filter(|w| w.iter().all(|v| v.is_finite()));
-    let amplification = solution.as_ref().map_or(f64::INFINITY, |w| norm(w) * norm(&sys) / norm(&rhs).max(f64::MIN_POSITIVE));
-    let Some(w) = solution.filter(|_| amplification <= AMPLIFICATION_LIMIT) else {
-        return Err(RankDeficient { ratio: 1.0 / amplification, basis_size: m });
+    let norm = |m: &faer::Mat<f64>| {
+        let mut a = 0.0f64;
+        for j in 0..m.ncols() {
+            for v in m.col(j).iter() {
+                a = a.max(v.abs());
+            }
+        }
+        a
     };
+    let w = faer::linalg::solvers::Solve::solve(&sys.partial_piv_lu(), &rhs);
+    let amplification = if (0..w.ncols()).all(|j| w.col(j).iter().all(|v| v.is_finite())) {
+        norm(&w) * norm(&sys) / norm(&rhs).max(f64::MIN_POSITIVE)
+    } else {
+        f64::INFINITY
+    };
+    if amplification > AMPLIFICATION_LIMIT {
+        return Err(RankDeficient { ratio: 1.0 / amplification, basis_size: m });
+    }
     for (col, &op) in ops.iter().enumerate() {
         let scale = s.powi(-op.order());
         for j in 0..n {
