@@ -231,6 +231,35 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
 ///
 /// An empty system (`n = 0`) returns an empty solution.
 pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    solve_with_memory(a, b, params, crate::output::available_memory_bytes())
+}
+
+/// [`solve_scaled`] with `available` bytes of memory for `auto`'s choice. When `auto`
+/// goes iterative and BiCGSTAB with the chosen preconditioner stops or breaks down,
+/// it tries ILU(0) before giving up (on the cantilever grid ILUT diverges where ILU(0)
+/// converges; BENCHMARKS.md), and says so in `choice`.
+pub(crate) fn solve_with_memory(
+    a: &SparseMatrix,
+    b: &[f64],
+    params: &SolverParams,
+    available: Option<f64>,
+) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    let (kind, choice) = params.kind.resolve(a.nrows() as f64, a.compute_nnz() as f64, available);
+    if let (SolverKind::Auto { .. }, SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }) = (params.kind, kind) {
+        let explicit = |p| SolverParams { kind: SolverKind::Bicgstab { preconditioner: p, tolerance, max_iterations }, ..*params };
+        let with_choice = |(x, mut r): (Vec<f64>, SolveReport), why: Option<String>| {
+            r.choice = why;
+            (x, r)
+        };
+        return match solve_with_memory(a, b, &explicit(preconditioner), available) {
+            Ok(done) => Ok(with_choice(done, choice)),
+            Err(e @ (SolveError::NoConvergence { .. } | SolveError::Singular { .. })) if preconditioner != Preconditioner::Ilu0 => {
+                let why = format!("{}; {e}; retried with ILU(0)", choice.unwrap_or_default());
+                solve_with_memory(a, b, &explicit(Preconditioner::Ilu0), available).map(|done| with_choice(done, Some(why)))
+            }
+            Err(e) => Err(e),
+        };
+    }
     let n = a.nrows();
     if a.ncols() != n {
         return Err(SolveError::Dimension { detail: format!("matrix is {}x{}, expected square", n, a.ncols()) });
@@ -241,7 +270,6 @@ pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Resul
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
-    let (kind, choice) = params.kind.resolve(n as f64, a.compute_nnz() as f64, crate::output::available_memory_bytes());
     if let SolverKind::Bicgstab { tolerance, .. } = kind {
         if !(tolerance > 0.0 && tolerance.is_finite()) {
             return Err(SolveError::Dimension { detail: format!("BiCGSTAB tolerance must be positive and finite, got {tolerance}") });

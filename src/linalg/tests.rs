@@ -400,3 +400,27 @@ fn auto_resolves_by_the_memory_of_the_factors() {
     assert_eq!(auto.resolve(n, nnz, None).0, SolverKind::Lu);
     assert_eq!(SolverKind::Lu.resolve(n, nnz, Some(1.0)), (SolverKind::Lu, None));
 }
+
+/// `auto` gone iterative retries with ILU(0) when its preconditioner stops: with a
+/// 300-iteration budget Jacobi does not converge on the collocation-like system of the
+/// test above (it needs 548 iterations there), ILU(0) does (135), and the choice says
+/// what happened; with the memory to spare it is LU without a retry.
+#[test]
+fn auto_retries_with_ilu0_when_the_iteration_stops() {
+    let (t, _, b) = navier_like(100, 20.0);
+    let a = assemble(&t).unwrap();
+    let kind = |preconditioner| SolverKind::Bicgstab { preconditioner, tolerance: 1e-10, max_iterations: 300 };
+    assert!(solve(&a, &b, &SolverParams { kind: kind(Preconditioner::Jacobi), equilibrate: true }).is_err(), "Jacobi alone must stop");
+    let auto = SolverParams {
+        kind: SolverKind::Auto { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 },
+        equilibrate: true,
+    };
+    let (x, rep) = solve_with_memory(&a, &b, &auto, Some(1.0)).unwrap();
+    assert_eq!(rep.method, "bicgstab+ilu0");
+    let why = rep.choice.unwrap();
+    assert!(why.contains("did not converge") && why.contains("retried with ILU(0)"), "{why}");
+    let (x_lu, _) = solve(&a, &b, &SolverParams::default()).unwrap();
+    assert!(max_rel_diff(&x, &x_lu) < 1e-7);
+    let (_, rep) = solve_with_memory(&a, &b, &auto, Some(1e12)).unwrap();
+    assert_eq!(rep.method, "lu");
+}
