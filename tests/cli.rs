@@ -69,6 +69,11 @@ fn mlsm(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mlsm")).args(args).current_dir(dir).output().expect("cannot start the mlsm binary")
 }
 
+/// The text of `problems/<name>.toml`.
+fn shipped(name: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml"))).unwrap()
+}
+
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
@@ -191,8 +196,8 @@ fn run_reports_its_estimate_and_strict_turns_warnings_into_exit_4() {
 #[test]
 fn run_writes_solution_and_summary() {
     let tmp = TempDir::new().unwrap();
-    let shipped = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/manufactured_dirichlet.toml")).unwrap();
-    write(tmp.path(), "scene.toml", &edit(&shipped, &[("spacing = 0.025", "spacing = 0.05")]));
+    let text = shipped("manufactured_dirichlet");
+    write(tmp.path(), "scene.toml", &edit(&text, &[("spacing = 0.025", "spacing = 0.05")]));
     let res = tmp.path().join("res");
     let o = mlsm(tmp.path(), &["--quiet", "run", "scene.toml", "--out", res.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
@@ -687,7 +692,7 @@ fn convergence_keeps_finished_levels_when_a_later_one_fails() {
 #[test]
 fn a_run_of_more_than_1e8_steps_asks_for_allow_long() {
     let tmp = TempDir::new().unwrap();
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    let text = shipped("steel_plate_dynamic");
     assert!(text.contains("end_time = 1e-3"));
     write(tmp.path(), "long.toml", &text.replace("end_time = 1e-3", "end_time = 1e3"));
     let res = tmp.path().join("res");
@@ -800,7 +805,7 @@ fn compare_refuses_bad_requests() {
 #[test]
 fn dynamic_run_writes_series_energies_and_summary() {
     let tmp = TempDir::new().unwrap();
-    let scene = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    let scene = shipped("steel_plate_dynamic");
     write(tmp.path(), "dyn.toml", &edit(&scene, &[("m = 6", "m = 3"), ("snapshots = 20", "snapshot_every = 10")]));
     let res = tmp.path().join("res");
     let o = mlsm(tmp.path(), &["run", "dyn.toml", "--out", res.to_str().unwrap()]);
@@ -841,7 +846,7 @@ fn dynamic_run_writes_series_energies_and_summary() {
 #[test]
 fn dynamic_compare_against_mlsm_elastodynamics() {
     let tmp = TempDir::new().unwrap();
-    let scene = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    let scene = shipped("steel_plate_dynamic");
     write(
         tmp.path(),
         "dyn.toml",
@@ -868,7 +873,7 @@ fn dynamic_compare_against_mlsm_elastodynamics() {
 #[test]
 fn an_interrupted_dynamic_run_leaves_no_partial_series() {
     let tmp = TempDir::new().unwrap();
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    let text = shipped("steel_plate_dynamic");
     assert!(text.contains("end_time = 1e-3"));
     write(tmp.path(), "short.toml", &text);
     // 500 times longer: about 1.7e6 steps, minutes; interrupted after two snapshots.
@@ -919,7 +924,7 @@ fn an_interrupted_dynamic_run_leaves_no_partial_series() {
 #[test]
 fn dynamic_runs_warn_about_energy_drift() {
     let tmp = TempDir::new().unwrap();
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    let text = shipped("steel_plate_dynamic");
     assert!(text.contains("integrator = \"rk4\""));
     write(tmp.path(), "rk4.toml", &text);
     write(tmp.path(), "emu.toml", &text.replace("integrator = \"rk4\"", "integrator = \"emu\""));
@@ -995,7 +1000,7 @@ fn export_system_writes_a_system_that_other_solvers_can_read() {
     let ghosts = csv.lines().skip(1).filter(|l| l.ends_with(",1")).count();
     assert_eq!(ghosts, 2 * s["ghost_nodes"].as_u64().unwrap() as usize, "two unknowns per ghost");
 
-    let scene = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/steel_plate_dynamic.toml")).unwrap();
+    let scene = shipped("steel_plate_dynamic");
     write(tmp.path(), "dynamic.toml", &scene);
     let o = mlsm(tmp.path(), &["--quiet", "run", "dynamic.toml", "--out", res.to_str().unwrap(), "--export-system", sys.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", describe(&o));

@@ -32,11 +32,6 @@ pub(super) struct Series<'a> {
     finished: bool,
 }
 
-/// An I/O failure on `path`.
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
-    move |source| OutputError::Io { path: path.to_path_buf(), source }
-}
-
 impl<'a> Series<'a> {
     /// A writer into `dir`; nothing is created yet.
     pub(super) fn new(dir: &Path, domain: &'a Domain) -> Self {
@@ -56,9 +51,9 @@ impl<'a> Series<'a> {
         let staging = self.dir.join(STAGING);
         if !self.staged {
             if staging.exists() {
-                std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
+                std::fs::remove_dir_all(&staging).map_err(|e| OutputError::io(&staging, e))?;
             }
-            std::fs::create_dir_all(&staging).map_err(io(&staging))?;
+            std::fs::create_dir_all(&staging).map_err(|e| OutputError::io(&staging, e))?;
             self.staged = true;
         }
         let file = format!("step_{:06}.vtu", s.step);
@@ -74,9 +69,9 @@ impl<'a> Series<'a> {
         let (staging, snapshots) = (self.dir.join(STAGING), self.dir.join(SNAPSHOTS));
         if staging.exists() {
             if snapshots.exists() {
-                std::fs::remove_dir_all(&snapshots).map_err(io(&snapshots))?;
+                std::fs::remove_dir_all(&snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
             }
-            std::fs::rename(&staging, &snapshots).map_err(io(&snapshots))?;
+            std::fs::rename(&staging, &snapshots).map_err(|e| OutputError::io(&snapshots, e))?;
         }
         self.finished = true;
         output::write_pvd(&self.dir.join("series.pvd"), &self.entries)?;

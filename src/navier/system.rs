@@ -112,7 +112,7 @@ mod tests {
             let disc = Discretisation::new(&case, &params, Some(exact.as_ref()), &mut StageTimer::new(&Silent)).unwrap();
             assert!(disc.ghost_count() > 0, "{fill:?}: the traction edges have ghosts");
             let (triplets, rhs) = System { case: &case, disc: &disc, exact: Some(exact.as_ref()) }.assemble().unwrap();
-            let u = disc.dofs.from_displacements(|i| exact.displacement(ghost_aware_position(&disc, i)));
+            let u = disc.dofs.from_displacements(|i| exact.displacement(disc.point(i)));
             let (mut au, mut scale) = (vec![0.0; rhs.len()], vec![0.0; rhs.len()]);
             for t in triplets.entries() {
                 au[t.row] += t.val * u[t.col];
@@ -121,17 +121,5 @@ mod tests {
             let worst = (0..rhs.len()).map(|k| (au[k] - rhs[k]).abs() / (scale[k] + rhs[k].abs())).fold(0.0, f64::max);
             assert!(worst < 1e-12, "{fill:?}: worst relative row residual {worst:.1e}");
         }
-    }
-
-    /// Position of node or ghost `i` (ghosts are nodes `n..` of the supports).
-    fn ghost_aware_position(disc: &Discretisation, i: usize) -> [f64; 2] {
-        let n = disc.nodes.len();
-        if i < n {
-            return disc.nodes.positions[i];
-        }
-        let owner = disc.ghost.iter().position(|g| *g == Some(i)).expect("every ghost has an owner");
-        let (p, normal) = (disc.nodes.positions[owner], disc.nodes.normal(owner));
-        let h = disc.nodes.local_spacing[owner];
-        [p[0] + h * normal[0], p[1] + h * normal[1]]
     }
 }
