@@ -23,6 +23,7 @@ use crate::case::Case;
 use crate::linalg::{lu_factor_bytes, SolverKind};
 use crate::navier::estimate::reference_approximation;
 use crate::navier::{EstimateMethod, NavierParams};
+use crate::output::available_memory_bytes;
 use crate::peridynamics::PdParams;
 use crate::problem::{validate, Problem, ProblemError};
 use serde::Serialize;
@@ -48,7 +49,7 @@ pub struct MemoryEstimate {
 /// Bytes of the solver for `nonzeros` and `unknowns`: assembly and matrix, plus
 /// factors or preconditioner (`auto` resolved as the solve will resolve it).
 fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
-    match kind.resolve(unknowns, nonzeros, available_bytes()).0 {
+    match kind.resolve(unknowns, nonzeros, available_memory_bytes()).0 {
         SolverKind::Bicgstab { .. } => 88.0 * nonzeros,
         _ => 40.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
     }
@@ -100,16 +101,21 @@ pub fn of(p: &Problem) -> MemoryEstimate {
     }
 }
 
-/// Memory available to a run, bytes (`output::available_memory_bytes`).
-pub fn available_bytes() -> Option<f64> {
-    crate::output::available_memory_bytes()
-}
-
 /// The estimate of `p`, or a refusal naming the setting that drives it when it
-/// exceeds the available memory.
+/// exceeds the available memory (or naming `MLSM_MEMORY_LIMIT` when it is set to
+/// something other than a positive number of bytes).
 pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
+    if let Ok(v) = std::env::var("MLSM_MEMORY_LIMIT") {
+        if !v.trim().parse::<f64>().is_ok_and(|x| x > 0.0 && x.is_finite()) {
+            return Err(ProblemError {
+                file: p.source.clone(),
+                field: "MLSM_MEMORY_LIMIT".into(),
+                reason: format!("the environment variable is {v:?}, not a positive number of bytes (e.g. 4e9)"),
+            });
+        }
+    }
     let e = of(p);
-    match available_bytes() {
+    match available_memory_bytes() {
         Some(available) if e.peak_bytes > available => Err(ProblemError {
             file: p.source.clone(),
             field: e.driver.into(),
@@ -137,5 +143,5 @@ pub fn describe(e: &MemoryEstimate) -> String {
 
 /// Whether `e` needs more than half the available memory (a warning).
 pub fn above_half(e: &MemoryEstimate) -> Option<f64> {
-    available_bytes().filter(|a| e.peak_bytes > 0.5 * a)
+    available_memory_bytes().filter(|a| e.peak_bytes > 0.5 * a)
 }

@@ -81,4 +81,9 @@ fn runs_that_cannot_fit_are_refused_naming_the_setting() {
         assert!(t0.elapsed().as_secs_f64() < 5.0, "{args:?}: refused only after {:?}", t0.elapsed());
         assert!(!out.exists(), "a refused run wrote output");
     }
+    // A limit that is not a number of bytes is refused, not ignored.
+    let o = mlsm(&["run", "problems/kirsch.toml", "--out", out.to_str().unwrap()], Some("lots"));
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("MLSM_MEMORY_LIMIT"), "{}", describe(&o));
+    assert!(!out.exists(), "a refused run wrote output");
 }
