@@ -9,7 +9,8 @@
 //! solve, LU    = Z (40 + 34 N^0.26)       (triplets and matrix, 40 B per nonzero; the LU
 //!                                          factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (40 + 48)           (matrix and an ILU of about three times its size)
-//! solve, auto  = LU or BiCGSTAB as `SolverKind::resolve` will choose
+//! solve, GMRES = 60 Z + (restart + 6) 8 N  (matrix, equilibrated copy, AMG levels, Krylov basis)
+//! solve, auto  = LU or GMRES as `SolverKind::resolve` will choose
 //! peak         = max(run, error-estimate reference) + 16 MB
 //! ```
 //!
@@ -51,6 +52,9 @@ pub struct MemoryEstimate {
 fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
     match kind.resolve(unknowns, nonzeros, available_memory_bytes()).0 {
         SolverKind::Bicgstab { .. } => 88.0 * nonzeros,
+        // Matrix, its equilibrated copy and AMG's rows of it (16 B per entry each), the
+        // coarse levels, and the Krylov basis.
+        SolverKind::Gmres { restart, .. } => 60.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
         _ => 40.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
     }
 }

@@ -490,8 +490,8 @@ fn invalid_scenes_exit_2_naming_the_field() {
         ("unknown solver", Some(scene_plus("[solver]\nkind = \"cg\"\n")), &["solver.kind", "cg"]),
         (
             "unknown preconditioner",
-            Some(scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"amg\"\n")),
-            &["solver.preconditioner", "amg"],
+            Some(scene_plus("[solver]\nkind = \"bicgstab\"\npreconditioner = \"multigrid\"\n")),
+            &["solver.preconditioner", "multigrid"],
         ),
         ("tolerance = 0", Some(scene_plus("[solver]\nkind = \"bicgstab\"\ntolerance = 0.0\n")), &["solver.tolerance"]),
         ("unknown exact kind", Some(scene(&[("kind = \"manufactured\"", "kind = \"hertz\"")])), &["exact.kind", "hertz"]),
@@ -1008,12 +1008,12 @@ fn export_system_writes_a_system_that_other_solvers_can_read() {
 }
 
 /// `solver.kind = "auto"` (the default) runs LU while the estimated LU factors take at
-/// most half the available memory and BiCGSTAB above it, and says which and why in
+/// most half the available memory and GMRES + AMG above it, and says which and why in
 /// summary.json. manufactured_dirichlet at h = 0.0125 (6561 nodes): factors estimated at
 /// about 0.1 GB, so a 150 MB limit (MLSM_MEMORY_LIMIT) makes it iterative, while the
 /// whole run still fits; both solutions agree to the iterative tolerance's level.
 #[test]
-fn auto_solver_switches_to_bicgstab_when_lu_does_not_fit_comfortably() {
+fn auto_solver_switches_to_gmres_when_lu_does_not_fit_comfortably() {
     let tmp = TempDir::new().unwrap();
     write(tmp.path(), "scene.toml", &scene_plus("[estimate]\nmethod = \"none\"\n"));
     let run = |limit: Option<&str>, out: &str| {
@@ -1033,8 +1033,8 @@ fn auto_solver_switches_to_bicgstab_when_lu_does_not_fit_comfortably() {
     assert_eq!(roomy["solver"]["method"], "lu", "{roomy}");
     assert!(roomy["solver"]["choice"].as_str().unwrap().contains("within"), "{roomy}");
     let tight = run(Some("150e6"), "tight");
-    assert!(tight["solver"]["method"].as_str().unwrap().starts_with("bicgstab"), "{tight}");
+    assert!(tight["solver"]["method"].as_str().unwrap().starts_with("gmres(30)+amg"), "{tight}");
     assert!(tight["solver"]["choice"].as_str().unwrap().contains("more than 0.5"), "{tight}");
     let (a, b) = (roomy["errors"]["e_inf_u"].as_f64().unwrap(), tight["errors"]["e_inf_u"].as_f64().unwrap());
-    assert!((a - b).abs() <= 1e-6 * a.max(1e-12) + 1e-9, "LU {a:e} vs BiCGSTAB {b:e}");
+    assert!((a - b).abs() <= 1e-6 * a.max(1e-12) + 1e-9, "LU {a:e} vs GMRES {b:e}");
 }

@@ -18,7 +18,10 @@
 //! is not finite, or (for LU) whose residual exceeds [`LU_RESIDUAL_LIMIT`], is
 //! an error, never silently returned.
 
+pub mod aggregation;
+pub mod amg;
 pub mod bicgstab;
+pub mod gmres;
 pub mod ilut;
 pub mod lu;
 pub mod params;
@@ -32,7 +35,10 @@ mod tests;
 
 use std::time::Instant;
 
-pub use params::{lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE};
+pub use amg::NodeLayout;
+pub use params::{
+    lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE, GMRES_RESTART,
+};
 pub use rowmat::{mul_add, row_matrix, RowMatrix};
 pub use triplets::{assemble, Triplets};
 
@@ -184,6 +190,17 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// 1e300 then give the same digits (no overflow or underflow in the residual norms),
 /// and a solution beyond the double range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    solve_nodal(a, b, params, None)
+}
+
+/// [`solve`] of a system whose unknowns belong to nodes (`layout`): the multigrid
+/// preconditioner takes its near-null space (rigid-body modes) from their positions.
+pub fn solve_nodal(
+    a: &SparseMatrix,
+    b: &[f64],
+    params: &SolverParams,
+    layout: Option<NodeLayout>,
+) -> Result<(Vec<f64>, SolveReport), SolveError> {
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
@@ -191,7 +208,7 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
     let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
     let scale = |x: f64, e: i32| x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
     let scaled: Vec<f64> = b.iter().map(|v| scale(*v, -exponent)).collect();
-    let (x, report) = solve_scaled(a, &scaled, params)?;
+    let (x, report) = solve_with_memory(a, &scaled, params, layout, crate::output::available_memory_bytes())?;
     if let Some(i) = x.iter().position(|v| !scale(*v, exponent).is_finite()) {
         return Err(SolveError::Overflow {
             detail: format!(
@@ -214,7 +231,7 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
 /// 1. Checks that `A` is square, `b` has length `n`, every stored entry is
 ///    finite and no row is entirely zero.
 /// 2. With `params.equilibrate`, solves `D A x = D b` with
-///    `D = diag(1 / max_j |a_ij|)` ([`scaling::equilibrate_rows`]); `x` is
+///    `D = diag(±1 / max_j |a_ij|)` ([`scaling::equilibrate_rows`]); `x` is
 ///    unchanged by row scaling.
 /// 3. Runs [`lu::SparseLu`] or [`bicgstab::solve_bicgstab`].
 /// 4. Recomputes the true residual of the solved (equilibrated, if asked)
@@ -231,31 +248,33 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
 ///
 /// An empty system (`n = 0`) returns an empty solution.
 pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    solve_with_memory(a, b, params, crate::output::available_memory_bytes())
+    solve_with_memory(a, b, params, None, crate::output::available_memory_bytes())
 }
 
 /// [`solve_scaled`] with `available` bytes of memory for `auto`'s choice. When `auto`
-/// goes iterative and BiCGSTAB with the chosen preconditioner stops or breaks down,
-/// it tries ILU(0) before giving up (on the cantilever grid ILUT diverges where ILU(0)
+/// goes iterative and its Krylov solver stops or breaks down, it tries BiCGSTAB with
+/// ILU(0) before giving up (on the cantilever grid ILUT diverges where ILU(0)
 /// converges; BENCHMARKS.md), and says so in `choice`.
 pub(crate) fn solve_with_memory(
     a: &SparseMatrix,
     b: &[f64],
     params: &SolverParams,
+    layout: Option<NodeLayout>,
     available: Option<f64>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let (kind, choice) = params.kind.resolve(a.nrows() as f64, a.compute_nnz() as f64, available);
-    if let (SolverKind::Auto { .. }, SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }) = (params.kind, kind) {
-        let explicit = |p| SolverParams { kind: SolverKind::Bicgstab { preconditioner: p, tolerance, max_iterations }, ..*params };
+    if let (SolverKind::Auto { tolerance, max_iterations, .. }, SolverKind::Gmres { .. }) = (params.kind, kind) {
         let with_choice = |(x, mut r): (Vec<f64>, SolveReport), why: Option<String>| {
             r.choice = why;
             (x, r)
         };
-        return match solve_with_memory(a, b, &explicit(preconditioner), available) {
+        return match solve_with_memory(a, b, &SolverParams { kind, ..*params }, layout, available) {
             Ok(done) => Ok(with_choice(done, choice)),
-            Err(e @ (SolveError::NoConvergence { .. } | SolveError::Singular { .. })) if preconditioner != Preconditioner::Ilu0 => {
-                let why = format!("{}; {e}; retried with ILU(0)", choice.unwrap_or_default());
-                solve_with_memory(a, b, &explicit(Preconditioner::Ilu0), available).map(|done| with_choice(done, Some(why)))
+            Err(e @ (SolveError::NoConvergence { .. } | SolveError::Singular { .. })) => {
+                let why = format!("{}; {e}; retried with BiCGSTAB+ILU(0)", choice.unwrap_or_default());
+                let fallback = SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance, max_iterations };
+                solve_with_memory(a, b, &SolverParams { kind: fallback, ..*params }, layout, available)
+                    .map(|done| with_choice(done, Some(why)))
             }
             Err(e) => Err(e),
         };
@@ -270,9 +289,9 @@ pub(crate) fn solve_with_memory(
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
-    if let SolverKind::Bicgstab { tolerance, .. } = kind {
+    if let SolverKind::Bicgstab { tolerance, .. } | SolverKind::Gmres { tolerance, .. } = kind {
         if !(tolerance > 0.0 && tolerance.is_finite()) {
-            return Err(SolveError::Dimension { detail: format!("BiCGSTAB tolerance must be positive and finite, got {tolerance}") });
+            return Err(SolveError::Dimension { detail: format!("the Krylov tolerance must be positive and finite, got {tolerance}") });
         }
     }
 
@@ -337,7 +356,7 @@ pub(crate) fn solve_with_memory(
             ))
         }
         SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
-            let pc = precond::BuiltPreconditioner::build(a_work, preconditioner)?;
+            let pc = precond::BuiltPreconditioner::build(a_work, preconditioner, layout)?;
             let setup_seconds = t_setup.elapsed().as_secs_f64();
             let t_solve = Instant::now();
             // Converged means the true residual of the solved (equilibrated) system is
@@ -388,6 +407,63 @@ pub(crate) fn solve_with_memory(
                          infinite); the matrix or the preconditioner is (nearly) singular. Try lu, \
                          and check the boundary conditions (a pure-traction problem has \
                          rigid-body modes)",
+                        out.iterations
+                    ),
+                }),
+            }
+        }
+        SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart } => {
+            let pc = precond::BuiltPreconditioner::build(a_work, preconditioner, layout)?;
+            // The multigrid holds the operator in rows already; other preconditioners
+            // need it converted once.
+            let converted;
+            let rows = match pc.fine_operator() {
+                Some(rows) => rows,
+                None => {
+                    converted = amg::to_csr(a_work);
+                    &converted
+                }
+            };
+            let setup_seconds = t_setup.elapsed().as_secs_f64();
+            let t_solve = Instant::now();
+            let out = gmres::solve_gmres(rows, &b_work, |v| pc.solve_in_place(v), tolerance, max_iterations, restart);
+            let solve_seconds = t_solve.elapsed().as_secs_f64();
+            let name = format!("GMRES({restart})+{}", preconditioner.display_name());
+            let original_relative_residual = relative_residual(a, &out.x, b);
+            match out.status {
+                gmres::Status::Converged => Ok((
+                    out.x,
+                    SolveReport {
+                        method: format!("{method}{}", pc.describe()),
+                        choice,
+                        iterations: out.iterations,
+                        relative_residual: out.relative_residual,
+                        original_relative_residual,
+                        setup_seconds,
+                        solve_seconds,
+                        equilibrated: params.equilibrate,
+                        preconditioner_nonzeros: Some(pc.nonzeros()),
+                        restarts: out.restarts,
+                        subnormal_unknowns: 0,
+                        condition_estimate: None,
+                    },
+                )),
+                gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
+                    limit: if out.status == gmres::Status::IterationLimit {
+                        format!("the iteration limit (solver.max_iterations = {max_iterations})")
+                    } else {
+                        format!("stagnation (a restart cycle reduced the residual by less than {:.0} %)", 100.0 * (1.0 - gmres::STAGNATION))
+                    },
+                    restarts: out.restarts,
+                    iterations: out.iterations,
+                    relative_residual: out.relative_residual,
+                    method: name,
+                    tolerance,
+                }),
+                gmres::Status::Breakdown => Err(SolveError::Singular {
+                    detail: format!(
+                        "{name}: the iterate became NaN or infinite after {} iterations; the matrix or the \
+                         preconditioner is (nearly) singular. Try lu, and check the boundary conditions",
                         out.iterations
                     ),
                 }),

@@ -23,6 +23,9 @@ pub enum Preconditioner {
         /// Extra entries per row kept in each of L and U (`p`).
         fill: usize,
     },
+    /// Smoothed-aggregation algebraic multigrid, one V-cycle per application, with
+    /// the rigid-body modes as near-null space ([`super::amg`]).
+    Amg,
 }
 
 impl Preconditioner {
@@ -32,6 +35,7 @@ impl Preconditioner {
             Preconditioner::Jacobi => "jacobi".to_string(),
             Preconditioner::Ilu0 => "ilu0".to_string(),
             Preconditioner::Ilut { drop, fill } => format!("ilut(drop={drop:e},fill={fill})"),
+            Preconditioner::Amg => "amg".to_string(),
         }
     }
 
@@ -41,6 +45,7 @@ impl Preconditioner {
             Preconditioner::Jacobi => "Jacobi".to_string(),
             Preconditioner::Ilu0 => "ILU(0)".to_string(),
             Preconditioner::Ilut { drop, fill } => format!("ILUT(drop={drop:e}, fill={fill})"),
+            Preconditioner::Amg => "AMG".to_string(),
         }
     }
 }
@@ -63,6 +68,18 @@ pub enum SolverKind {
         /// = 2 preconditioner applications + 2 products with `A`).
         max_iterations: usize,
     },
+    /// Restarted right-preconditioned GMRES(`restart`) (Saad & Schultz 1986;
+    /// [`super::gmres`]). Converged means the same true residual as BiCGSTAB's.
+    Gmres {
+        /// Right preconditioner.
+        preconditioner: Preconditioner,
+        /// Target true relative residual of the solved system (`> 0`).
+        tolerance: f64,
+        /// Iteration budget (products with `A`), over all restarts.
+        max_iterations: usize,
+        /// Krylov vectors kept before a restart.
+        restart: usize,
+    },
     /// LU while its factors fit comfortably, else BiCGSTAB with these settings
     /// ([`SolverKind::resolve`]).
     Auto {
@@ -82,6 +99,10 @@ pub fn lu_factor_bytes(nonzeros: f64, unknowns: f64) -> f64 {
     nonzeros * 34.0 * unknowns.max(1.0).powf(0.26)
 }
 
+/// Krylov vectors GMRES keeps by default (30 vectors of the unknowns: 0.5 GB at
+/// 2e6 unknowns).
+pub const GMRES_RESTART: usize = 30;
+
 /// Fraction of the available memory that `auto` lets the LU factors take.
 pub const AUTO_LU_SHARE: f64 = 0.5;
 
@@ -91,6 +112,7 @@ impl SolverKind {
         match self {
             SolverKind::Lu => SolverMethod::Lu,
             SolverKind::Bicgstab { .. } => SolverMethod::Bicgstab,
+            SolverKind::Gmres { .. } => SolverMethod::Gmres,
             SolverKind::Auto { .. } => SolverMethod::Auto,
         }
     }
@@ -98,15 +120,16 @@ impl SolverKind {
     /// The solver that runs on a system of `unknowns` rows and `nonzeros` entries with
     /// `available` bytes of memory, and for `Auto` why: LU when its estimated factors
     /// ([`lu_factor_bytes`]) take at most [`AUTO_LU_SHARE`] of the available memory
-    /// (or the available memory is unknown), else BiCGSTAB with the `Auto` settings.
+    /// (or the available memory is unknown), else GMRES([`GMRES_RESTART`]) with the
+    /// `Auto` settings.
     pub fn resolve(&self, unknowns: f64, nonzeros: f64, available: Option<f64>) -> (SolverKind, Option<String>) {
         let SolverKind::Auto { preconditioner, tolerance, max_iterations } = *self else { return (*self, None) };
         let factors = lu_factor_bytes(nonzeros, unknowns);
         match available {
             Some(a) if factors > AUTO_LU_SHARE * a => (
-                SolverKind::Bicgstab { preconditioner, tolerance, max_iterations },
+                SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART },
                 Some(format!(
-                    "auto: LU factors estimated at {:.2} GB, more than {AUTO_LU_SHARE} of the {:.2} GB available: BiCGSTAB+{}",
+                    "auto: LU factors estimated at {:.2} GB, more than {AUTO_LU_SHARE} of the {:.2} GB available: GMRES+{}",
                     factors / 1e9,
                     a / 1e9,
                     preconditioner.display_name()
@@ -130,11 +153,18 @@ impl SolverKind {
         SolverKind::Bicgstab { preconditioner: Preconditioner::Ilut { drop: 1e-5, fill: 20 }, tolerance: 1e-10, max_iterations: 2000 }
     }
 
+    /// The iterative default: GMRES(30) + smoothed-aggregation AMG, tolerance 1e-10, at
+    /// most 500 iterations.
+    pub fn default_gmres() -> Self {
+        SolverKind::Gmres { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500, restart: GMRES_RESTART }
+    }
+
     /// Short label for reports, e.g. `lu` or `bicgstab+ilu0`.
     pub fn label(&self) -> String {
         match self {
             SolverKind::Lu => "lu".to_string(),
-            SolverKind::Auto { preconditioner, .. } => format!("auto(lu|bicgstab+{})", preconditioner.label()),
+            SolverKind::Auto { preconditioner, .. } => format!("auto(lu|gmres+{})", preconditioner.label()),
+            SolverKind::Gmres { preconditioner, restart, .. } => format!("gmres({restart})+{}", preconditioner.label()),
             SolverKind::Bicgstab { preconditioner, .. } => {
                 format!("bicgstab+{}", preconditioner.label())
             }
@@ -145,18 +175,20 @@ impl SolverKind {
 choice! {
     /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
     pub enum SolverMethod("solver.kind", default Some(SolverMethod::Auto), note "\"auto\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"") {
-        Auto = "auto" => "LU while its estimated factors take at most half the available memory, else BiCGSTAB with the preconditioner, tolerance and max_iterations given (reason in summary.json, `solver.choice`)",
+        Auto = "auto" => "LU while its estimated factors take at most half the available memory, else GMRES with the preconditioner, tolerance and max_iterations given (reason in summary.json, `solver.choice`)",
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
+        Gmres = "gmres" => "right-preconditioned restarted GMRES(`restart`, default 30) to a true relative residual `tolerance`; stops when a restart cycle gains less than 1 %",
     }
 }
 
 choice! {
     /// The name of a preconditioner in a scene (`solver.preconditioner`).
-    pub enum PreconditionerKind("solver.preconditioner", default Some(PreconditionerKind::Ilut)) {
+    pub enum PreconditionerKind("solver.preconditioner", default Some(PreconditionerKind::Amg), note "\"amg\" with gmres and auto, \"ilut\" with bicgstab") {
         Ilut = "ilut" => "Saad's dual-threshold ILUT(drop, fill), defaults drop = 1e-5, fill = 20",
         Ilu0 = "ilu0" => "zero-fill incomplete LU",
         Jacobi = "jacobi" => "the diagonal",
+        Amg = "amg" => "smoothed-aggregation algebraic multigrid with the rigid-body modes (one V-cycle, block Gauss-Seidel smoothing); the default of gmres and auto",
     }
 }
 
@@ -167,6 +199,7 @@ impl Preconditioner {
             Preconditioner::Ilut { .. } => PreconditionerKind::Ilut,
             Preconditioner::Ilu0 => PreconditionerKind::Ilu0,
             Preconditioner::Jacobi => PreconditionerKind::Jacobi,
+            Preconditioner::Amg => PreconditionerKind::Amg,
         }
     }
 }

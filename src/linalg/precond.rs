@@ -1,9 +1,11 @@
-//! Preconditioners `M ≈ A` for BiCGSTAB: Jacobi, ILU(0) (adapter over
-//! `faer-precond`) and the native dual-threshold ILUT of [`super::ilut`].
+//! Preconditioners `M ≈ A` for the Krylov solvers: Jacobi, ILU(0) (adapter over
+//! `faer-precond`), the native dual-threshold ILUT of [`super::ilut`] and the
+//! smoothed-aggregation multigrid of [`super::amg`].
 //!
 //! All are exposed to `faer::matrix_free` through [`BuiltPreconditioner`],
 //! whose `LinOp::apply` / `Precond::apply_in_place` compute `M⁻¹ v`.
 
+use super::amg::{Amg, AmgParams, NodeLayout};
 pub use super::ilut::{Ilut, ILUT_PIVOT_RTOL};
 use super::{Preconditioner, SolveError, SparseMatrix};
 use faer::dyn_stack::{MemStack, StackReq};
@@ -62,6 +64,8 @@ pub enum BuiltPreconditioner {
     Ilu0(Box<Ilu0<usize, f64>>),
     /// See [`Ilut`].
     Ilut(Ilut),
+    /// See [`Amg`].
+    Amg(Box<Amg>),
 }
 
 /// `a` with an explicit zero stored at every missing diagonal entry, or `None` when
@@ -85,9 +89,9 @@ fn with_stored_diagonal(a: &SparseMatrix) -> Result<Option<SparseMatrix>, SolveE
 }
 
 impl BuiltPreconditioner {
-    /// Build the preconditioner `kind` for `a`.
+    /// Build the preconditioner `kind` for `a`; `layout` gives AMG its near-null space.
     /// Errors: [`SolveError::Singular`] for zero pivots / missing diagonals.
-    pub fn build(a: &SparseMatrix, kind: Preconditioner) -> Result<Self, SolveError> {
+    pub fn build(a: &SparseMatrix, kind: Preconditioner, layout: Option<NodeLayout>) -> Result<Self, SolveError> {
         Ok(match kind {
             Preconditioner::Jacobi => BuiltPreconditioner::Jacobi(Jacobi::try_new(a)?),
             Preconditioner::Ilu0 => {
@@ -112,6 +116,7 @@ impl BuiltPreconditioner {
                 BuiltPreconditioner::Ilu0(Box::new(p))
             }
             Preconditioner::Ilut { drop, fill } => BuiltPreconditioner::Ilut(Ilut::try_new(a, drop, fill)?),
+            Preconditioner::Amg => BuiltPreconditioner::Amg(Box::new(Amg::build(a, layout, AmgParams::default())?)),
         })
     }
 
@@ -122,6 +127,27 @@ impl BuiltPreconditioner {
             // faer-precond's L includes its unit diagonal; count it once (as U's).
             BuiltPreconditioner::Ilu0(p) => p.symbolic().l_nnz() + p.symbolic().u_nnz() - p.dim(),
             BuiltPreconditioner::Ilut(p) => p.nonzeros(),
+            BuiltPreconditioner::Amg(p) => p.nonzeros(),
+        }
+    }
+
+    /// The operator in compressed rows, when the preconditioner keeps one (AMG's
+    /// finest level).
+    pub fn fine_operator(&self) -> Option<&nalgebra_sparse::CsrMatrix<f64>> {
+        match self {
+            BuiltPreconditioner::Amg(p) => p.fine_operator(),
+            _ => None,
+        }
+    }
+
+    /// What the report adds to the method's name: AMG's levels and operator complexity.
+    pub fn describe(&self) -> String {
+        match self {
+            BuiltPreconditioner::Amg(p) => {
+                let sizes: Vec<String> = p.sizes().iter().map(|s| s.to_string()).collect();
+                format!(" [levels {}, operator complexity {:.2}]", sizes.join("/"), p.operator_complexity())
+            }
+            _ => String::new(),
         }
     }
 
@@ -130,6 +156,7 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
             BuiltPreconditioner::Ilu0(p) => p.dim(),
             BuiltPreconditioner::Ilut(p) => p.dim(),
+            BuiltPreconditioner::Amg(p) => p.dim(),
         }
     }
 
@@ -138,6 +165,7 @@ impl BuiltPreconditioner {
         match self {
             BuiltPreconditioner::Jacobi(j) => j.solve_in_place(x),
             BuiltPreconditioner::Ilut(p) => p.solve_in_place(x),
+            BuiltPreconditioner::Amg(p) => p.solve_in_place(x),
             BuiltPreconditioner::Ilu0(p) => {
                 let n = x.len();
                 let m = faer::MatMut::from_column_major_slice_mut(x, n, 1);
@@ -203,7 +231,7 @@ mod tests {
         // [[0, 1], [1, 0]] is nonsingular but has no pivot without pivoting.
         let a = assemble(&Triplets::from_entries(2, &[(0, 1, 1.0), (1, 0, 1.0)])).unwrap();
         for kind in [Preconditioner::Jacobi, Preconditioner::Ilu0, Preconditioner::Ilut { drop: 0.0, fill: 2 }] {
-            match BuiltPreconditioner::build(&a, kind) {
+            match BuiltPreconditioner::build(&a, kind, None) {
                 Err(SolveError::Singular { .. }) => {}
                 other => panic!("{kind:?}: expected Singular, got {other:?}"),
             }

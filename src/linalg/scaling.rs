@@ -4,9 +4,14 @@
 //! (`~1/h`) and identity (`~1`) equations. Scaling row `i` by
 //! `d_i = 1 / max_j |a_ij|` (the row-scaling half of the equilibration in
 //! LAPACK `xGEEQU`; Golub & Van Loan, *Matrix Computations*, 4th ed., §3.5.2)
-//! makes every row's largest entry `±1`. The solution is unchanged
-//! (`D A x = D b ⇔ A x = b` for nonsingular diagonal `D`), but pivoting in LU,
-//! ILU drop tolerances and the Krylov residual all see comparable rows.
+//! makes every row's largest entry `±1`. The sign of `d_i` makes the diagonal entry
+//! `a_ii` positive (a Navier row's own coefficient is negative, a displacement row's
+//! positive): pivoting and ILU do not care, but smoothed aggregation sums rows over
+//! an aggregate, and rows of opposite signs there cancel into coarse operators that
+//! Gauss–Seidel cannot smooth (it diverged by 1e38 in one sweep on the cantilever).
+//! The solution is unchanged (`D A x = D b ⇔ A x = b` for nonsingular diagonal `D`),
+//! but pivoting in LU, ILU drop tolerances and the Krylov residual all see
+//! comparable rows.
 
 use super::{SolveError, SparseMatrix};
 
@@ -49,7 +54,8 @@ pub fn row_max_abs(a: &SparseMatrix) -> Result<Vec<f64>, SolveError> {
     Ok(row_max)
 }
 
-/// Row-equilibrate `A`: returns `(D A, d)` with `d_i = 1 / max_j |a_ij|`.
+/// Row-equilibrate `A`: returns `(D A, d)` with `d_i = ±1 / max_j |a_ij|`, the sign
+/// that of `a_ii` (`+` when `a_ii = 0`).
 /// Scale the right-hand side with [`scale_rhs`]. Errors as [`row_max_abs`].
 pub fn equilibrate_rows(a: &SparseMatrix) -> Result<(SparseMatrix, Vec<f64>), SolveError> {
     let row_max = row_max_abs(a)?;
@@ -57,9 +63,17 @@ pub fn equilibrate_rows(a: &SparseMatrix) -> Result<(SparseMatrix, Vec<f64>), So
 }
 
 /// `(D A, d)` from precomputed, strictly positive row maxima
-/// (see [`row_max_abs`]).
+/// (see [`row_max_abs`]); `D A` has a non-negative diagonal.
 pub fn equilibrate_rows_with(a: &SparseMatrix, row_max: &[f64]) -> (SparseMatrix, Vec<f64>) {
-    let d: Vec<f64> = row_max.iter().map(|m| 1.0 / m).collect();
+    let mut d: Vec<f64> = row_max.iter().map(|m| 1.0 / m).collect();
+    for (j, dj) in d.iter_mut().enumerate().take(a.ncols()) {
+        let rows = a.symbolic().row_idx_of_col_raw(j);
+        if let Ok(p) = rows.binary_search(&j) {
+            if a.val_of_col(j)[p] < 0.0 {
+                *dj = -*dj;
+            }
+        }
+    }
     let mut s = a.clone();
     let (sym, val) = s.parts_mut();
     for j in 0..sym.ncols() {
@@ -92,7 +106,12 @@ mod tests {
         let a = assemble(&t).unwrap();
         let (s, d) = equilibrate_rows(&a).unwrap();
         // Division by a power of two or a single rounding: 1 ulp-level.
-        assert!((d[0] - 0.25e-12).abs() < 1e-27);
+        assert!((d[0] + 0.25e-12).abs() < 1e-27, "a_00 < 0 flips the row: {}", d[0]);
+        for j in 0..3 {
+            let rows = s.symbolic().row_idx_of_col_raw(j);
+            let p = rows.binary_search(&j).unwrap();
+            assert!(s.val_of_col(j)[p] > 0.0, "diagonal {j} of D A is positive");
+        }
         let mut row_max = [0.0f64; 3];
         for j in 0..3 {
             for (&i, &v) in s.symbolic().row_idx_of_col_raw(j).iter().zip(s.val_of_col(j)) {

@@ -374,7 +374,7 @@ fn no_convergence_reports_the_true_residual() {
     // recompute its residual independently from the COO triplets.
     let (s, d) = scaling::equilibrate_rows(&a).unwrap();
     let bs = scaling::scale_rhs(&b, &d);
-    let p = precond::BuiltPreconditioner::build(&s, pc).unwrap();
+    let p = precond::BuiltPreconditioner::build(&s, pc, None).unwrap();
     let out = bicgstab::solve_bicgstab(&s, &bs, &p, tol, max_it, |x| super::relative_residual(&s, x, &bs));
     let (ts, b_scaled) = row_scaled(&t, &b);
     let independent = coo_relres(&ts, &out.x, &b_scaled);
@@ -395,13 +395,16 @@ fn auto_resolves_by_the_memory_of_the_factors() {
     assert_eq!(kind, SolverKind::Lu);
     assert!(why.unwrap().contains("within"));
     let (kind, why) = auto.resolve(n, nnz, Some(1.5 * factors));
-    assert_eq!(kind, SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 });
-    assert!(why.unwrap().contains("BiCGSTAB+ILU(0)"));
+    assert_eq!(
+        kind,
+        SolverKind::Gmres { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300, restart: GMRES_RESTART }
+    );
+    assert!(why.unwrap().contains("GMRES+ILU(0)"));
     assert_eq!(auto.resolve(n, nnz, None).0, SolverKind::Lu);
     assert_eq!(SolverKind::Lu.resolve(n, nnz, Some(1.0)), (SolverKind::Lu, None));
 }
 
-/// `auto` gone iterative retries with ILU(0) when its preconditioner stops: with a
+/// `auto` gone iterative retries with BiCGSTAB+ILU(0) when its GMRES stops: with a
 /// 300-iteration budget Jacobi does not converge on the collocation-like system of the
 /// test above (it needs 548 iterations there), ILU(0) does (135), and the choice says
 /// what happened; with the memory to spare it is LU without a retry.
@@ -415,12 +418,12 @@ fn auto_retries_with_ilu0_when_the_iteration_stops() {
         kind: SolverKind::Auto { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 },
         equilibrate: true,
     };
-    let (x, rep) = solve_with_memory(&a, &b, &auto, Some(1.0)).unwrap();
+    let (x, rep) = solve_with_memory(&a, &b, &auto, None, Some(1.0)).unwrap();
     assert_eq!(rep.method, "bicgstab+ilu0");
     let why = rep.choice.unwrap();
-    assert!(why.contains("did not converge") && why.contains("retried with ILU(0)"), "{why}");
+    assert!(why.contains("did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
     let (x_lu, _) = solve(&a, &b, &SolverParams::default()).unwrap();
     assert!(max_rel_diff(&x, &x_lu) < 1e-7);
-    let (_, rep) = solve_with_memory(&a, &b, &auto, Some(1e12)).unwrap();
+    let (_, rep) = solve_with_memory(&a, &b, &auto, None, Some(1e12)).unwrap();
     assert_eq!(rep.method, "lu");
 }

@@ -181,7 +181,9 @@ pub(super) fn assemble_and_solve(
     })?;
     let nonzeros = matrix.compute_nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
-        let (x, report) = linalg::solve(&matrix, &rhs, solver)?;
+        let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
+        let layout = linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions };
+        let (x, report) = linalg::solve_nodal(&matrix, &rhs, solver, Some(layout))?;
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report), note))
     })?;

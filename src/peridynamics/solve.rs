@@ -166,7 +166,9 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     })?;
     let nonzeros = matrix.compute_nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
-        let (x, report) = linalg::solve(&matrix, &rhs, &params.solver)?;
+        // The unknowns are the free nodes' displacements, free nodes first.
+        let layout = linalg::NodeLayout { per_node: 2, positions: &disc.nodes.positions[..rhs.len() / 2] };
+        let (x, report) = linalg::solve_nodal(&matrix, &rhs, &params.solver, Some(layout))?;
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;

@@ -274,6 +274,8 @@ pub struct SolverSpec {
     pub tolerance: Option<f64>,
     /// Iteration limit.
     pub max_iterations: Option<usize>,
+    /// GMRES restart length.
+    pub restart: Option<usize>,
     /// Row equilibration.
     pub equilibrate: Option<bool>,
 }

@@ -1,25 +1,26 @@
-//! `[solver]` (and `[peridynamics.solver]`): sparse LU, or BiCGSTAB with its
-//! preconditioner, tolerance and iteration limit.
+//! `[solver]` (and `[peridynamics.solver]`): sparse LU, or BiCGSTAB / GMRES with
+//! their preconditioner, tolerance and iteration limit, or `auto`.
 
 use super::Ctx;
 use crate::choice::Choice;
-use crate::linalg::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams};
+use crate::linalg::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, GMRES_RESTART};
 use crate::problem::spec::SolverSpec;
 use crate::problem::ProblemError;
 
-/// The BiCGSTAB settings of `s` (also those of `auto`'s iterative choice), defaults
-/// from [`SolverKind::default_bicgstab`].
-fn bicgstab(c: &Ctx, s: &SolverSpec) -> Result<SolverKind, ProblemError> {
-    let SolverKind::Bicgstab { preconditioner: default_p, tolerance: default_t, max_iterations: default_m } =
-        SolverKind::default_bicgstab()
-    else {
-        unreachable!("default_bicgstab is a BiCGSTAB configuration")
+/// The Krylov settings of `s`: BiCGSTAB with defaults from
+/// [`SolverKind::default_bicgstab`], GMRES (and `auto`'s iterative choice) from
+/// [`SolverKind::default_gmres`] (preconditioner `amg` unless another is named).
+fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, ProblemError> {
+    let (default_p, default_t, default_m) = match (method, SolverKind::default_bicgstab(), SolverKind::default_gmres()) {
+        (SolverMethod::Bicgstab, SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }, _)
+        | (_, _, SolverKind::Gmres { preconditioner, tolerance, max_iterations, .. }) => (preconditioner, tolerance, max_iterations),
+        _ => unreachable!("the defaults are a BiCGSTAB and a GMRES configuration"),
     };
-    let (default_drop, default_fill) = match default_p {
-        Preconditioner::Ilut { drop, fill } => (drop, fill),
-        _ => (1e-5, 20),
+    let (default_drop, default_fill) = (1e-5, 20);
+    let kind: PreconditionerKind = match s.preconditioner.as_deref() {
+        None => default_p.kind(),
+        named => c.choose("solver.preconditioner", named)?,
     };
-    let kind: PreconditionerKind = c.choose("solver.preconditioner", s.preconditioner.as_deref())?;
     let preconditioner = match kind {
         PreconditionerKind::Ilut => {
             let drop = s.drop.unwrap_or(default_drop);
@@ -32,14 +33,14 @@ fn bicgstab(c: &Ctx, s: &SolverSpec) -> Result<SolverKind, ProblemError> {
             }
             Preconditioner::Ilut { drop, fill }
         }
-        PreconditionerKind::Ilu0 | PreconditionerKind::Jacobi => {
+        PreconditionerKind::Ilu0 | PreconditionerKind::Jacobi | PreconditionerKind::Amg => {
             if s.drop.is_some() || s.fill.is_some() {
                 return c.err("solver.drop", format!("drop and fill belong to preconditioner = \"ilut\", not \"{}\"", kind.name()));
             }
-            if kind == PreconditionerKind::Ilu0 {
-                Preconditioner::Ilu0
-            } else {
-                Preconditioner::Jacobi
+            match kind {
+                PreconditionerKind::Ilu0 => Preconditioner::Ilu0,
+                PreconditionerKind::Amg => Preconditioner::Amg,
+                _ => Preconditioner::Jacobi,
             }
         }
     };
@@ -51,7 +52,28 @@ fn bicgstab(c: &Ctx, s: &SolverSpec) -> Result<SolverKind, ProblemError> {
     if max_iterations == 0 {
         return c.err("solver.max_iterations", "must be at least 1");
     }
-    Ok(SolverKind::Bicgstab { preconditioner, tolerance, max_iterations })
+    let restart = s.restart.unwrap_or(GMRES_RESTART);
+    if restart == 0 {
+        return c.err("solver.restart", "must be at least 1");
+    }
+    Ok(match method {
+        SolverMethod::Bicgstab => {
+            if s.restart.is_some() {
+                return c.err("solver.restart", "only used by kind = \"gmres\" (BiCGSTAB keeps no Krylov basis)");
+            }
+            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }
+        }
+        SolverMethod::Auto => {
+            if s.restart.is_some() {
+                return c.err(
+                    "solver.restart",
+                    format!("auto's GMRES restarts every {GMRES_RESTART} iterations; set kind = \"gmres\" to change it"),
+                );
+            }
+            SolverKind::Auto { preconditioner, tolerance, max_iterations }
+        }
+        _ => SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart },
+    })
 }
 
 /// `[solver]`; the fields of errors start with `solver.` (the caller renames them
@@ -66,19 +88,14 @@ pub(super) fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemErr
                 ("fill", s.fill.is_some()),
                 ("tolerance", s.tolerance.is_some()),
                 ("max_iterations", s.max_iterations.is_some()),
+                ("restart", s.restart.is_some()),
             ];
             if let Some((k, _)) = iterative_only.iter().find(|(_, p)| *p) {
-                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\" or \"auto\"");
+                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\", \"gmres\" or \"auto\"");
             }
             SolverKind::Lu
         }
-        SolverMethod::Bicgstab => bicgstab(c, s)?,
-        SolverMethod::Auto => match bicgstab(c, s)? {
-            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
-                SolverKind::Auto { preconditioner, tolerance, max_iterations }
-            }
-            other => other,
-        },
+        method => krylov(c, s, method)?,
     };
     Ok(SolverParams { kind, equilibrate })
 }

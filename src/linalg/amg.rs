@@ -1,0 +1,491 @@
+//! Smoothed-aggregation algebraic multigrid (SA-AMG) for the nonsymmetric collocation
+//! and peridynamic systems, used as one V-cycle per preconditioner application.
+//!
+//! Setup, level by level (Vaněk, Mandel, Brezina, *Computing* 56 (1996) 179–196; the
+//! nonsymmetric restriction of Sala & Tuminaro, *SIAM J. Sci. Comput.* 31 (2008)
+//! 143–166, as pyamg's `symmetry = "nonsymmetric"` does it):
+//! 1. node graph of strong blocks and aggregates ([`super::aggregation`]);
+//! 2. tentative prolongator `T` from the near-null space `B`: the rigid-body modes
+//!    `(1, 0)`, `(0, 1)`, `(−y, x)` at each node's position, which every Navier and
+//!    peridynamic row annihilates except the Dirichlet rows;
+//! 3. smoothed prolongator `P = (I − ω D⁻¹ A) T` and restriction
+//!    `R = Tᵀ (I − ω A D⁻¹)` (the same smoothing applied with `Aᵀ`), `D` the 2x2 (3x3
+//!    on coarse levels) diagonal blocks, `ω = 4 / (3 ρ(D⁻¹ A))`;
+//! 4. coarse operator `A_c = R A P`, coarse near-null space from the factorisation.
+//!
+//! The cycle smooths with block Gauss–Seidel, a forward and a backward sweep before
+//! and after the coarse correction; the coarsest level is solved by dense LU.
+//!
+//! Why written here: no Rust crate offers aggregation with a vector near-null space
+//! and nodal blocks. `russell_sparse` 5.1 ships a scalar AMG (AMGCL port) without a
+//! near-null space; on our cantilever systems it broke down or diverged from about
+//! 8e4 unknowns. pyamg on the exported systems (`../shared/docs/solvers.md`) showed
+//! that this configuration gives flat iteration counts on grids (27–34 over 23x in
+//! size), and which alternatives fail.
+
+use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
+use super::SparseMatrix;
+use nalgebra::DMatrix;
+use nalgebra_sparse::{CscMatrix, CsrMatrix};
+use rayon::prelude::*;
+
+/// Where the unknowns of a system live, for the near-null space: `per_node`
+/// interleaved unknowns per node (`u, v[, p]`), node `i` at `positions[i]`.
+#[derive(Clone, Copy, Debug)]
+pub struct NodeLayout<'a> {
+    /// Unknowns per node; the first two are the displacement.
+    pub per_node: usize,
+    /// Position of each node (ghosts included).
+    pub positions: &'a [[f64; 2]],
+}
+
+/// Settings of the hierarchy.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct AmgParams {
+    /// Strength threshold θ of [`strength_graph`] (0: every coupling is strong).
+    pub strength: f64,
+    /// Stop coarsening at this many unknowns and solve that level directly.
+    pub max_coarse: usize,
+    /// Levels at most.
+    pub max_levels: usize,
+}
+
+impl Default for AmgParams {
+    fn default() -> Self {
+        AmgParams { strength: 0.0, max_coarse: 400, max_levels: 12 }
+    }
+}
+
+/// One level: its operator, the inverses of its diagonal blocks, and the transfers to
+/// the next coarser level.
+#[derive(Debug)]
+struct Level {
+    a: CsrMatrix<f64>,
+    blocks: Blocks,
+    /// Pseudo-inverse of each diagonal block, row-major, `block²` per node.
+    inv_diag: Vec<f64>,
+    p: CsrMatrix<f64>,
+    r: CsrMatrix<f64>,
+}
+
+/// The coarsest level, factored.
+#[derive(Debug)]
+struct Coarsest {
+    lu: faer::linalg::solvers::PartialPivLu<f64>,
+    n: usize,
+}
+
+/// A smoothed-aggregation hierarchy; [`Amg::apply`] is one V-cycle from a zero guess.
+#[derive(Debug)]
+pub struct Amg {
+    levels: Vec<Level>,
+    coarsest: Coarsest,
+    /// Unknowns per level, finest first (the coarsest included).
+    sizes: Vec<usize>,
+    /// Stored entries of all operators and transfers.
+    nonzeros: usize,
+    /// `Σ nnz(A_l) / nnz(A_0)`.
+    operator_complexity: f64,
+}
+
+/// The rigid-body modes at `layout` (unknowns × 3, row-major), positions centred and
+/// scaled to unit size so that the rotation has the translations' magnitude; a
+/// pressure unknown gets zeros (rigid motions carry no pressure). Without a layout,
+/// the two translations of a two-unknowns-per-node system plus a zero third column.
+fn rigid_body_modes(n: usize, layout: Option<NodeLayout>) -> (Vec<f64>, usize) {
+    let Some(layout) = layout.filter(|l| l.per_node >= 2 && l.positions.len() * l.per_node == n) else {
+        let mut b = vec![0.0; n * 3];
+        for i in 0..n {
+            b[i * 3 + i % 2] = 1.0;
+        }
+        return (b, 2);
+    };
+    let count = layout.positions.len() as f64;
+    let centre = layout.positions.iter().fold([0.0, 0.0], |c, p| [c[0] + p[0] / count, c[1] + p[1] / count]);
+    let size =
+        layout.positions.iter().map(|p| (p[0] - centre[0]).abs().max((p[1] - centre[1]).abs())).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let mut b = vec![0.0; n * 3];
+    for (node, p) in layout.positions.iter().enumerate() {
+        let (x, y) = ((p[0] - centre[0]) / size, (p[1] - centre[1]) / size);
+        let row = node * layout.per_node;
+        b[row * 3..row * 3 + 3].copy_from_slice(&[1.0, 0.0, -y]);
+        b[(row + 1) * 3..(row + 1) * 3 + 3].copy_from_slice(&[0.0, 1.0, x]);
+    }
+    (b, 3)
+}
+
+/// `a` (CSC, as assembled) as a CSR matrix.
+pub(super) fn to_csr(a: &SparseMatrix) -> CsrMatrix<f64> {
+    let n = a.nrows();
+    let csc =
+        CscMatrix::try_from_csc_data(n, a.ncols(), a.symbolic().col_ptr().to_vec(), a.symbolic().row_idx().to_vec(), a.val().to_vec())
+            .expect("faer's CSC arrays are a valid CSC matrix");
+    CsrMatrix::from(&csc)
+}
+
+/// Pseudo-inverses of the diagonal blocks of `a` (row-major, `block²` per node):
+/// a ghost's block can be singular, and a coarse node whose near-null vectors were
+/// dependent has zero rows; the pseudo-inverse leaves those directions to the other
+/// levels instead of dividing by zero.
+fn inverse_diagonal_blocks(a: &CsrMatrix<f64>, blocks: Blocks) -> Vec<f64> {
+    let b = blocks.block;
+    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
+    let mut out = vec![0.0; blocks.nodes * b * b];
+    out.par_chunks_mut(b * b).enumerate().for_each(|(node, inv)| {
+        let mut d = DMatrix::<f64>::zeros(b, b);
+        for r in 0..b {
+            let row = node * b + r;
+            for k in ptr[row]..ptr[row + 1] {
+                let c = idx[k];
+                if c / b == node {
+                    d[(r, c % b)] = val[k];
+                }
+            }
+        }
+        let largest = d.amax();
+        if largest == 0.0 {
+            return;
+        }
+        let p = pseudo_inverse(&d);
+        for r in 0..b {
+            for c in 0..b {
+                inv[r * b + c] = p[(r, c)];
+            }
+        }
+    });
+    out
+}
+
+/// Largest condition number of a diagonal block inverted as it stands; beyond it the
+/// block's small singular values are dropped (pseudo-inverse).
+const BLOCK_CONDITION: f64 = 1e10;
+
+/// `d⁻¹` by LU when `d` is well conditioned, else the pseudo-inverse from faer's SVD
+/// with singular values below `‖d‖ / BLOCK_CONDITION` dropped (nalgebra's SVD is not
+/// used: it fails silently on some well-posed problems, `../shared/docs/crates.md`).
+fn pseudo_inverse(d: &DMatrix<f64>) -> DMatrix<f64> {
+    let b = d.nrows();
+    if let Some(inv) = d.clone().try_inverse() {
+        let (n, ni) = (d.abs().row_sum().max(), inv.abs().row_sum().max());
+        if n * ni < BLOCK_CONDITION && inv.iter().all(|v| v.is_finite()) {
+            return inv;
+        }
+    }
+    let m = faer::Mat::<f64>::from_fn(b, b, |i, j| d[(i, j)]);
+    let Ok(svd) = m.svd() else { return DMatrix::zeros(b, b) };
+    let (u, s, v) = (svd.U(), svd.S(), svd.V());
+    let largest = (0..b).map(|i| s[i]).fold(0.0f64, f64::max);
+    let mut out = DMatrix::<f64>::zeros(b, b);
+    for k in 0..b {
+        if s[k] > largest / BLOCK_CONDITION {
+            for i in 0..b {
+                for j in 0..b {
+                    out[(i, j)] += v[(i, k)] * u[(j, k)] / s[k];
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The block-diagonal matrix of `inv_diag`.
+fn block_diagonal(inv_diag: &[f64], blocks: Blocks) -> CsrMatrix<f64> {
+    let b = blocks.block;
+    let n = blocks.nodes * b;
+    let offsets: Vec<usize> = (0..=n).map(|r| r * b).collect();
+    let cols: Vec<usize> = (0..n).flat_map(|r| (0..b).map(move |c| (r / b) * b + c)).collect();
+    CsrMatrix::try_from_csr_data(n, n, offsets, cols, inv_diag.to_vec()).expect("block diagonal pattern is valid")
+}
+
+/// `y = A x`, rows in parallel.
+pub fn product(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
+    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
+    y.par_iter_mut().enumerate().with_min_len(256).for_each(|(r, y)| {
+        *y = (ptr[r]..ptr[r + 1]).map(|k| val[k] * x[idx[k]]).sum::<f64>();
+    });
+}
+
+/// Spectral radius of `M = D⁻¹ A` estimated from the Ritz values of a 20-step Arnoldi
+/// process (power iteration underestimates it on nonsymmetric `M`, and `ω` too large
+/// makes the smoothed prolongator amplify instead of smooth).
+fn spectral_radius(a: &CsrMatrix<f64>, inv_diag: &CsrMatrix<f64>) -> f64 {
+    let n = a.nrows();
+    let steps = 20.min(n);
+    // A fixed, non-smooth start vector: deterministic runs.
+    let mut v: Vec<Vec<f64>> = vec![(0..n).map(|i| 1.0 + ((i * 7919) % 13) as f64 / 13.0).collect()];
+    let norm = super::norm2(&v[0]);
+    v[0].iter_mut().for_each(|x| *x /= norm);
+    let mut h = DMatrix::<f64>::zeros(steps + 1, steps);
+    let mut tmp = vec![0.0; n];
+    let mut m = 0;
+    for j in 0..steps {
+        product(a, &v[j], &mut tmp);
+        let mut w = vec![0.0; n];
+        product(inv_diag, &tmp, &mut w);
+        for (i, vi) in v.iter().enumerate() {
+            let d: f64 = vi.iter().zip(&w).map(|(a, b)| a * b).sum();
+            h[(i, j)] = d;
+            w.iter_mut().zip(vi).for_each(|(w, v)| *w -= d * v);
+        }
+        let norm = super::norm2(&w);
+        h[(j + 1, j)] = norm;
+        m = j + 1;
+        if norm <= 1e-12 * h.column(j).norm() {
+            break;
+        }
+        w.iter_mut().for_each(|x| *x /= norm);
+        v.push(w);
+    }
+    let square = h.view((0, 0), (m, m)).clone_owned();
+    square.complex_eigenvalues().iter().map(|z| z.norm()).fold(0.0, f64::max)
+}
+
+impl Amg {
+    /// The hierarchy of `a` (the system as solved, row-equilibrated) with the rigid-body
+    /// modes of `layout` as near-null space.
+    pub fn build(a: &SparseMatrix, layout: Option<NodeLayout>, params: AmgParams) -> Result<Self, super::SolveError> {
+        let n = a.nrows();
+        let (mut null, k) = rigid_body_modes(n, layout);
+        let block = layout.map(|l| l.per_node).filter(|&b| b >= 2 && n.is_multiple_of(b)).unwrap_or(1);
+        let mut current = to_csr(a);
+        let mut blocks = Blocks { block, nodes: n / block };
+        let mut levels = Vec::new();
+        let mut sizes = vec![n];
+        while current.nrows() > params.max_coarse && levels.len() + 1 < params.max_levels {
+            let inv_diag = inverse_diagonal_blocks(&current, blocks);
+            let graph = strength_graph(&current, blocks, params.strength);
+            let (agg, count) = aggregate(&graph);
+            // No coarsening (every node its own aggregate) would loop forever.
+            if count * k >= current.nrows() {
+                break;
+            }
+            let (t, coarse_null) = tentative(&null, k, blocks, &agg, count);
+            let d = block_diagonal(&inv_diag, blocks);
+            let rho = spectral_radius(&current, &d).max(f64::MIN_POSITIVE);
+            let omega = 4.0 / (3.0 * rho);
+            // P = T − ω D⁻¹ (A T);  R = Tᵀ − ω (Tᵀ A) D⁻¹.
+            let at = &current * &t;
+            let p = &t - &(&(&d * &at) * omega);
+            let tt = t.transpose();
+            let ta = &tt * &current;
+            let r = &tt - &(&(&ta * &d) * omega);
+            let coarse = &(&r * &current) * &p;
+            levels.push(Level { a: current, blocks, inv_diag, p, r });
+            sizes.push(coarse.nrows());
+            current = coarse;
+            null = coarse_null;
+            blocks = Blocks { block: k, nodes: count };
+        }
+        let coarsest = Coarsest::factor(&current)?;
+        let nonzeros = levels.iter().map(|l| l.a.nnz() + l.p.nnz() + l.r.nnz()).sum::<usize>() + current.nnz();
+        let fine = levels.first().map_or(current.nnz(), |l| l.a.nnz()) as f64;
+        let operator_complexity = (levels.iter().map(|l| l.a.nnz()).sum::<usize>() + current.nnz()) as f64 / fine;
+        Ok(Amg { levels, coarsest, sizes, nonzeros, operator_complexity })
+    }
+
+    /// Unknowns per level, finest first.
+    pub fn sizes(&self) -> &[usize] {
+        &self.sizes
+    }
+
+    /// Stored entries of operators and transfers over all levels.
+    pub fn nonzeros(&self) -> usize {
+        self.nonzeros
+    }
+
+    /// `Σ nnz(A_l) / nnz(A_0)`: memory and work of a cycle relative to one product.
+    pub fn operator_complexity(&self) -> f64 {
+        self.operator_complexity
+    }
+
+    /// The finest operator in compressed rows (`None` when the system was small enough
+    /// to be solved directly on one level).
+    pub fn fine_operator(&self) -> Option<&CsrMatrix<f64>> {
+        self.levels.first().map(|l| &l.a)
+    }
+
+    /// Unknowns of the finest level.
+    pub fn dim(&self) -> usize {
+        self.sizes[0]
+    }
+
+    /// `x ← M⁻¹ x`: one V-cycle for `A z = x` from `z = 0`.
+    pub fn solve_in_place(&self, x: &mut [f64]) {
+        let f = x.to_vec();
+        self.cycle(0, &f, x);
+    }
+
+    fn cycle(&self, l: usize, f: &[f64], z: &mut [f64]) {
+        let Some(level) = self.levels.get(l) else {
+            self.coarsest.solve(f, z);
+            return;
+        };
+        z.fill(0.0);
+        level.gauss_seidel(f, z, true);
+        level.gauss_seidel(f, z, false);
+        let mut r = vec![0.0; f.len()];
+        product(&level.a, z, &mut r);
+        r.iter_mut().zip(f).for_each(|(r, f)| *r = f - *r);
+        let mut fc = vec![0.0; level.r.nrows()];
+        product(&level.r, &r, &mut fc);
+        let mut zc = vec![0.0; fc.len()];
+        self.cycle(l + 1, &fc, &mut zc);
+        product(&level.p, &zc, &mut r);
+        z.iter_mut().zip(&r).for_each(|(z, c)| *z += c);
+        level.gauss_seidel(f, z, true);
+        level.gauss_seidel(f, z, false);
+    }
+}
+
+impl Level {
+    /// One block Gauss–Seidel sweep for `A z = f`, nodes in increasing (`forward`) or
+    /// decreasing order: `z_I += D_I⁺ (f − A z)_I`. With several threads the nodes are
+    /// split into one contiguous range per thread, each swept in order with the values
+    /// of the other ranges from before the sweep ("hybrid" Gauss–Seidel, Baker, Falgout,
+    /// Kolev & Yang, *SIAM J. Sci. Comput.* 33 (2011) 2864–2887): ranges of thousands of
+    /// nodes couple only through their edges, so the sweep stays a Gauss–Seidel sweep
+    /// almost everywhere.
+    fn gauss_seidel(&self, f: &[f64], z: &mut [f64], forward: bool) {
+        let b = self.blocks.block;
+        let nodes = self.blocks.nodes;
+        let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
+        let per_part = nodes.div_ceil(parts);
+        let before: Option<Vec<f64>> = (parts > 1).then(|| z.to_vec());
+        let (ptr, idx, val) = (self.a.row_offsets(), self.a.col_indices(), self.a.values());
+        z.par_chunks_mut(per_part * b).enumerate().for_each(|(part, own)| {
+            let first = part * per_part;
+            let start = first * b;
+            let end = start + own.len();
+            let range = first..first + own.len() / b;
+            let mut s = [0.0f64; MAX_BLOCK];
+            let mut sweep = |node: usize| {
+                for (m, sm) in s.iter_mut().enumerate().take(b) {
+                    let row = node * b + m;
+                    let mut sum = 0.0;
+                    for k in ptr[row]..ptr[row + 1] {
+                        let c = idx[k];
+                        let zc = if (start..end).contains(&c) { own[c - start] } else { before.as_ref().map_or(0.0, |z| z[c]) };
+                        sum += val[k] * zc;
+                    }
+                    *sm = f[row] - sum;
+                }
+                let inv = &self.inv_diag[node * b * b..(node + 1) * b * b];
+                for m in 0..b {
+                    own[(node - first) * b + m] += (0..b).map(|c| inv[m * b + c] * s[c]).sum::<f64>();
+                }
+            };
+            if forward {
+                range.for_each(&mut sweep);
+            } else {
+                range.rev().for_each(&mut sweep);
+            }
+        });
+    }
+}
+
+/// Below this many nodes a level is swept by one thread (the copy of the iterate
+/// costs more than the second thread gains).
+const PARALLEL_SWEEP_NODES: usize = 20_000;
+
+/// Largest block (unknowns per node or near-null vectors) the smoother handles.
+const MAX_BLOCK: usize = 8;
+
+impl Coarsest {
+    /// Dense LU of the coarsest operator; unknowns whose row and column are both empty
+    /// (dependent near-null vectors) get a unit diagonal, which leaves them zero.
+    fn factor(a: &CsrMatrix<f64>) -> Result<Self, super::SolveError> {
+        let n = a.nrows();
+        let mut dense = faer::Mat::<f64>::zeros(n, n);
+        let mut used = vec![false; n];
+        for (r, row) in a.row_iter().enumerate() {
+            for (&c, &v) in row.col_indices().iter().zip(row.values()) {
+                dense[(r, c)] += v;
+                if v != 0.0 {
+                    used[r] = true;
+                    used[c] = true;
+                }
+            }
+        }
+        for (i, u) in used.iter().enumerate() {
+            if !u {
+                dense[(i, i)] = 1.0;
+            }
+        }
+        Ok(Coarsest { lu: dense.partial_piv_lu(), n })
+    }
+
+    fn solve(&self, f: &[f64], z: &mut [f64]) {
+        use faer::linalg::solvers::Solve;
+        let rhs = faer::MatRef::from_column_major_slice(f, self.n, 1);
+        let x = self.lu.solve(rhs);
+        for (i, zi) in z.iter_mut().enumerate() {
+            *zi = if x[(i, 0)].is_finite() { x[(i, 0)] } else { 0.0 };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::{assemble, gmres, scaling, Triplets};
+
+    /// The two-component 5-point Laplacian on an `m x m` grid of the unit square, the
+    /// boundary nodes' rows identity (a Dirichlet problem), node `i + m j` at `(i, j) h`.
+    fn vector_laplacian(m: usize) -> (SparseMatrix, Vec<[f64; 2]>) {
+        let h = 1.0 / (m - 1) as f64;
+        let mut t = Triplets::new(2 * m * m);
+        let mut positions = Vec::new();
+        for j in 0..m {
+            for i in 0..m {
+                let node = i + m * j;
+                positions.push([i as f64 * h, j as f64 * h]);
+                for c in 0..2 {
+                    let row = 2 * node + c;
+                    if i == 0 || j == 0 || i == m - 1 || j == m - 1 {
+                        t.push(row, row, 1.0);
+                        continue;
+                    }
+                    t.push(row, row, -4.0 / (h * h));
+                    for other in [node - 1, node + 1, node - m, node + m] {
+                        t.push(row, 2 * other + c, 1.0 / (h * h));
+                    }
+                }
+            }
+        }
+        (assemble(&t).unwrap(), positions)
+    }
+
+    #[test]
+    fn rigid_body_modes_are_centred_translations_and_a_rotation() {
+        let positions = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
+        let (b, k) = rigid_body_modes(8, Some(NodeLayout { per_node: 2, positions: &positions }));
+        assert_eq!(k, 3);
+        // Node 2 at (1, 1) from the centre, scaled by 1: u = (-y, x) = (-1, 1).
+        assert_eq!(&b[4 * 3..4 * 3 + 3], &[1.0, 0.0, -1.0]);
+        assert_eq!(&b[5 * 3..5 * 3 + 3], &[0.0, 1.0, 1.0]);
+    }
+
+    /// One V-cycle as the preconditioner of GMRES: on the vector Laplacian the count
+    /// stays bounded as the grid is refined 4x (measured 8, 9, 10 at 33², 65², 129²
+    /// nodes); without a coarse space ILU- or Jacobi-type methods grow like 1/h.
+    #[test]
+    fn multigrid_iterations_do_not_grow_with_the_grid() {
+        let mut counts = Vec::new();
+        for m in [33, 65, 129] {
+            let (a, positions) = vector_laplacian(m);
+            let (a, d) = scaling::equilibrate_rows(&a).unwrap();
+            let b: Vec<f64> = (0..a.nrows()).map(|i| if (i / 2) % m == 0 { 0.0 } else { 1.0 }).collect();
+            let b = scaling::scale_rhs(&b, &d);
+            let amg = Amg::build(&a, Some(NodeLayout { per_node: 2, positions: &positions }), AmgParams::default()).unwrap();
+            assert!(amg.sizes().len() >= 2, "{:?}", amg.sizes());
+            // Five-node aggregates of a 5-point stencil carry 3 coarse unknowns for 10
+            // fine ones, and the coarse stencils widen: measured 3.3.
+            assert!(amg.operator_complexity() < 4.0, "{}", amg.operator_complexity());
+            let out = gmres::solve_gmres(amg.fine_operator().unwrap(), &b, |v| amg.solve_in_place(v), 1e-10, 200, 30);
+            assert_eq!(out.status, gmres::Status::Converged, "{m}: {:?}", out.history);
+            counts.push(out.iterations);
+        }
+        eprintln!("GMRES+AMG iterations on 33², 65², 129² nodes: {counts:?}");
+        assert!(counts.iter().all(|&c| c <= 20), "{counts:?}");
+    }
+}
