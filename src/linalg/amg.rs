@@ -116,10 +116,18 @@ fn rigid_body_modes(n: usize, layout: Option<NodeLayout>) -> (Vec<f64>, usize) {
 
 /// `a` (CSC, as assembled) as a CSR matrix.
 pub(super) fn to_csr(a: &SparseMatrix) -> CsrMatrix<f64> {
-    let n = a.nrows();
-    let csc =
-        CscMatrix::try_from_csc_data(n, a.ncols(), a.symbolic().col_ptr().to_vec(), a.symbolic().row_idx().to_vec(), a.val().to_vec())
-            .expect("faer's CSC arrays are a valid CSC matrix");
+    scaled_rows(a, None)
+}
+
+/// `D a` as a CSR matrix, `D = diag(scales)` (the identity for `None`): the
+/// row-equilibrated system without an intermediate scaled CSC copy.
+pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> CsrMatrix<f64> {
+    let values: Vec<f64> = match scales {
+        None => a.val().to_vec(),
+        Some(d) => a.symbolic().row_idx().iter().zip(a.val()).map(|(&i, &v)| v * d[i]).collect(),
+    };
+    let csc = CscMatrix::try_from_csc_data(a.nrows(), a.ncols(), a.symbolic().col_ptr().to_vec(), a.symbolic().row_idx().to_vec(), values)
+        .expect("faer's CSC arrays are a valid CSC matrix");
     CsrMatrix::from(&csc)
 }
 
@@ -244,10 +252,16 @@ impl Amg {
     /// The hierarchy of `a` (the system as solved, row-equilibrated) with the rigid-body
     /// modes of `layout` as near-null space.
     pub fn build(a: &SparseMatrix, layout: Option<NodeLayout>, params: AmgParams) -> Result<Self, super::SolveError> {
+        Self::build_from_rows(to_csr(a), layout, params)
+    }
+
+    /// [`Amg::build`] from the operator in compressed rows, which the hierarchy keeps
+    /// as its finest level.
+    pub fn build_from_rows(a: CsrMatrix<f64>, layout: Option<NodeLayout>, params: AmgParams) -> Result<Self, super::SolveError> {
         let n = a.nrows();
         let (mut null, k) = rigid_body_modes(n, layout);
         let block = layout.map(|l| l.per_node).filter(|&b| b >= 2 && n.is_multiple_of(b)).unwrap_or(1);
-        let mut current = to_csr(a);
+        let mut current = a;
         let mut blocks = Blocks { block, nodes: n / block };
         let mut levels = Vec::new();
         let mut sizes = vec![n];
@@ -264,12 +278,27 @@ impl Amg {
             let rho = spectral_radius(&current, &d).max(f64::MIN_POSITIVE);
             let omega = 4.0 / (3.0 * rho);
             // P = T − ω D⁻¹ (A T);  R = Tᵀ − ω (Tᵀ A) D⁻¹.
-            let at = &current * &t;
-            let p = &t - &(&(&d * &at) * omega);
-            let tt = t.transpose();
-            let ta = &tt * &current;
-            let r = &tt - &(&(&ta * &d) * omega);
-            let coarse = &(&r * &current) * &p;
+            // Intermediates are dropped as soon as they are used: at 8e5 unknowns each
+            // is a few hundred MB.
+            let p = {
+                let at = &current * &t;
+                let dat = &d * &at;
+                drop(at);
+                &t - &(dat * omega)
+            };
+            let r = {
+                let tt = t.transpose();
+                drop(t);
+                let ta = &tt * &current;
+                let tad = &ta * &d;
+                drop(ta);
+                &tt - &(tad * omega)
+            };
+            drop(d);
+            let coarse = {
+                let ra = &r * &current;
+                &ra * &p
+            };
             levels.push(Level { a: current, blocks, inv_diag, p, r });
             sizes.push(coarse.nrows());
             current = coarse;

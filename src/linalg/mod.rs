@@ -317,14 +317,16 @@ pub(crate) fn solve_with_memory(
     let t_setup = Instant::now();
     // Validates finiteness / zero rows in both cases.
     let row_max = scaling::row_max_abs(a)?;
-    let scaled;
-    let (a_work, b_work): (&SparseMatrix, std::borrow::Cow<[f64]>) = if params.equilibrate {
-        let (m, d) = scaling::equilibrate_rows_with(a, &row_max);
-        scaled = m;
-        (&scaled, std::borrow::Cow::Owned(scaling::scale_rhs(b, &d)))
-    } else {
-        (a, std::borrow::Cow::Borrowed(b))
+    let scales = params.equilibrate.then(|| scaling::row_scales(a, &row_max));
+    let b_work: std::borrow::Cow<[f64]> = match &scales {
+        Some(d) => std::borrow::Cow::Owned(scaling::scale_rhs(b, d)),
+        None => std::borrow::Cow::Borrowed(b),
     };
+    // The multigrid holds the scaled operator in rows and GMRES iterates on those, so
+    // no scaled copy in columns is made for it.
+    let multigrid = matches!(kind, SolverKind::Gmres { preconditioner: Preconditioner::Amg, .. });
+    let scaled = scales.as_ref().filter(|_| !multigrid).map(|_| scaling::equilibrate_rows_with(a, &row_max).0);
+    let a_work = scaled.as_ref().unwrap_or(a);
 
     match kind {
         SolverKind::Auto { .. } => unreachable!("resolved above"),
@@ -413,7 +415,12 @@ pub(crate) fn solve_with_memory(
             }
         }
         SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart } => {
-            let pc = precond::BuiltPreconditioner::build(a_work, preconditioner, layout)?;
+            let pc = if multigrid {
+                let rows = amg::scaled_rows(a, scales.as_deref());
+                precond::BuiltPreconditioner::Amg(Box::new(amg::Amg::build_from_rows(rows, layout, amg::AmgParams::default())?))
+            } else {
+                precond::BuiltPreconditioner::build(a_work, preconditioner, layout)?
+            };
             // The multigrid holds the operator in rows already; other preconditioners
             // need it converted once.
             let converted;

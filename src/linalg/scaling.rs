@@ -65,15 +65,7 @@ pub fn equilibrate_rows(a: &SparseMatrix) -> Result<(SparseMatrix, Vec<f64>), So
 /// `(D A, d)` from precomputed, strictly positive row maxima
 /// (see [`row_max_abs`]); `D A` has a non-negative diagonal.
 pub fn equilibrate_rows_with(a: &SparseMatrix, row_max: &[f64]) -> (SparseMatrix, Vec<f64>) {
-    let mut d: Vec<f64> = row_max.iter().map(|m| 1.0 / m).collect();
-    for (j, dj) in d.iter_mut().enumerate().take(a.ncols()) {
-        let rows = a.symbolic().row_idx_of_col_raw(j);
-        if let Ok(p) = rows.binary_search(&j) {
-            if a.val_of_col(j)[p] < 0.0 {
-                *dj = -*dj;
-            }
-        }
-    }
+    let d = row_scales(a, row_max);
     let mut s = a.clone();
     let (sym, val) = s.parts_mut();
     for j in 0..sym.ncols() {
@@ -83,6 +75,21 @@ pub fn equilibrate_rows_with(a: &SparseMatrix, row_max: &[f64]) -> (SparseMatrix
         }
     }
     (s, d)
+}
+
+/// The row scales `d_i = ±1 / max_j |a_ij|` of [`equilibrate_rows`], from the row
+/// maxima of [`row_max_abs`].
+pub fn row_scales(a: &SparseMatrix, row_max: &[f64]) -> Vec<f64> {
+    let mut d: Vec<f64> = row_max.iter().map(|m| 1.0 / m).collect();
+    for (j, dj) in d.iter_mut().enumerate().take(a.ncols()) {
+        let rows = a.symbolic().row_idx_of_col_raw(j);
+        if let Ok(p) = rows.binary_search(&j) {
+            if a.val_of_col(j)[p] < 0.0 {
+                *dj = -*dj;
+            }
+        }
+    }
+    d
 }
 
 /// `D b`, i.e. `b_i · d_i`.
