@@ -1,0 +1,34 @@
+"""Iterations against nodes on log-linear axes as an SVG, from `nodes:iterations` pairs.
+
+Usage: python3 benches/plot_iterations.py OUT.svg "TITLE" 2541:23 9881:22 ...
+The numbers are the measured ones listed in BENCHMARKS.md (GMRES + AMG section).
+"""
+import math
+import sys
+
+out, title, pairs = sys.argv[1], sys.argv[2], [tuple(map(float, p.split(':'))) for p in sys.argv[3:]]
+W, H, L, R, T, B = 640, 400, 70, 20, 40, 60
+lo, hi = math.floor(math.log10(min(n for n, _ in pairs))), math.ceil(math.log10(max(n for n, _ in pairs)))
+ymax = max(10.0, math.ceil(max(i for _, i in pairs) / 10.0) * 10.0 + 10.0)
+x = lambda n: L + (math.log10(n) - lo) / (hi - lo) * (W - L - R)
+y = lambda i: H - B - i / ymax * (H - T - B)
+svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="12">',
+       f'<rect width="{W}" height="{H}" fill="white"/>',
+       f'<text x="{W / 2}" y="22" text-anchor="middle" font-size="14">{title}</text>',
+       f'<line x1="{L}" y1="{H - B}" x2="{W - R}" y2="{H - B}" stroke="black"/>',
+       f'<line x1="{L}" y1="{T}" x2="{L}" y2="{H - B}" stroke="black"/>']
+for e in range(lo, hi + 1):
+    svg.append(f'<line x1="{x(10 ** e)}" y1="{T}" x2="{x(10 ** e)}" y2="{H - B}" stroke="#ddd"/>')
+    svg.append(f'<text x="{x(10 ** e)}" y="{H - B + 18}" text-anchor="middle">1e{e}</text>')
+for k in range(0, int(ymax) + 1, 10):
+    svg.append(f'<line x1="{L}" y1="{y(k)}" x2="{W - R}" y2="{y(k)}" stroke="#eee"/>')
+    svg.append(f'<text x="{L - 8}" y="{y(k) + 4}" text-anchor="end">{k}</text>')
+svg.append(f'<text x="{(L + W - R) / 2}" y="{H - 15}" text-anchor="middle">nodes</text>')
+svg.append(f'<text x="18" y="{(T + H - B) / 2}" text-anchor="middle" transform="rotate(-90 18 {(T + H - B) / 2})">iterations to 1e-10</text>')
+pts = sorted(pairs)
+svg.append('<polyline fill="none" stroke="#1f77b4" stroke-width="2" points="' + ' '.join(f'{x(n):.1f},{y(i):.1f}' for n, i in pts) + '"/>')
+for n, i in pts:
+    svg.append(f'<circle cx="{x(n):.1f}" cy="{y(i):.1f}" r="4" fill="#1f77b4"/>')
+    svg.append(f'<text x="{x(n):.1f}" y="{y(i) - 9:.1f}" text-anchor="middle" font-size="11">{int(i)}</text>')
+svg.append('</svg>')
+open(out, 'w').write('\n'.join(svg) + '\n')
