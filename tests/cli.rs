@@ -494,6 +494,9 @@ fn invalid_scenes_exit_2_naming_the_field() {
             &["solver.preconditioner", "multigrid"],
         ),
         ("tolerance = 0", Some(scene_plus("[solver]\nkind = \"bicgstab\"\ntolerance = 0.0\n")), &["solver.tolerance"]),
+        ("restart = 0", Some(scene_plus("[solver]\nkind = \"gmres\"\nrestart = 0\n")), &["solver.restart", "1..=1000"]),
+        ("restart huge", Some(scene_plus("[solver]\nkind = \"gmres\"\nrestart = 100000000\n")), &["solver.restart", "100000000"]),
+        ("restart with bicgstab", Some(scene_plus("[solver]\nkind = \"bicgstab\"\nrestart = 20\n")), &["solver.restart", "gmres"]),
         ("unknown exact kind", Some(scene(&[("kind = \"manufactured\"", "kind = \"hertz\"")])), &["exact.kind", "hertz"]),
         (
             "cantilever without load",

@@ -24,6 +24,7 @@
 //! size), and which alternatives fail.
 
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
+use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
 use super::SparseMatrix;
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CscMatrix, CsrMatrix};
@@ -129,71 +130,6 @@ pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> CsrMatrix<f64> {
     let csc = CscMatrix::try_from_csc_data(a.nrows(), a.ncols(), a.symbolic().col_ptr().to_vec(), a.symbolic().row_idx().to_vec(), values)
         .expect("faer's CSC arrays are a valid CSC matrix");
     CsrMatrix::from(&csc)
-}
-
-/// Pseudo-inverses of the diagonal blocks of `a` (row-major, `block²` per node):
-/// a ghost's block can be singular, and a coarse node whose near-null vectors were
-/// dependent has zero rows; the pseudo-inverse leaves those directions to the other
-/// levels instead of dividing by zero.
-fn inverse_diagonal_blocks(a: &CsrMatrix<f64>, blocks: Blocks) -> Vec<f64> {
-    let b = blocks.block;
-    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
-    let mut out = vec![0.0; blocks.nodes * b * b];
-    out.par_chunks_mut(b * b).enumerate().for_each(|(node, inv)| {
-        let mut d = DMatrix::<f64>::zeros(b, b);
-        for r in 0..b {
-            let row = node * b + r;
-            for k in ptr[row]..ptr[row + 1] {
-                let c = idx[k];
-                if c / b == node {
-                    d[(r, c % b)] = val[k];
-                }
-            }
-        }
-        let largest = d.amax();
-        if largest == 0.0 {
-            return;
-        }
-        let p = pseudo_inverse(&d);
-        for r in 0..b {
-            for c in 0..b {
-                inv[r * b + c] = p[(r, c)];
-            }
-        }
-    });
-    out
-}
-
-/// Largest condition number of a diagonal block inverted as it stands; beyond it the
-/// block's small singular values are dropped (pseudo-inverse).
-const BLOCK_CONDITION: f64 = 1e10;
-
-/// `d⁻¹` by LU when `d` is well conditioned, else the pseudo-inverse from faer's SVD
-/// with singular values below `‖d‖ / BLOCK_CONDITION` dropped (nalgebra's SVD is not
-/// used: it fails silently on some well-posed problems, `../shared/docs/crates.md`).
-fn pseudo_inverse(d: &DMatrix<f64>) -> DMatrix<f64> {
-    let b = d.nrows();
-    if let Some(inv) = d.clone().try_inverse() {
-        let (n, ni) = (d.abs().row_sum().max(), inv.abs().row_sum().max());
-        if n * ni < BLOCK_CONDITION && inv.iter().all(|v| v.is_finite()) {
-            return inv;
-        }
-    }
-    let m = faer::Mat::<f64>::from_fn(b, b, |i, j| d[(i, j)]);
-    let Ok(svd) = m.svd() else { return DMatrix::zeros(b, b) };
-    let (u, s, v) = (svd.U(), svd.S(), svd.V());
-    let largest = (0..b).map(|i| s[i]).fold(0.0f64, f64::max);
-    let mut out = DMatrix::<f64>::zeros(b, b);
-    for k in 0..b {
-        if s[k] > largest / BLOCK_CONDITION {
-            for i in 0..b {
-                for j in 0..b {
-                    out[(i, j)] += v[(i, k)] * u[(j, k)] / s[k];
-                }
-            }
-        }
-    }
-    out
 }
 
 /// The block-diagonal matrix of `inv_diag`.
@@ -367,57 +303,11 @@ impl Amg {
 }
 
 impl Level {
-    /// One block Gauss–Seidel sweep for `A z = f`, nodes in increasing (`forward`) or
-    /// decreasing order: `z_I += D_I⁺ (f − A z)_I`. With several threads the nodes are
-    /// split into one contiguous range per thread, each swept in order with the values
-    /// of the other ranges from before the sweep ("hybrid" Gauss–Seidel, Baker, Falgout,
-    /// Kolev & Yang, *SIAM J. Sci. Comput.* 33 (2011) 2864–2887): ranges of thousands of
-    /// nodes couple only through their edges, so the sweep stays a Gauss–Seidel sweep
-    /// almost everywhere.
+    /// One block Gauss–Seidel sweep of this level ([`gauss_seidel`]).
     fn gauss_seidel(&self, f: &[f64], z: &mut [f64], forward: bool) {
-        let b = self.blocks.block;
-        let nodes = self.blocks.nodes;
-        let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
-        let per_part = nodes.div_ceil(parts);
-        let before: Option<Vec<f64>> = (parts > 1).then(|| z.to_vec());
-        let (ptr, idx, val) = (self.a.row_offsets(), self.a.col_indices(), self.a.values());
-        z.par_chunks_mut(per_part * b).enumerate().for_each(|(part, own)| {
-            let first = part * per_part;
-            let start = first * b;
-            let end = start + own.len();
-            let range = first..first + own.len() / b;
-            let mut s = [0.0f64; MAX_BLOCK];
-            let mut sweep = |node: usize| {
-                for (m, sm) in s.iter_mut().enumerate().take(b) {
-                    let row = node * b + m;
-                    let mut sum = 0.0;
-                    for k in ptr[row]..ptr[row + 1] {
-                        let c = idx[k];
-                        let zc = if (start..end).contains(&c) { own[c - start] } else { before.as_ref().map_or(0.0, |z| z[c]) };
-                        sum += val[k] * zc;
-                    }
-                    *sm = f[row] - sum;
-                }
-                let inv = &self.inv_diag[node * b * b..(node + 1) * b * b];
-                for m in 0..b {
-                    own[(node - first) * b + m] += (0..b).map(|c| inv[m * b + c] * s[c]).sum::<f64>();
-                }
-            };
-            if forward {
-                range.for_each(&mut sweep);
-            } else {
-                range.rev().for_each(&mut sweep);
-            }
-        });
+        gauss_seidel(&self.a, self.blocks, &self.inv_diag, f, z, forward);
     }
 }
-
-/// Below this many nodes a level is swept by one thread (the copy of the iterate
-/// costs more than the second thread gains).
-const PARALLEL_SWEEP_NODES: usize = 20_000;
-
-/// Largest block (unknowns per node or near-null vectors) the smoother handles.
-const MAX_BLOCK: usize = 8;
 
 impl Coarsest {
     /// Dense LU of the coarsest operator; unknowns whose row and column are both empty

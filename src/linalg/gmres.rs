@@ -78,7 +78,8 @@ pub fn solve_gmres(
     restart: usize,
 ) -> GmresOutcome {
     let n = b.len();
-    let m = restart.max(1);
+    // More Krylov vectors than iterations or unknowns would only allocate.
+    let m = restart.min(max_iterations).min(n).max(1);
     let mut x = vec![0.0; n];
     let b_norm = norm(b);
     let mut out =

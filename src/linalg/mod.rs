@@ -28,6 +28,7 @@ pub mod params;
 pub mod precond;
 pub mod rowmat;
 pub mod scaling;
+pub mod smoother;
 pub mod triplets;
 
 #[cfg(test)]
@@ -186,7 +187,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 
 /// Solve `A x = b` in the scale of the loads: `b` is multiplied by the power of two
 /// `s = 2^-e` that brings `max |b_i|` into `[1, 2)` (exact in binary floating point),
-/// `A x' = s b` is solved by [`solve_scaled`], and `x = x' / s`. Loads from 1e-300 to
+/// `A x' = s b` is solved by [`solve_with_memory`], and `x = x' / s`. Loads from 1e-300 to
 /// 1e300 then give the same digits (no overflow or underflow in the residual norms),
 /// and a solution beyond the double range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
@@ -226,35 +227,63 @@ pub fn solve_nodal(
     Ok((x, SolveReport { subnormal_unknowns, ..report }))
 }
 
-/// Solve `A x = b` (the loads already scaled, [`solve`]).
+/// The report of a converged Krylov solve with preconditioner `pc`, before its
+/// iteration counts and residuals are filled in; the method's name carries what the
+/// preconditioner says of itself (AMG: its levels).
+fn iterative_report(
+    method: String,
+    choice: Option<String>,
+    pc: &precond::BuiltPreconditioner,
+    equilibrated: bool,
+    (setup_seconds, solve_seconds): (f64, f64),
+) -> SolveReport {
+    SolveReport {
+        method: format!("{method}{}", pc.describe()),
+        choice,
+        iterations: 0,
+        relative_residual: f64::NAN,
+        original_relative_residual: f64::NAN,
+        setup_seconds,
+        solve_seconds,
+        equilibrated,
+        preconditioner_nonzeros: Some(pc.nonzeros()),
+        restarts: 0,
+        subnormal_unknowns: 0,
+        condition_estimate: None,
+    }
+}
+
+/// What stopped a Krylov method that ran out of iterations.
+fn iteration_limit(max_iterations: usize) -> String {
+    format!("the iteration limit (solver.max_iterations = {max_iterations})")
+}
+
+/// Solve `A x = b` (the loads already scaled, [`solve`]) with `available` bytes of
+/// memory for `auto`'s choice.
 ///
 /// 1. Checks that `A` is square, `b` has length `n`, every stored entry is
 ///    finite and no row is entirely zero.
 /// 2. With `params.equilibrate`, solves `D A x = D b` with
 ///    `D = diag(±1 / max_j |a_ij|)` ([`scaling::equilibrate_rows`]); `x` is
 ///    unchanged by row scaling.
-/// 3. Runs [`lu::SparseLu`] or [`bicgstab::solve_bicgstab`].
+/// 3. Runs [`lu::SparseLu`], [`bicgstab::solve_bicgstab`] or [`gmres::solve_gmres`].
 /// 4. Recomputes the true residual of the solved (equilibrated, if asked)
 ///    system ([`relative_residual`]) and reports it, with the residual of the
 ///    original system beside it. For LU a non-finite solution or a
 ///    residual above [`LU_RESIDUAL_LIMIT`] or a condition estimate above
-///    [`lu::CONDITION_LIMIT`] is [`SolveError::Singular`]; for BiCGSTAB a
-///    residual above the tolerance is [`SolveError::NoConvergence`] and a
-///    NaN/inf iterate is [`SolveError::Singular`].
+///    [`lu::CONDITION_LIMIT`] is [`SolveError::Singular`]; for the Krylov
+///    methods a residual above the tolerance is [`SolveError::NoConvergence`]
+///    and a NaN/inf iterate is [`SolveError::Singular`].
 ///
-/// Only LU can *prove* trouble: BiCGSTAB on a singular but consistent system
+/// When `auto` goes iterative and its Krylov solver stops or breaks down, it tries
+/// BiCGSTAB with ILU(0) before giving up (on the cantilever grid ILUT diverges where
+/// ILU(0) converges; BENCHMARKS.md), and says so in `choice`.
+///
+/// Only LU can *prove* trouble: a Krylov method on a singular but consistent system
 /// (e.g. pure traction with self-equilibrated loads) may converge to one of
 /// the infinitely many solutions, rigid-body component included.
 ///
 /// An empty system (`n = 0`) returns an empty solution.
-pub fn solve_scaled(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    solve_with_memory(a, b, params, None, crate::output::available_memory_bytes())
-}
-
-/// [`solve_scaled`] with `available` bytes of memory for `auto`'s choice. When `auto`
-/// goes iterative and its Krylov solver stops or breaks down, it tries BiCGSTAB with
-/// ILU(0) before giving up (on the cantilever grid ILUT diverges where ILU(0)
-/// converges; BENCHMARKS.md), and says so in `choice`.
 pub(crate) fn solve_with_memory(
     a: &SparseMatrix,
     b: &[f64],
@@ -373,23 +402,16 @@ pub(crate) fn solve_with_memory(
                 bicgstab::Status::Converged => Ok((
                     out.x,
                     SolveReport {
-                        method,
-                        choice,
                         iterations: out.iterations,
+                        restarts: out.restarts,
                         relative_residual: out.relative_residual,
                         original_relative_residual,
-                        setup_seconds,
-                        solve_seconds,
-                        equilibrated: params.equilibrate,
-                        preconditioner_nonzeros: Some(pc.nonzeros()),
-                        restarts: out.restarts,
-                        subnormal_unknowns: 0,
-                        condition_estimate: None,
+                        ..iterative_report(method, choice, &pc, params.equilibrate, (setup_seconds, solve_seconds))
                     },
                 )),
                 bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
                     limit: if out.iterations >= max_iterations {
-                        format!("the iteration limit (solver.max_iterations = {max_iterations})")
+                        iteration_limit(max_iterations)
                     } else {
                         format!(
                             "the restart limit ({} verification restarts: the recursive residual claimed \
@@ -441,23 +463,16 @@ pub(crate) fn solve_with_memory(
                 gmres::Status::Converged => Ok((
                     out.x,
                     SolveReport {
-                        method: format!("{method}{}", pc.describe()),
-                        choice,
                         iterations: out.iterations,
+                        restarts: out.restarts,
                         relative_residual: out.relative_residual,
                         original_relative_residual,
-                        setup_seconds,
-                        solve_seconds,
-                        equilibrated: params.equilibrate,
-                        preconditioner_nonzeros: Some(pc.nonzeros()),
-                        restarts: out.restarts,
-                        subnormal_unknowns: 0,
-                        condition_estimate: None,
+                        ..iterative_report(method, choice, &pc, params.equilibrate, (setup_seconds, solve_seconds))
                     },
                 )),
                 gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
                     limit: if out.status == gmres::Status::IterationLimit {
-                        format!("the iteration limit (solver.max_iterations = {max_iterations})")
+                        iteration_limit(max_iterations)
                     } else {
                         format!("stagnation (a restart cycle reduced the residual by less than {:.0} %)", 100.0 * (1.0 - gmres::STAGNATION))
                     },

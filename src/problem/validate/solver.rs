@@ -7,6 +7,9 @@ use crate::linalg::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod
 use crate::problem::spec::SolverSpec;
 use crate::problem::ProblemError;
 
+/// Largest GMRES restart length accepted: the basis then takes 8 kB per unknown.
+const MAX_RESTART: usize = 1000;
+
 /// The Krylov settings of `s`: BiCGSTAB with defaults from
 /// [`SolverKind::default_bicgstab`], GMRES (and `auto`'s iterative choice) from
 /// [`SolverKind::default_gmres`] (preconditioner `amg` unless another is named).
@@ -53,8 +56,8 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
         return c.err("solver.max_iterations", "must be at least 1");
     }
     let restart = s.restart.unwrap_or(GMRES_RESTART);
-    if restart == 0 {
-        return c.err("solver.restart", "must be at least 1");
+    if restart == 0 || restart > MAX_RESTART {
+        return c.err("solver.restart", format!("must lie in 1..={MAX_RESTART} (each vector costs 8 bytes per unknown), got {restart}"));
     }
     Ok(match method {
         SolverMethod::Bicgstab => {
