@@ -28,8 +28,8 @@ struct Run {
 
 fn run(p: &Problem, params: &PdParams) -> Run {
     let t0 = std::time::Instant::now();
-    let dynamics = p.case.dynamics.expect("a [dynamics] table");
-    let sim = simulate(&p.case, params, &dynamics, &Silent, |_| Ok(())).map_err(|_| "integration failed").unwrap();
+    let dynamics = p.case.dynamics.as_ref().expect("a [dynamics] table");
+    let sim = simulate(&p.case, params, dynamics, &Silent, |_| Ok(())).map_err(|_| "integration failed").unwrap();
     let positions = sim.discretisation.nodes.positions[..sim.discretisation.nodes.free].to_vec();
     let interior = interior_flags(&p.case.domain, &positions, params.horizon);
     Run { positions, u: sim.u, v: sim.v, interior, seconds: t0.elapsed().as_secs_f64() }

@@ -6,10 +6,14 @@
 
 use crate::choice::choice;
 use crate::domain::Domain;
+use crate::domain::Point;
 use crate::dynamics::DynamicsParams;
 use crate::elasticity::conditions::{BoundaryCondition, Value};
 use crate::elasticity::material::Material;
-use crate::exact::{ExactSolution, NamedSolution};
+use crate::exact::{ExactKind, ExactSolution, ExpressionSolution, NamedSolution};
+use crate::expression::VectorExpression;
+use crate::pipeline::RunError;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Output fields a run writes.
@@ -85,5 +89,50 @@ impl Case {
     /// The exact solution the scene names, if any (its parameters were validated).
     pub fn exact_solution(&self) -> Option<Box<dyn ExactSolution>> {
         self.exact.as_ref().map(|e| e.build(self.material).expect("validated exact solution parameters"))
+    }
+
+    /// Every formula of the scene evaluated where a run uses it: the body force, the
+    /// initial state and an `[exact] kind = "expression"` (with its derivatives) at
+    /// `points`, each boundary value at the `boundary` points `(position, part)` of its
+    /// part. The first value that is not finite is an error naming the formula and
+    /// the point.
+    pub fn check_formulas(&self, points: &[Point], boundary: &[(Point, usize)]) -> Result<(), RunError> {
+        let bad = |(field, text, value): (String, &str, f64), p: Point| RunError::BadFormula {
+            field,
+            text: text.to_string(),
+            value,
+            x: p[0],
+            y: p[1],
+        };
+        let mut everywhere: Vec<&VectorExpression> = Vec::new();
+        let dynamics = self.dynamics.iter().flat_map(|d| [&d.initial_displacement, &d.initial_velocity]);
+        for v in std::iter::once(&self.body_force).chain(dynamics) {
+            if let Value::Expression(e) = v {
+                everywhere.push(e);
+            }
+        }
+        let exact = match &self.exact {
+            Some(named) if named.kind == ExactKind::Expression => {
+                Some(ExpressionSolution::from_parameters(&named.parameters, self.material).expect("validated exact solution"))
+            }
+            _ => None,
+        };
+        if !everywhere.is_empty() || exact.is_some() {
+            let found = points.par_iter().find_map_first(|&p| {
+                let at = everywhere.iter().find_map(|e| e.non_finite_at(p)).or_else(|| exact.as_ref()?.non_finite_at(p));
+                at.map(|a| bad(a, p))
+            });
+            if let Some(e) = found {
+                return Err(e);
+            }
+        }
+        for &(p, part) in boundary {
+            if let Value::Expression(e) = &self.conditions[part].value {
+                if let Some(a) = e.non_finite_at(p) {
+                    return Err(bad(a, p));
+                }
+            }
+        }
+        Ok(())
     }
 }

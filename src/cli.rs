@@ -15,6 +15,16 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// A positive finite number (a spacing, horizon or ratio); negative numbers reach this
+/// check instead of clap's "unexpected argument" (`allow_negative_numbers`).
+fn positive(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(v) => Err(format!("must be a positive number, got {v}")),
+        Err(_) => Err(format!("\"{text}\" is not a number")),
+    }
+}
+
 /// Model selector of `run`.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum ModelArg {
@@ -35,13 +45,13 @@ pub enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
         /// Override the scene's node spacing (m), e.g. for timing studies.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         spacing: Option<f64>,
         /// Model to solve (default: the scene's `model`, else navier).
         #[arg(long, value_enum)]
         model: Option<ModelArg>,
         /// Override the peridynamic horizon delta (m); h = delta / m.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         horizon: Option<f64>,
         /// Exit with code 4 when the run ends with warnings (results are still written).
         #[arg(long)]
@@ -78,10 +88,10 @@ pub enum Command {
         /// Scene file (TOML) with a [peridynamics] table.
         scene: PathBuf,
         /// Ratio m = delta / h (default: the scene's).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         m: Option<f64>,
-        /// Horizons, comma-separated (default: the scene's horizon and --levels halvings).
-        #[arg(long, value_delimiter = ',')]
+        /// Horizons, comma-separated, each once (default: the scene's horizon and --levels halvings).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive)]
         deltas: Option<Vec<f64>>,
         /// Halvings of the scene's horizon when --deltas is not given.
         #[arg(long, default_value_t = 3)]
@@ -90,7 +100,7 @@ pub enum Command {
         #[arg(long, value_delimiter = ',')]
         quadratures: Option<Vec<String>>,
         /// Node spacing of the MLSM reference (default: the scene's; unused when the scene has an [exact] solution).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         reference_spacing: Option<f64>,
         /// Output folder (default: output/<scene name>/compare).
         #[arg(long)]

@@ -7,7 +7,7 @@
 //! The modules from the bottom up, one floor at a time: a module uses only modules on
 //! the floors below its own (`tests/architecture.rs` checks it).
 //! 1. [`choice`]: scene names, defaults and help of every option enum; [`output`]:
-//!    files; [`cli`]: the command line;
+//!    files; [`cli`]: the command line; [`expression`]: formulas of the scene file;
 //! 2. [`domain`]: geometry and nodes; [`linalg`]: sparse solvers; [`elasticity`]:
 //!    material, boundary conditions, unknown layout, stress;
 //! 3. [`mlsm`]: weighted least-squares shape functions; [`exact`]: closed-form and
@@ -27,6 +27,7 @@
 // Floor 1
 pub mod choice;
 pub mod cli;
+pub mod expression;
 pub mod output;
 
 // Floor 2

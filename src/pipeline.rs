@@ -248,6 +248,12 @@ pub enum RunError {
          overflowed the double range (1.8e308) or is NaN; rescale the units of the loads and moduli"
     )]
     NotFinite { node: usize, x: f64, y: f64 },
+    /// A formula of the scene is not finite at a point where the run needs it.
+    #[error(
+        "{field} = \"{text}\" is {value} at ({x:.6e}, {y:.6e}): a formula must give a finite number at every node where it \
+         is used (division by zero, sqrt or log of a negative number?)"
+    )]
+    BadFormula { field: String, text: String, value: f64, x: f64, y: f64 },
     /// Writing a snapshot during time integration failed.
     #[error(transparent)]
     Snapshot(OutputError),

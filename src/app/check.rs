@@ -13,6 +13,9 @@ pub(super) fn run(scene: &Path, quiet: bool) -> Result<(), AppError> {
     }
     println!("{}: valid", scene.display());
     println!("  boundary parts: {}", p.case.domain.parts.join(", "));
+    for n in &p.notes {
+        println!("  note: {n}");
+    }
     let n = &p.navier;
     println!(
         "  spacing {:.4e} ({:?} fill), support {}, {}",

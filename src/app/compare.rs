@@ -101,8 +101,16 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
         return Err(AppError::Usage(format!("--levels {}: at most 6 halvings (each multiplies the node count by 4)", req.levels)));
     }
     let deltas: Vec<f64> = req.deltas.clone().unwrap_or_else(|| (0..=req.levels).map(|k| base.horizon / 2f64.powi(k as i32)).collect());
+    if let Some((k, d)) = deltas.iter().enumerate().find(|(k, d)| deltas[..*k].contains(d)) {
+        return Err(AppError::Usage(format!(
+            "--deltas: {d} is given twice (entries {} and {}); give each horizon once",
+            deltas.iter().position(|x| x == d).unwrap() + 1,
+            k + 1
+        )));
+    }
     if deltas.len() < 2 {
-        return Err(AppError::Usage("compare needs at least two horizons to measure an order".into()));
+        let given = if req.deltas.is_some() { "--deltas gives one horizon" } else { "--levels 0 gives one horizon" };
+        return Err(AppError::Usage(format!("{given}; compare needs at least two to measure an order")));
     }
     let m = req.m.unwrap_or(base.ratio);
     let mut runs = Vec::new();
@@ -119,7 +127,7 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
 fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference, dir: &Path, term: &Terminal) -> Result<Row, AppError> {
     let params = run.peridynamics.expect("a peridynamic run");
     let t0 = Instant::now();
-    let outcome = model::solve(run, term, |_| Ok(()))?;
+    let outcome = model::solve(run, term, |_| Ok(())).map_err(|e| AppError::of_scene(p, e))?;
     let (free, displacement) = (outcome.positions(), outcome.displacement());
     let interior = interior_flags(&p.case.domain, free, params.horizon);
     let local = reference.displacement_at(free)?;

@@ -40,6 +40,20 @@ pub enum AppError {
     Strict(usize),
 }
 
+impl AppError {
+    /// A run failure caused by the scene file (a fixed time step above the stability
+    /// limit, a formula that is not finite at a node) as an error of that file and
+    /// field; any other failure as it is.
+    pub(crate) fn of_scene(p: &Problem, e: RunError) -> Self {
+        let field = match &e {
+            RunError::UnstableTimeStep { .. } => "dynamics.time_step".to_string(),
+            RunError::BadFormula { field, .. } => field.clone(),
+            _ => return e.into(),
+        };
+        AppError::Problem(ProblemError { file: p.source.clone(), field, reason: e.to_string() })
+    }
+}
+
 impl From<RunError> for AppError {
     /// A snapshot that could not be written is an output failure, not a numerical one.
     fn from(e: RunError) -> Self {
@@ -58,7 +72,8 @@ impl AppError {
             AppError::Problem(_)
             | AppError::Usage(_)
             | AppError::Run(RunError::UnstableTimeStep { .. })
-            | AppError::Run(RunError::TooManySteps { .. }) => 2,
+            | AppError::Run(RunError::TooManySteps { .. })
+            | AppError::Run(RunError::BadFormula { .. }) => 2,
             AppError::Run(RunError::Interrupted { .. }) => 130,
             AppError::Run(_) => 3,
             AppError::Output(_) => 1,

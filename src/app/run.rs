@@ -78,10 +78,13 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
     let dir = req.out.clone().unwrap_or_else(|| default_out(&p));
     if !quiet {
         eprintln!("{}", model::announce(&p));
+        for n in &p.notes {
+            eprintln!("note: {n}");
+        }
     }
     let t0 = Instant::now();
     let mut series = Series::new(&dir, &p.case.domain);
-    let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot))?;
+    let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     let t_out = Instant::now();
     let seconds = || t_out.elapsed().as_secs_f64();
     match outcome {

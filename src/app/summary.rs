@@ -258,7 +258,7 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
     #[serde(flatten)]
     header: Header<'a>,
     nodes: usize,
-    dynamics: DynamicsParams,
+    dynamics: &'a DynamicsParams,
     integration: &'a DynamicReport,
     seconds_per_step_per_node: f64,
     energy_first: EnergyRow,
@@ -276,7 +276,7 @@ impl<'a, M: Serialize> DynamicSummary<'a, M> {
         DynamicSummary {
             header: Header::new(p, timings, t0),
             nodes,
-            dynamics: p.case.dynamics.expect("dynamic run"),
+            dynamics: p.case.dynamics.as_ref().expect("dynamic run"),
             integration: report,
             seconds_per_step_per_node: report.seconds / report.steps.max(1) as f64 / nodes.max(1) as f64,
             energy_first: energies[0],

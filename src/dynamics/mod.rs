@@ -15,7 +15,7 @@ pub mod rod;
 
 pub use driver::INTEGRATE;
 pub use integrators::Integrator;
-pub use params::{Affine, DynamicsParams};
+pub use params::DynamicsParams;
 
 /// A semi-discrete second-order system `u_tt = a(t, u)`.
 pub trait SecondOrderSystem: Sync {

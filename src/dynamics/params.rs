@@ -2,29 +2,11 @@
 //! scheme, step, initial state and snapshots.
 
 use super::Integrator;
+use crate::elasticity::conditions::Value;
 use serde::Serialize;
 
-/// An affine vector field `u_c(x, y) = c[0] + c[1] x + c[2] y` per component.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Affine {
-    /// Coefficients of the x component.
-    pub x: [f64; 3],
-    /// Coefficients of the y component.
-    pub y: [f64; 3],
-}
-
-impl Affine {
-    /// The zero field.
-    pub const ZERO: Affine = Affine { x: [0.0; 3], y: [0.0; 3] };
-
-    /// Value at `p`.
-    pub fn at(&self, p: [f64; 2]) -> [f64; 2] {
-        [self.x[0] + self.x[1] * p[0] + self.x[2] * p[1], self.y[0] + self.y[1] * p[0] + self.y[2] * p[1]]
-    }
-}
-
 /// The `[dynamics]` table, validated.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct DynamicsParams {
     /// Mass density rho (kg/m^3).
     pub density: f64,
@@ -36,10 +18,10 @@ pub struct DynamicsParams {
     pub time_step: Option<f64>,
     /// Fraction of the stable step used otherwise.
     pub safety: f64,
-    /// Initial displacement.
-    pub initial_displacement: Affine,
-    /// Initial velocity.
-    pub initial_velocity: Affine,
+    /// Initial displacement (a constant or an expression).
+    pub initial_displacement: Value,
+    /// Initial velocity (a constant or an expression).
+    pub initial_velocity: Value,
     /// Snapshots in the .pvd series.
     pub snapshots: usize,
     /// A snapshot every k steps, when given (instead of `snapshots`).

@@ -3,7 +3,9 @@
 //! boundary nodes, peridynamics into volume constraints and layer loads).
 
 use crate::choice::choice;
+use crate::expression::VectorExpression;
 use serde::Serialize;
+use std::sync::Arc;
 
 choice! {
     /// How a displacement component is constrained on a boundary part.
@@ -27,18 +29,37 @@ choice! {
     }
 }
 
-/// Where a boundary or body-force value comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// Where a boundary value, body force or initial state comes from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Value {
     /// A constant vector.
     Constant([f64; 2]),
     /// The scene's exact solution (displacement, traction `sigma n`, or body force).
     Exact,
+    /// A formula per component in `x`, `y` (`[0, "-rho * g"]`).
+    Expression(Arc<VectorExpression>),
+}
+
+impl Value {
+    /// The value at `p` of a constant or an expression; `None` for [`Value::Exact`],
+    /// which needs the exact solution (`exact::value`).
+    pub fn explicit_at(&self, p: [f64; 2]) -> Option<[f64; 2]> {
+        match self {
+            Value::Constant(c) => Some(*c),
+            Value::Expression(e) => Some(e.at(p)),
+            Value::Exact => None,
+        }
+    }
+
+    /// Whether the value is the zero vector everywhere.
+    pub fn is_zero(&self) -> bool {
+        *self == Value::Constant([0.0, 0.0])
+    }
 }
 
 /// The condition imposed on one boundary part.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BoundaryCondition {
     /// Condition on the x and y components.
     pub components: [ComponentCondition; 2],

@@ -19,6 +19,7 @@
 //! | [`LameCylinder`] (thick cylinder) | 3 (Lame) | 0 | both |
 //! | [`Manufactured`] | 6 | analytic | both |
 //! | [`Polynomial`] | 6 (patch tests) | analytic | both |
+//! | [`ExpressionSolution`] | any formulas `ux`, `uy` | derived symbolically | both |
 //!
 //! The closed-form cases return their published stress formulas from
 //! [`ExactSolution::stress`]; the tests check that these agree with
@@ -28,6 +29,7 @@
 //! public so a problem can be read, printed and serialised as it is.
 
 mod cantilever;
+mod expression;
 mod flamant;
 mod kirsch;
 mod lame;
@@ -43,11 +45,12 @@ use crate::elasticity::conditions::Value;
 use crate::elasticity::material::{self, Material, PlaneModel};
 
 pub use cantilever::Cantilever;
+pub use expression::ExpressionSolution;
 pub use flamant::Flamant;
 pub use kirsch::Kirsch;
 pub use lame::LameCylinder;
 pub use manufactured::Manufactured;
-pub use named::{ExactKind, NamedSolution, Parameter, ParameterKind, Parameters};
+pub use named::{ExactKind, NamedSolution, Parameter, ParameterKind, ParameterValue, Parameters};
 pub use polynomial::Polynomial;
 
 /// A closed-form displacement field that solves the Navier equation with a known body force.
@@ -152,11 +155,9 @@ impl Check {
     }
 }
 
-/// The vector a boundary or body-force [`Value`] stands for: the constant, or `pick`
-/// applied to the exact solution (validation makes sure one exists).
-pub fn value(value: Value, exact: Option<&dyn ExactSolution>, pick: impl FnOnce(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
-    match value {
-        Value::Constant(c) => c,
-        Value::Exact => pick(exact.expect("validated: \"exact\" values need an exact solution")),
-    }
+/// The vector a boundary or body-force [`Value`] stands for at `p`: the constant, the
+/// expression's value, or `pick` applied to the exact solution (validation makes sure
+/// one exists).
+pub fn value(value: &Value, p: [f64; 2], exact: Option<&dyn ExactSolution>, pick: impl FnOnce(&dyn ExactSolution) -> [f64; 2]) -> [f64; 2] {
+    value.explicit_at(p).unwrap_or_else(|| pick(exact.expect("validated: \"exact\" values need an exact solution")))
 }

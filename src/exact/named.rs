@@ -2,9 +2,10 @@
 //! takes. Each solution declares its parameters next to its formulas
 //! (`PARAMETERS`, `from_parameters`); [`ExactKind`] lists them.
 
-use super::{Cantilever, ExactSolution, Flamant, Kirsch, LameCylinder, Manufactured, ParameterError, Polynomial};
+use super::{Cantilever, ExactSolution, ExpressionSolution, Flamant, Kirsch, LameCylinder, Manufactured, ParameterError, Polynomial};
 use crate::choice::choice;
 use crate::elasticity::material::Material;
+use crate::expression::Expression;
 
 /// What values a parameter accepts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -15,6 +16,8 @@ pub enum ParameterKind {
     Length,
     /// An array of this many finite numbers.
     Coefficients(usize),
+    /// A formula in `x`, `y` and the scene's constants.
+    Expression,
 }
 
 /// A parameter of a named solution.
@@ -28,19 +31,48 @@ pub struct Parameter {
     pub help: &'static str,
 }
 
-/// Validated parameter values, by name (a number is an array of one).
+/// A validated parameter value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ParameterValue {
+    /// Numbers (a number is an array of one).
+    Numbers(Vec<f64>),
+    /// A formula.
+    Expression(Expression),
+}
+
+/// Validated parameter values, by name.
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct Parameters(Vec<(&'static str, Vec<f64>)>);
+pub struct Parameters(Vec<(&'static str, ParameterValue)>);
 
 impl Parameters {
     /// Set `name` to `values`.
     pub fn insert(&mut self, name: &'static str, values: Vec<f64>) {
+        self.set(name, ParameterValue::Numbers(values));
+    }
+
+    /// Set `name` to `value`.
+    pub fn set(&mut self, name: &'static str, value: ParameterValue) {
         self.0.retain(|(n, _)| *n != name);
-        self.0.push((name, values));
+        self.0.push((name, value));
+    }
+
+    fn value(&self, name: &str) -> &ParameterValue {
+        self.0.iter().find(|(n, _)| *n == name).map(|(_, v)| v).unwrap_or_else(|| panic!("parameter {name} was validated"))
     }
 
     fn get(&self, name: &str) -> &[f64] {
-        self.0.iter().find(|(n, _)| *n == name).map(|(_, v)| v.as_slice()).unwrap_or_else(|| panic!("parameter {name} was validated"))
+        match self.value(name) {
+            ParameterValue::Numbers(v) => v,
+            ParameterValue::Expression(_) => panic!("parameter {name} was validated as numbers"),
+        }
+    }
+
+    /// The formula `name`.
+    pub fn expression(&self, name: &str) -> &Expression {
+        match self.value(name) {
+            ParameterValue::Expression(e) => e,
+            ParameterValue::Numbers(_) => panic!("parameter {name} was validated as a formula"),
+        }
     }
 
     /// The number `name`.
@@ -64,6 +96,7 @@ choice! {
         Manufactured = "manufactured" => "u = (sin(pi x) cos(pi y), x^2 y^3) with its body force (needs body_force = \"exact\")",
         Tension = "tension" => "uniform uniaxial stress sigma_xx = `tension`",
         Polynomial = "polynomial" => "a cubic field with its body force (`ux`, `uy`: 10 coefficients each)",
+        Expression = "expression" => "any smooth field given as formulas `ux`, `uy` in x, y; body force, stress and tractions derived symbolically",
     }
 }
 
@@ -78,6 +111,7 @@ impl ExactKind {
             ExactKind::Manufactured => &[],
             ExactKind::Tension => Polynomial::TENSION_PARAMETERS,
             ExactKind::Polynomial => Polynomial::PARAMETERS,
+            ExactKind::Expression => ExpressionSolution::PARAMETERS,
         }
     }
 
@@ -91,6 +125,7 @@ impl ExactKind {
             ExactKind::Manufactured => Box::new(Manufactured::new(material)?),
             ExactKind::Tension => Box::new(Polynomial::uniaxial_tension(p.number("tension"), material)?),
             ExactKind::Polynomial => Box::new(Polynomial::new(p.coefficients("ux"), p.coefficients("uy"), material)?),
+            ExactKind::Expression => Box::new(ExpressionSolution::from_parameters(p, material)?),
         })
     }
 }

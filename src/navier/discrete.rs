@@ -79,6 +79,9 @@ impl Discretisation {
         if nodes.len() < n_support {
             return Err(RunError::TooFewNodes { nodes: nodes.len(), support: n_support });
         }
+        let on_parts: Vec<(Point, usize)> =
+            nodes.boundary.iter().flat_map(|b| b.touches.iter().map(|&(part, _)| (b.position, part))).collect();
+        case.check_formulas(&nodes.positions, &on_parts)?;
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
         let (positions, ghost, supports, needs, widened) = timer.run(SUPPORTS, || {

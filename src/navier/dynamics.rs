@@ -26,7 +26,9 @@ use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Sn
 use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
+use crate::elasticity::material::Lame;
 use crate::elasticity::stress::strain;
+use crate::exact;
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 
@@ -180,16 +182,19 @@ fn condensed(case: &Case, disc: &Discretisation, density: f64) -> Result<NavierD
 }
 
 /// `(E_kin, E_el, E_ext)` of a state (see [`simulate`]).
-fn energies(system: &NavierDynamics, disc: &Discretisation, case: &Case, areas: &[f64], density: f64, s: &State) -> (f64, f64, f64) {
+fn energies(
+    system: &NavierDynamics,
+    disc: &Discretisation,
+    body: &[[f64; 2]],
+    areas: &[f64],
+    lame: Lame,
+    density: f64,
+    s: &State,
+) -> (f64, f64, f64) {
     let (u, v) = (system.expand(&s.u, false), system.expand(&s.v, true));
     let grads = disc.gradients(&u);
-    let lame = case.material.lame();
-    let body = match case.body_force {
-        Value::Constant(f) => f,
-        Value::Exact => [0.0, 0.0],
-    };
     let (mut kin, mut el, mut ext) = (0.0, 0.0, 0.0);
-    for (i, area) in areas.iter().enumerate() {
+    for (i, (area, body)) in areas.iter().zip(body).enumerate() {
         let (ui, vi) = (disc.dofs.displacement(&u, i), disc.dofs.displacement(&v, i));
         kin += 0.5 * density * area * (vi[0].powi(2) + vi[1].powi(2));
         let (sg, e) = (lame.stress(grads[i]), strain(grads[i]));
@@ -202,7 +207,7 @@ fn energies(system: &NavierDynamics, disc: &Discretisation, case: &Case, areas: 
 /// Run `case` (with `dynamics`) by explicit MLSM elastodynamics, calling `snapshot`
 /// at the snapshot steps. Energies:
 /// `E_kin = sum rho A_i |v_i|^2 / 2`, `E_el = sum A_i sigma : eps / 2`,
-/// `E_ext = -sum A_i f . u_i` (constant body force), `A_i` lumped Delaunay areas.
+/// `E_ext = -sum A_i f(x_i) . u_i`, `A_i` lumped Delaunay areas.
 pub fn simulate(
     case: &Case,
     params: &NavierParams,
@@ -225,13 +230,13 @@ pub fn simulate(
     let grid = time_grid(system.stable_time_step(), dynamics)?;
     let points = &disc.nodes.positions;
     let dofs: DofMap = disc.dofs;
-    let init = |f: &crate::dynamics::Affine| -> Vec<f64> {
+    let init = |f: &Value| -> Vec<f64> {
         system
             .dynamic
             .iter()
             .map(|&g| {
                 let (node, c) = dofs.location(g);
-                f.at(points[node])[c]
+                f.explicit_at(points[node]).expect("validated: an initial state is a constant or an expression")[c]
             })
             .collect()
     };
@@ -239,7 +244,8 @@ pub fn simulate(
     let areas = nodal_areas(points, &cells_inside(&case.domain, points));
     let n = disc.nodes.len();
     let nodal = |x: &[f64]| dofs.displacements(x, n);
-    let energy = |s: &State| energies(&system, &disc, case, &areas, dynamics.density, s);
+    let body: Vec<[f64; 2]> = points.iter().map(|&p| exact::value(&case.body_force, p, exact.as_deref(), |e| e.body_force(p))).collect();
+    let energy = |s: &State| energies(&system, &disc, &body, &areas, case.material.lame(), dynamics.density, s);
     let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
         let (u, v) = (nodal(&system.expand(&s.u, false)), nodal(&system.expand(&s.v, true)));
         snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })

@@ -37,7 +37,7 @@ pub fn resolve(sample: &BoundarySample, conditions: &[BoundaryCondition], exact:
         for &(part, _) in &sample.touches {
             let bc = &conditions[part];
             if bc.components[c] == ComponentCondition::Displacement {
-                let g = exact::value(bc.value, exact, |e| e.displacement(p));
+                let g = exact::value(&bc.value, p, exact, |e| e.displacement(p));
                 return ComponentEquation::Displacement { value: g[c] };
             }
         }
@@ -47,13 +47,13 @@ pub fn resolve(sample: &BoundarySample, conditions: &[BoundaryCondition], exact:
             let bc = &conditions[part];
             n[0] += normal[0];
             n[1] += normal[1];
-            t += exact::value(bc.value, exact, |e| e.traction(p, normal))[c];
+            t += exact::value(&bc.value, p, exact, |e| e.traction(p, normal))[c];
         }
         let len = n[0].hypot(n[1]);
         if len < 1e-8 {
             // Opposite normals (a zero-thickness slit): use the first part alone.
             let (part, normal) = sample.touches[0];
-            let t = exact::value(conditions[part].value, exact, |e| e.traction(p, normal))[c];
+            let t = exact::value(&conditions[part].value, p, exact, |e| e.traction(p, normal))[c];
             return ComponentEquation::Traction { normal, value: t };
         }
         ComponentEquation::Traction { normal: [n[0] / len, n[1] / len], value: t / len }
@@ -120,7 +120,7 @@ mod tests {
         let u = exact.displacement(sample.position);
         assert_eq!(eq, [ComponentEquation::Displacement { value: u[0] }, ComponentEquation::Displacement { value: u[1] }]);
         // A zero-thickness slit: opposite normals of two traction parts.
-        let trac = [BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Exact }; 2];
+        let trac = [0, 1].map(|_| BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Exact });
         let slit = BoundarySample { position: [0.3, -0.2], touches: vec![(0, [0.0, 1.0]), (1, [0.0, -1.0])], lengths: vec![0.1, 0.1] };
         let eq = resolve(&slit, &trac, Some(&exact));
         let t = exact.traction(slit.position, [0.0, 1.0]);

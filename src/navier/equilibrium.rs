@@ -12,13 +12,15 @@
 //! samples (`BoundarySample::lengths`); the body force of a constant `b` is `b A` with
 //! the area `A = ½ ∮ (x - x₀)·n ds` from the same weights, and an exact body force
 //! integrates as `-∮ sigma_exact n ds` (divergence theorem), so the check compares
-//! like with like at the same quadrature.
+//! like with like at the same quadrature. A body force given by an expression is
+//! integrated by the centroid rule on the Delaunay cells of the nodes.
 //!
 //! The relative imbalance divides `|R + T + B|` by the force that flows through the
 //! boundary, `Σ |contribution of one node and part|` (plus `|B|`): the size of the
 //! terms that should cancel.
 
 use crate::case::Case;
+use crate::domain::cells::cells_inside;
 use crate::domain::{NodeSet, Point};
 use crate::elasticity::conditions::{ComponentCondition, Value};
 use crate::elasticity::stress::StressField;
@@ -45,6 +47,20 @@ fn traction(s: [f64; 3], n: Point) -> [f64; 2] {
     [s[0] * n[0] + s[2] * n[1], s[2] * n[0] + s[1] * n[1]]
 }
 
+/// `∫ f dA` by the centroid rule on the Delaunay cells of the nodes inside the solid
+/// (second order; the slivers between a curved boundary and its chords are left out).
+fn centroid_integral(case: &Case, points: &[Point], f: impl Fn(Point) -> [f64; 2]) -> [f64; 2] {
+    let mut total = [0.0; 2];
+    for t in cells_inside(&case.domain, points) {
+        let (p, q, r) = (points[t[0]], points[t[1]], points[t[2]]);
+        let area = 0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1])).abs();
+        let v = f([(p[0] + q[0] + r[0]) / 3.0, (p[1] + q[1] + r[1]) / 3.0]);
+        total[0] += area * v[0];
+        total[1] += area * v[1];
+    }
+    total
+}
+
 /// The balance of `stress` on `nodes` for `case` (module docs).
 pub fn balance(case: &Case, nodes: &NodeSet, stress: &StressField, exact: Option<&dyn ExactSolution>) -> Equilibrium {
     let (lo, hi) = case.domain.bounding_box();
@@ -54,9 +70,9 @@ pub fn balance(case: &Case, nodes: &NodeSet, stress: &StressField, exact: Option
     for (i, sample) in nodes.boundary.iter().enumerate() {
         let p = sample.position;
         for (&(part, n), &length) in sample.touches.iter().zip(&sample.lengths) {
-            let condition = case.conditions[part];
+            let condition = &case.conditions[part];
             let computed = traction(stress.sigma[i], n);
-            let prescribed = exact::value(condition.value, exact, |e| e.traction(p, n));
+            let prescribed = exact::value(&condition.value, p, exact, |e| e.traction(p, n));
             let mut node = [0.0; 2];
             for c in 0..2 {
                 node[c] = length
@@ -78,9 +94,10 @@ pub fn balance(case: &Case, nodes: &NodeSet, stress: &StressField, exact: Option
             }
         }
     }
-    let body = match case.body_force {
+    let body = match &case.body_force {
         Value::Constant(b) => [b[0] * area, b[1] * area],
         Value::Exact => [-exact_flux[0], -exact_flux[1]],
+        Value::Expression(f) => centroid_integral(case, &nodes.positions, |p| f.at(p)),
     };
     let imbalance = [reactions[0] + applied[0] + body[0], reactions[1] + applied[1] + body[1]];
     let scale = flow + body[0].hypot(body[1]);

@@ -85,7 +85,7 @@ pub(crate) mod test_case {
             domain: Domain::rectangle([0.0, 0.0], [1.0, 0.5]),
             material: Material { elastic: YoungPoisson { young: 3.0, poisson: 0.3 }, plane: PlaneModel::Stress },
             body_force: Value::Exact,
-            conditions: vec![traction, traction, traction, displacement],
+            conditions: vec![traction.clone(), traction.clone(), traction, displacement],
             exact: Some(NamedSolution { kind: ExactKind::Polynomial, parameters }),
             outputs: Outputs::default(),
             dynamics: None,

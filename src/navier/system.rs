@@ -44,7 +44,8 @@ impl System<'_> {
             }
         }
         if disc.has_navier_row(i) {
-            let f = exact::value(self.case.body_force, self.exact, |e| e.body_force(disc.nodes.positions[i]));
+            let p = disc.nodes.positions[i];
+            let f = exact::value(&self.case.body_force, p, self.exact, |e| e.body_force(p));
             let r = writer.navier(i, i, f, &mut e);
             rhs.extend([(dofs.dof(i, 0), r[0]), (dofs.dof(i, 1), r[1])]);
         }

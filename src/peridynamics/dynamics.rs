@@ -24,7 +24,8 @@ use super::solve::Discretisation;
 use super::{loads, BondForce, PdParams};
 use crate::case::Case;
 use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
-use crate::dynamics::{Affine, DynamicsParams, SecondOrderSystem, State};
+use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
+use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
 use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
 use rayon::prelude::*;
@@ -192,11 +193,13 @@ pub fn simulate(
     let mut timer = StageTimer::new(progress);
     let exact = case.exact_solution();
     let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
-    let (body_force, _) = loads::body_forces(&case.domain, &case.conditions, case.body_force, exact.as_deref(), &disc.nodes);
+    let (body_force, _) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact.as_deref(), &disc.nodes);
     let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let dofs = disc.nodes.dofs();
-    let flat = |f: &Affine| dofs.from_displacements(|i| f.at(free[i]));
+    let flat = |f: &Value| {
+        dofs.from_displacements(|i| f.explicit_at(free[i]).expect("validated: an initial state is a constant or an expression"))
+    };
     let grid = time_grid(system.stable_time_step(), dynamics)?;
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
     let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());

@@ -46,13 +46,12 @@ fn layer_share(d: f64, d_normal: f64, h: f64) -> f64 {
 pub fn body_forces(
     domain: &Domain,
     conditions: &[BoundaryCondition],
-    body_force: Value,
+    body_force: &Value,
     exact: Option<&dyn ExactSolution>,
     nodes: &PdNodes,
 ) -> (Vec<[f64; 2]>, usize) {
     let h = nodes.spacing;
-    let loaded: Vec<bool> =
-        conditions.iter().map(|bc| bc.is_all(ComponentCondition::Traction) && bc.value != Value::Constant([0.0, 0.0])).collect();
+    let loaded: Vec<bool> = conditions.iter().map(|bc| bc.is_all(ComponentCondition::Traction) && !bc.value.is_zero()).collect();
     // Samples every h/16 locate the nearest point of a part to within h/32.
     let samples = if loaded.iter().any(|&l| l) { discretise_boundary(domain, h / 16.0) } else { Vec::new() };
     let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
@@ -62,7 +61,7 @@ pub fn body_forces(
         .into_par_iter()
         .map(|i| {
             let x = nodes.positions[i];
-            let mut b = exact::value(body_force, exact, |e| e.body_force(x));
+            let mut b = exact::value(body_force, x, exact, |e| e.body_force(x));
             let mut in_layer = false;
             if let Some(tree) = &tree {
                 // Nearest sample of each loaded part within h.
@@ -86,7 +85,7 @@ pub fn body_forces(
                     if share == 0.0 {
                         continue;
                     }
-                    let t = exact::value(conditions[part].value, exact, |e| e.traction(p, normal));
+                    let t = exact::value(&conditions[part].value, p, exact, |e| e.traction(p, normal));
                     b[0] += share * t[0] / h;
                     b[1] += share * t[1] / h;
                     in_layer = true;
@@ -115,7 +114,7 @@ mod tests {
         for rule in [Quadrature::FullArea, Quadrature::Gauss2x2, Quadrature::TriangleP2, Quadrature::TriangleP3] {
             let p = params(0.06, rule);
             let nodes = plate_nodes(&domain, &conditions, &p);
-            let (b, layer) = body_forces(&domain, &conditions, Value::Constant(f), None, &nodes);
+            let (b, layer) = body_forces(&domain, &conditions, &Value::Constant(f), None, &nodes);
             assert!(layer > 0);
             let h = nodes.spacing;
             let mut load = [0.0, 0.0];

@@ -119,9 +119,9 @@ impl<'a> Body<'a> {
         let s = &self.samples[nearest.item as usize];
         s.touches
             .iter()
-            .map(|(part, _)| self.conditions[*part])
+            .map(|(part, _)| &self.conditions[*part])
             .find(|bc| bc.is_all(ComponentCondition::Displacement))
-            .map(|bc| exact::value(bc.value, self.exact, |e| e.displacement(p)))
+            .map(|bc| exact::value(&bc.value, p, self.exact, |e| e.displacement(p)))
     }
 
     /// Whether `p` carries material: inside the solid or in the constrained collar.

@@ -9,7 +9,7 @@ use super::operator::Bonds;
 use super::weights::{bond_coefficients, search_radius, BondWeights};
 use super::{loads, strain, PdParams};
 use crate::case::Case;
-use crate::domain::{Domain, Point};
+use crate::domain::{boundary::discretise_boundary, Domain, Point};
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport};
@@ -94,6 +94,10 @@ impl Discretisation {
             let note = format!("{} free nodes, {} constrained, h = {:.3e}", n.free, n.constrained(), n.spacing);
             Ok((n, note))
         })?;
+        // Boundary values are read at the boundary samples of the traction layer (h/16, see `loads`).
+        let samples = discretise_boundary(&case.domain, nodes.spacing / 16.0);
+        let on_parts: Vec<(Point, usize)> = samples.iter().flat_map(|b| b.touches.iter().map(|&(part, _)| (b.position, part))).collect();
+        case.check_formulas(&nodes.positions[..nodes.free], &on_parts)?;
         let families = timer.run(FAMILIES, || {
             let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
             let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
@@ -156,7 +160,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
-        let (b, layer) = loads::body_forces(&case.domain, &case.conditions, case.body_force, exact, &disc.nodes);
+        let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes);
         let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| {
             let p = disc.nodes.positions[node];
             RunError::NotFinite { node, x: p[0], y: p[1] }

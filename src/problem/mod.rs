@@ -49,6 +49,9 @@ pub struct Problem {
     pub peridynamics: Option<PdParams>,
     /// Model of `mlsm run`.
     pub model: Model,
+    /// What validation changed in the scene's values, to print (e.g. a Poisson ratio
+    /// snapped to the value peridynamics represents).
+    pub notes: Vec<String>,
 }
 
 impl Problem {

@@ -55,6 +55,7 @@ pub fn exact_parameters_markdown() -> String {
                 ParameterKind::Number => "number".to_string(),
                 ParameterKind::Length => "positive number".to_string(),
                 ParameterKind::Coefficients(n) => format!("{n} numbers"),
+                ParameterKind::Expression => "formula".to_string(),
             };
             let solution = if k == 0 { format!("`\"{name}\"`") } else { String::new() };
             s.push_str(&format!("| {solution} | `{}` | {values} | {} |\n", p.name, escape_cell(p.help)));

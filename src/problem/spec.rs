@@ -2,7 +2,8 @@
 //! semantic check happens in `validate`, which turns a [`SceneSpec`] into a
 //! [`super::Problem`].
 
-use serde::Deserialize;
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer};
 
 /// A whole scene file.
 #[derive(Debug, Deserialize)]
@@ -21,7 +22,9 @@ pub struct SceneSpec {
     pub approximation: ApproximationSpec,
     /// Elastic constants and planar model.
     pub material: MaterialSpec,
-    /// Body force `[fx, fy]` (N/m^3) or `"exact"`.
+    /// Named constants of the expressions: a number, or a formula of other constants.
+    pub constants: Option<std::collections::BTreeMap<String, NumberOrFormula>>,
+    /// Body force `[fx, fy]` (N/m^3; numbers or formulas in x, y) or `"exact"`.
     pub body_force: Option<VectorOrExact>,
     /// One condition per boundary part.
     #[serde(default)]
@@ -55,14 +58,51 @@ pub struct EstimateSpec {
     pub threshold: Option<f64>,
 }
 
+/// Exactly `N` numbers: a longer or shorter array is an error (serde's fixed arrays
+/// would drop the extra elements of a TOML array silently).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Numbers<const N: usize>(pub [f64; N]);
+
+impl<'de, const N: usize> Deserialize<'de> for Numbers<N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<f64>::deserialize(d)?;
+        let n = v.len();
+        let expected = format!("exactly {N} numbers");
+        v.try_into().map(Numbers).map_err(|_| D::Error::invalid_length(n, &expected.as_str()))
+    }
+}
+
+/// A point `[x, y]`.
+pub type PointSpec = Numbers<2>;
+
+/// A number, or a formula in quotes (see `expression`).
+#[derive(Debug, Deserialize, Clone, PartialEq)]
+#[serde(untagged, expecting = "a number or a formula in quotes")]
+pub enum NumberOrFormula {
+    /// A number.
+    Number(f64),
+    /// A formula.
+    Formula(String),
+}
+
 /// An affine field `c0 + cx x + cy y` per component.
 #[derive(Debug, Deserialize, Clone, Copy)]
 #[serde(deny_unknown_fields)]
 pub struct AffineSpec {
     /// Coefficients `[c0, cx, cy]` of the x component.
-    pub x: [f64; 3],
+    pub x: Numbers<3>,
     /// Coefficients `[c0, cx, cy]` of the y component.
-    pub y: [f64; 3],
+    pub y: Numbers<3>,
+}
+
+/// An initial field: affine coefficients, or a vector of numbers or formulas.
+#[derive(Debug, Deserialize, Clone)]
+#[serde(untagged, expecting = "a vector [x, y] of numbers or formulas, or a table { x = [c0, cx, cy], y = [c0, cx, cy] }")]
+pub enum InitialSpec {
+    /// `{ x = [c0, cx, cy], y = [c0, cx, cy] }`.
+    Affine(AffineSpec),
+    /// `[ux, uy]`, numbers or formulas in x, y.
+    Vector(Vec<NumberOrFormula>),
 }
 
 /// `[dynamics]`.
@@ -79,10 +119,10 @@ pub struct DynamicsSpec {
     pub time_step: Option<f64>,
     /// Fraction of the stable step used when `time_step` is not given.
     pub safety: Option<f64>,
-    /// Initial displacement (affine), default zero.
-    pub initial_displacement: Option<AffineSpec>,
-    /// Initial velocity (affine), default zero.
-    pub initial_velocity: Option<AffineSpec>,
+    /// Initial displacement, default zero.
+    pub initial_displacement: Option<InitialSpec>,
+    /// Initial velocity, default zero.
+    pub initial_velocity: Option<InitialSpec>,
     /// Number of snapshots written to the .pvd series (default 10).
     pub snapshots: Option<usize>,
     /// Write a snapshot every k steps instead (exclusive with `snapshots`).
@@ -128,15 +168,15 @@ pub struct RegionSpec {
     /// `union` (default), `subtract` or `intersect`.
     pub op: Option<String>,
     /// Rectangle corner with the smallest coordinates.
-    pub min: Option<[f64; 2]>,
+    pub min: Option<PointSpec>,
     /// Rectangle corner with the largest coordinates.
-    pub max: Option<[f64; 2]>,
+    pub max: Option<PointSpec>,
     /// Disc centre.
-    pub center: Option<[f64; 2]>,
+    pub center: Option<PointSpec>,
     /// Disc radius.
     pub radius: Option<f64>,
     /// Polygon vertices (either orientation).
-    pub vertices: Option<Vec<[f64; 2]>>,
+    pub vertices: Option<Vec<PointSpec>>,
     /// Boundary part name of a disc.
     pub name: Option<String>,
     /// Part names of a rectangle's edges (keys `bottom`, `right`, `top`, `left`) ...
@@ -188,7 +228,7 @@ pub struct RefineSpec {
     /// Boundary parts to refine towards.
     pub near: Option<Vec<String>>,
     /// Points to refine towards.
-    pub points: Option<Vec<[f64; 2]>>,
+    pub points: Option<Vec<PointSpec>>,
 }
 
 /// `[approximation]`.
@@ -232,12 +272,12 @@ pub struct MaterialSpec {
     pub plane: String,
 }
 
-/// A 2-vector or the word `"exact"`.
+/// A 2-vector (numbers or formulas) or the word `"exact"`.
 #[derive(Debug, Deserialize, Clone)]
-#[serde(untagged, expecting = "a vector [x, y] of two numbers or the word \"exact\"")]
+#[serde(untagged, expecting = "a vector [x, y] of numbers or formulas in quotes, or the word \"exact\"")]
 pub enum VectorOrExact {
-    /// Constant value.
-    Vector([f64; 2]),
+    /// Components (the length is checked in `validate`).
+    Vector(Vec<NumberOrFormula>),
     /// A word (only `exact` is valid).
     Word(String),
 }
@@ -254,7 +294,7 @@ pub struct BoundarySpec {
     pub x: Option<String>,
     /// For `mixed`: condition on the y component.
     pub y: Option<String>,
-    /// Value (m or Pa) or `"exact"`; default `[0, 0]`.
+    /// Value (m or Pa; numbers or formulas in x, y) or `"exact"`; default `[0, 0]`.
     pub value: Option<VectorOrExact>,
 }
 

@@ -72,7 +72,7 @@ fn refinement(c: &Ctx, r: &RefineSpec, domain: &Domain, kind: FillKind, far: f64
             None => return c.err(format!("nodes.refine.near[{k}]"), format!("\"{name}\" is not a boundary part (known: {})", known())),
         }
     }
-    let points = r.points.clone().unwrap_or_default();
+    let points: Vec<[f64; 2]> = r.points.iter().flatten().map(|p| p.0).collect();
     for p in &points {
         c.finite("nodes.refine.points", p)?;
     }

@@ -75,8 +75,8 @@ impl RegionAt<'_> {
         self.unused("vertices", r.vertices.is_some(), "rectangle")?;
         self.unused("name", r.name.is_some(), "rectangle (use names = { left = \"...\" })")?;
         self.unused("edge_names", r.edge_names.is_some(), "rectangle (use names)")?;
-        let min = c.need(&self.field("min"), r.min, "a rectangle needs min = [x, y]")?;
-        let max = c.need(&self.field("max"), r.max, "a rectangle needs max = [x, y]")?;
+        let min = c.need(&self.field("min"), r.min, "a rectangle needs min = [x, y]")?.0;
+        let max = c.need(&self.field("max"), r.max, "a rectangle needs max = [x, y]")?.0;
         c.finite(&self.field("min"), &min)?;
         c.finite(&self.field("max"), &max)?;
         if !(max[0] > min[0] && max[1] > min[1]) {
@@ -99,7 +99,7 @@ impl RegionAt<'_> {
         self.unused("vertices", r.vertices.is_some(), "disc")?;
         self.unused("names", r.names.is_some(), "disc (use name)")?;
         self.unused("edge_names", r.edge_names.is_some(), "disc (use name)")?;
-        let center = c.need(&self.field("center"), r.center, "a disc needs center = [x, y]")?;
+        let center = c.need(&self.field("center"), r.center, "a disc needs center = [x, y]")?.0;
         c.finite(&self.field("center"), &center)?;
         let radius = c.positive(&self.field("radius"), c.need(&self.field("radius"), r.radius, "a disc needs radius")?)?;
         let name = r.name.clone().unwrap_or_else(|| if op == CsgOp::Subtract { "hole".into() } else { "rim".into() });
@@ -115,7 +115,7 @@ impl RegionAt<'_> {
         self.unused("radius", r.radius.is_some(), "polygon")?;
         self.unused("names", r.names.is_some(), "polygon (use edge_names)")?;
         self.unused("name", r.name.is_some(), "polygon (use edge_names)")?;
-        let mut v = r.vertices.clone().unwrap_or_default();
+        let mut v: Vec<[f64; 2]> = r.vertices.iter().flatten().map(|p| p.0).collect();
         if v.len() < 3 {
             return c.err(self.field("vertices"), format!("a polygon needs at least 3 vertices, got {}", v.len()));
         }

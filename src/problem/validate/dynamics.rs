@@ -1,9 +1,10 @@
 //! `[dynamics]`: density, end time, integrator, time step (fixed, or a fraction of
 //! the stable step), affine initial state, snapshots.
 
+use super::expressions::initial;
 use super::Ctx;
-use crate::dynamics::{Affine, DynamicsParams, Integrator};
-use crate::problem::spec::{AffineSpec, DynamicsSpec};
+use crate::dynamics::{DynamicsParams, Integrator};
+use crate::problem::spec::DynamicsSpec;
 use crate::problem::ProblemError;
 
 /// `[dynamics]`.
@@ -27,16 +28,6 @@ pub(super) fn dynamics(c: &Ctx, s: &DynamicsSpec) -> Result<DynamicsParams, Prob
     if !(safety > 0.0 && safety <= 1.0) {
         return c.err("dynamics.safety", format!("must lie in (0, 1], got {safety}"));
     }
-    let affine = |field: &str, a: Option<AffineSpec>| -> Result<Affine, ProblemError> {
-        match a {
-            None => Ok(Affine::ZERO),
-            Some(a) => {
-                c.finite(&format!("dynamics.{field}.x"), &a.x)?;
-                c.finite(&format!("dynamics.{field}.y"), &a.y)?;
-                Ok(Affine { x: a.x, y: a.y })
-            }
-        }
-    };
     if s.snapshots.is_some() && s.snapshot_every.is_some() {
         return c.err("dynamics.snapshot_every", "give either snapshots (a count) or snapshot_every (steps), not both");
     }
@@ -54,8 +45,8 @@ pub(super) fn dynamics(c: &Ctx, s: &DynamicsSpec) -> Result<DynamicsParams, Prob
         integrator,
         time_step,
         safety,
-        initial_displacement: affine("initial_displacement", s.initial_displacement)?,
-        initial_velocity: affine("initial_velocity", s.initial_velocity)?,
+        initial_displacement: initial(c, "dynamics.initial_displacement", s.initial_displacement.as_ref())?,
+        initial_velocity: initial(c, "dynamics.initial_velocity", s.initial_velocity.as_ref())?,
         snapshots,
         snapshot_every: s.snapshot_every,
     })

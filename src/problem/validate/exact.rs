@@ -2,12 +2,13 @@
 //! parameters (each solution declares them, see `exact::named`), and `"exact"` as a
 //! body force or boundary value.
 
+use super::expressions::{formula_of, vector};
 use super::Ctx;
 use crate::choice::Choice;
 use crate::elasticity::conditions::Value;
 use crate::elasticity::material::Material;
-use crate::exact::{ExactKind, NamedSolution, ParameterKind, Parameters};
-use crate::problem::spec::{ExactSpec, VectorOrExact};
+use crate::exact::{ExactKind, ExpressionSolution, NamedSolution, ParameterKind, ParameterValue, Parameters};
+use crate::problem::spec::{ExactSpec, NumberOrFormula, VectorOrExact};
 use crate::problem::ProblemError;
 
 /// The numbers of a parameter value: a number, or an array of numbers.
@@ -31,6 +32,17 @@ pub(super) fn exact(c: &Ctx, s: &ExactSpec, material: Material) -> Result<NamedS
     for p in declared {
         let field = format!("exact.{}", p.name);
         let given = c.need(&field, s.parameters.get(p.name), &format!("the {} solution needs {}", kind.name(), p.name))?;
+        if p.kind == ParameterKind::Expression {
+            let formula = match given {
+                toml::Value::String(text) => NumberOrFormula::Formula(text.clone()),
+                v => match numbers(v) {
+                    Some(x) if x.len() == 1 && !v.is_array() => NumberOrFormula::Number(x[0]),
+                    _ => return c.err(&field, format!("must be a formula in quotes or a number ({})", p.help)),
+                },
+            };
+            parameters.set(p.name, ParameterValue::Expression(formula_of(c, &field, &formula)?));
+            continue;
+        }
         let values = match (p.kind, given.is_array(), numbers(given)) {
             (ParameterKind::Coefficients(n), true, Some(v)) if v.len() == n => v,
             (ParameterKind::Coefficients(n), is_array, v) => {
@@ -48,6 +60,13 @@ pub(super) fn exact(c: &Ctx, s: &ExactSpec, material: Material) -> Result<NamedS
             c.positive(&field, values[0])?;
         }
         parameters.insert(p.name, values);
+    }
+    if kind == ExactKind::Expression {
+        let (ux, uy) = (parameters.expression("ux").clone(), parameters.expression("uy").clone());
+        if let Err(e) = ExpressionSolution::derive(ux, uy, material) {
+            let which = if parameters.expression("ux").text() == e.text { "ux" } else { "uy" };
+            return c.err(format!("exact.{which}"), e.to_string());
+        }
     }
     let named = NamedSolution { kind, parameters };
     if let Err(pe) = named.build(material) {
@@ -67,14 +86,12 @@ pub(super) fn exact_word(c: &Ctx, field: &str, word: &str, has_exact: bool) -> R
     Ok(Value::Exact)
 }
 
-/// A boundary value or body force: a finite vector, or `"exact"` (default zero).
+/// A boundary value or body force: a vector of numbers or formulas, or `"exact"`
+/// (default zero).
 pub(super) fn value(c: &Ctx, field: &str, v: Option<&VectorOrExact>, has_exact: bool) -> Result<Value, ProblemError> {
     match v {
         None => Ok(Value::Constant([0.0, 0.0])),
-        Some(VectorOrExact::Vector(v)) => {
-            c.finite(field, v)?;
-            Ok(Value::Constant(*v))
-        }
+        Some(VectorOrExact::Vector(v)) => vector(c, field, v),
         Some(VectorOrExact::Word(w)) => exact_word(c, field, w, has_exact),
     }
 }

@@ -8,19 +8,21 @@ mod conditions;
 mod domain;
 mod dynamics;
 mod exact;
+mod expressions;
 mod material;
 mod peridynamics;
 mod solver;
 
 pub use crate::mlsm::default_support;
 pub use approximation::{expected_nodes, DEFAULT_GHOST_NODES};
-pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO};
+pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO, POISSON_SNAP};
 
 use super::spec::{EstimateSpec, SceneSpec};
 use super::{Model, Problem, ProblemError};
 use crate::case::{Case, OutputField, Outputs};
 use crate::choice::Choice;
 use crate::domain::{Domain, FillKind};
+use crate::expression::Constants;
 use crate::navier::estimate::DEFAULT_THRESHOLD;
 use crate::navier::{EstimateParams, NavierParams};
 use std::path::Path;
@@ -61,9 +63,10 @@ fn located(text: &str, e: &toml::de::Error) -> String {
     }
 }
 
-/// The scene file being validated, for error messages.
+/// The scene file being validated (for error messages) and its constants.
 struct Ctx<'a> {
     path: &'a Path,
+    constants: Constants,
 }
 
 impl Ctx<'_> {
@@ -122,7 +125,8 @@ impl Ctx<'_> {
 
 /// Semantic validation: physics, geometry, consistency of names and options.
 pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
-    let c = Ctx { path };
+    let c = Ctx { path, constants: Constants::default() };
+    let c = Ctx { constants: expressions::constants(&c, spec.constants.as_ref())?, ..c };
     let name = scene_name(&c, spec.name.as_deref(), path)?;
     let domain = domain::domain(&c, &spec.domain)?;
     let area = domain.area_estimate(400);
@@ -130,7 +134,11 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
     let fill = approximation::nodes(&c, &spec.nodes, &domain, area)?;
     let approximation = approximation::approximation(&c, &spec.approximation, fill.kind, dynamic)?;
     approximation::check_node_count(&c, &domain, &fill, &approximation, area)?;
-    let material = material::material(&c, &spec.material)?;
+    let mut material = material::material(&c, &spec.material)?;
+    let mut notes = Vec::new();
+    if spec.peridynamics.is_some() {
+        notes.extend(peridynamics::snap_poisson(&mut material));
+    }
     let formulation = approximation::formulation(&c, &spec.approximation, &material, dynamic)?;
     let exact = spec.exact.as_ref().map(|e| exact::exact(&c, e, material)).transpose()?;
     let body_force = exact::body_force(&c, spec.body_force.as_ref(), exact.as_ref())?;
@@ -154,6 +162,7 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         navier: NavierParams { fill, approximation, formulation, solver, estimate: estimate(&c, &spec.estimate)?, keep_system: false },
         peridynamics,
         model,
+        notes,
     })
 }
 

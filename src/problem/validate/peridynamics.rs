@@ -59,6 +59,27 @@ pub fn check_peridynamics(p: &PdParams, domain: &Domain) -> Result<(), (String, 
     Ok(())
 }
 
+/// Largest `|nu - nu_pd|` that is taken as the value bond-based peridynamics
+/// represents (`nu_pd` = 1/4 in plane strain, 1/3 in plane stress) and snapped to it:
+/// `0.333333` is 1/3 written to six digits (off by 3.3e-7), while a deliberate other
+/// ratio such as 0.33 is 3.3e-3 away and is refused.
+pub const POISSON_SNAP: f64 = 1e-5;
+
+/// Snap a Poisson ratio within [`POISSON_SNAP`] of the peridynamic value to it (for
+/// both models: one solid), with a note saying so.
+pub(super) fn snap_poisson(material: &mut Material) -> Option<String> {
+    let (target, name, plane) = match material.plane {
+        PlaneModel::Strain => (0.25, "1/4", "plane strain"),
+        PlaneModel::Stress => (1.0 / 3.0, "1/3", "plane stress"),
+    };
+    let nu = material.elastic.poisson;
+    if nu == target || (nu - target).abs() > POISSON_SNAP {
+        return None;
+    }
+    material.elastic.poisson = target;
+    Some(format!("material.nu = {nu} taken as {name} (within {POISSON_SNAP:e}), the value bond-based peridynamics represents in {plane}"))
+}
+
 /// nu must be one bond-based peridynamics can represent.
 fn check_material(c: &Ctx, material: &Material) -> Result<(), ProblemError> {
     if !crate::peridynamics::kernel::representable(material) {
