@@ -31,6 +31,10 @@ pub const FUNCTIONS: &[&str] = &[
 /// not take them (`E` would silently be Euler's number).
 const RESERVED: &[&str] = &["x", "y", "t", "pi", "PI", "E", "e", "TAU", "π", "τ", "atan2", "min", "max"];
 
+/// The longest formula (characters) and the deepest nesting of parentheses accepted.
+const MAX_LENGTH: usize = 4000;
+const MAX_NESTING: usize = 64;
+
 /// The most variables and constants one expression may use.
 const MAX_VARIABLES: usize = 32;
 
@@ -194,7 +198,22 @@ fn operand_end(t: &[Token], i: usize) -> usize {
 /// Young's modulus?), a sign before a power (`-x^2` is `(-x)^2` to exmex), and
 /// chained powers (`a^b^c` is `(a^b)^c` to exmex).
 fn check_tokens(text: &str) -> Result<(), String> {
+    // exmex parses and differentiates recursively: bound the size and the nesting.
+    if text.len() > MAX_LENGTH {
+        return Err(format!("{} characters; at most {MAX_LENGTH}", text.len()));
+    }
     let t = tokens(text);
+    let mut depth = 0usize;
+    for tok in &t {
+        match tok {
+            Token::Open => depth += 1,
+            Token::Close => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        if depth > MAX_NESTING {
+            return Err(format!("parentheses nested deeper than {MAX_NESTING}"));
+        }
+    }
     for (i, tok) in t.iter().enumerate() {
         let operand_position = i == 0 || matches!(t[i - 1], Token::Operator(_) | Token::Open);
         match *tok {

@@ -13,10 +13,11 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // Ctrl-C: a time loop stops between steps and removes its partial snapshot series
-    // (exit 130); anywhere else the process ends at once, as without a handler.
+    // Ctrl-C: a time loop stops between steps and its staged results are removed
+    // (exit 130); anywhere else the process removes its staged results and ends at once.
     let _ = ctrlc::set_handler(|| {
         if !mlsm::pipeline::interrupt::request() {
+            mlsm::output::remove_uncommitted();
             std::process::exit(130);
         }
     });

@@ -16,8 +16,9 @@ use std::time::Instant;
 /// Interruption (Ctrl-C) of a time loop: while an [`interrupt::Interruptible`] guard
 /// lives, an interrupt only raises a flag that the loop polls once per step, so the run
 /// ends as [`RunError::Interrupted`] and its writer can remove what it staged; outside a
-/// time loop the command line ends the process at once (nothing is half written:
-/// files are written atomically).
+/// time loop the command line removes the staged results
+/// ([`output::remove_uncommitted`](crate::output::remove_uncommitted)) and ends the
+/// process at once.
 pub mod interrupt {
     use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -258,7 +259,7 @@ pub enum RunError {
     #[error(transparent)]
     Snapshot(OutputError),
     /// The user interrupted the time loop (Ctrl-C).
-    #[error("interrupted at step {step} (t = {t:.4e} s); the partial snapshot series was removed, earlier results are untouched")]
+    #[error("interrupted at step {step} (t = {t:.4e} s); the partial results were removed, earlier results are untouched")]
     Interrupted { step: usize, t: f64 },
 }
 

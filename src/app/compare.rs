@@ -4,17 +4,18 @@
 use super::fields::{integer, scalar, vector, write_points_vtu};
 use super::summary::Header;
 use super::terminal::Terminal;
-use super::{create_dir, AppError};
+use super::AppError;
 use crate::choice::Choice;
 use crate::compare::LocalReference;
 use crate::model;
-use crate::output::{self, Series};
+use crate::output::{self, Series, StagedDir};
 use crate::peridynamics::solve::interior_flags;
 use crate::peridynamics::{PdParams, Quadrature};
 use crate::pipeline::{Stage, StageTimings, OUTPUT};
 use crate::post::{masked_errors, observed_order};
 use crate::problem::{Model, Problem};
 use serde::Serialize;
+use std::ffi::OsStr;
 use std::path::Path;
 use std::time::Instant;
 
@@ -110,7 +111,7 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
     }
     if deltas.len() < 2 {
         let given = if req.deltas.is_some() { "--deltas gives one horizon" } else { "--levels 0 gives one horizon" };
-        return Err(AppError::Usage(format!("{given}; compare needs at least two to measure an order")));
+        return Err(AppError::Usage(format!("{given}; compare needs two horizons or more to measure an order")));
     }
     let m = req.m.unwrap_or(base.ratio);
     let mut runs = Vec::new();
@@ -187,15 +188,29 @@ fn orders(quadratures: &[Quadrature], rows: &[Row]) -> Vec<Orders> {
         .collect()
 }
 
-/// Run the comparison of `p` and write its tables, plot and fields into `dir`.
-pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
+/// Whether `name` is a file `compare` writes (`compare.json`, `compare.svg`,
+/// `compare_<rule>.csv`, `<rule>_delta<k>.vtu`): a re-run replaces those of the earlier
+/// comparison and keeps anything else in the folder.
+fn compare_owns(name: &OsStr) -> bool {
+    let n = name.to_string_lossy();
+    n == "compare.json"
+        || n == "compare.svg"
+        || (n.starts_with("compare_") && n.ends_with(".csv"))
+        || (n.contains("_delta") && n.ends_with(".vtu"))
+}
+
+/// Run the comparison of `p` and write its tables, plot and fields into a staged
+/// folder that replaces `out` when everything is written.
+pub(super) fn compare(p: &Problem, req: CompareRequest, out: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
     let Plan { quadratures, deltas, m, runs } = planned_runs(p, &req)?;
     let base = p.peridynamics.expect("checked");
     let reference_problem = match req.reference_spacing {
         Some(h) if p.case.exact.is_none() => p.with_spacing(h)?,
         _ => p.clone(),
     };
-    create_dir(dir)?;
+    let staged = StagedDir::create(out, compare_owns)?;
+    let dir_buf = staged.path().to_path_buf();
+    let dir = dir_buf.as_path();
     if !quiet {
         eprintln!("{}: local reference", p.name);
     }
@@ -207,7 +222,8 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
     for (k, run) in runs.iter().enumerate() {
         let params = run.peridynamics.expect("a peridynamic run");
         if !quiet {
-            eprintln!("{} delta = {:.4e} (h = {:.4e})", params.quadrature.name(), params.horizon, params.spacing());
+            let (q, d, h) = (params.quadrature.name(), params.horizon, params.spacing());
+            eprintln!("run {} of {}: {q} delta = {d:.4e} (h = {h:.4e})", k + 1, runs.len());
         }
         let t = Instant::now();
         rows.push(compare_run(p, run, k % deltas.len(), &reference, dir, term)?);
@@ -228,8 +244,10 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, dir: &Path, term: &Termi
         orders,
     };
     output::write_json(&dir.join("compare.json"), &table)?;
+    let target = staged.target().to_path_buf();
+    staged.commit()?;
     if !quiet {
-        print_table(&table, dir);
+        print_table(&table, &target);
     }
     Ok(())
 }

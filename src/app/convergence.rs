@@ -71,7 +71,7 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
     let area = p.case.domain.area_estimate(400);
     let mut rows: Vec<Level> = Vec::new();
     for k in 0..=levels {
-        match solve_level(p, k, rows.last(), area, term, quiet) {
+        match solve_level(p, (k, levels), rows.last(), area, term, quiet) {
             Ok(level) => rows.push(level),
             Err(e) => {
                 if !rows.is_empty() {
@@ -112,13 +112,20 @@ fn write_tables(p: &Problem, rows: &[Level], requested: usize, dir: &Path, t0: I
     Ok(())
 }
 
-/// Solve level `k` (spacing halved `k` times); its orders against the level before
-/// use the effective spacing `sqrt(area / N)`, so that scattered fills are compared
-/// fairly.
-fn solve_level(p: &Problem, k: usize, before: Option<&Level>, area: f64, term: &Terminal, quiet: bool) -> Result<Level, AppError> {
+/// Solve level `k` of `0..=last` (spacing halved `k` times); its orders against the
+/// level before use the effective spacing `sqrt(area / N)`, so that scattered fills
+/// are compared fairly.
+fn solve_level(
+    p: &Problem,
+    (k, last): (usize, usize),
+    before: Option<&Level>,
+    area: f64,
+    term: &Terminal,
+    quiet: bool,
+) -> Result<Level, AppError> {
     let spacing = p.navier.fill.spacing / 2f64.powi(k as i32);
     if !quiet {
-        eprintln!("level {k}: spacing {spacing:.4e}");
+        eprintln!("level {k} ({} of {}): spacing {spacing:.4e}", k + 1, last + 1);
     }
     let t0 = Instant::now();
     let q = p.with_spacing(spacing)?;

@@ -5,17 +5,18 @@ use super::fields::{navier_fields, pd_fields, write_points_vtu};
 use super::series::Series;
 use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::terminal::Terminal;
-use super::{create_dir, default_out, export, AppError};
+use super::{default_out, export, AppError};
 use crate::dynamics::driver::EnergyRow;
 use crate::model::{self, Outcome};
 use crate::navier::Estimate;
-use crate::output;
+use crate::output::{self, StagedDir};
 use crate::peridynamics::PdParams;
 use crate::pipeline::{RunError, OUTPUT};
 use crate::problem::{Model, Problem};
 use crate::warnings::{self, Checks};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::ffi::OsStr;
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// What `run` was asked for, after the command line was read.
@@ -72,10 +73,22 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
     Ok(p)
 }
 
-/// Solve, write and report one scene.
+/// The entries of a result folder that `run` writes: a re-run replaces those of the
+/// earlier run (and the staging folder of older versions); anything else in the
+/// folder (`compare/`, `convergence.csv`, the user's files) is kept.
+const RUN_ENTRIES: [&str; 6] = ["solution.vtu", "summary.json", "snapshots", "series.pvd", "energies.csv", ".snapshots.partial"];
+
+/// Whether `name` is one of [`RUN_ENTRIES`].
+fn run_owns(name: &OsStr) -> bool {
+    RUN_ENTRIES.iter().any(|e| name == *e)
+}
+
+/// Solve, write and report one scene. Everything is written into a staged folder
+/// that replaces the result folder only when all files are written.
 pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), AppError> {
     let p = prepare(&req)?;
-    let dir = req.out.clone().unwrap_or_else(|| default_out(&p));
+    let staged = StagedDir::create(&req.out.clone().unwrap_or_else(|| default_out(&p)), run_owns)?;
+    let dir = staged.path().to_path_buf();
     if !quiet {
         eprintln!("{}", model::announce(&p));
         for n in &p.notes {
@@ -91,9 +104,10 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
         Outcome::NavierStatic(mut sol) => {
             let mut checks = warnings::navier_static(&sol, &p.navier, &p.case);
             checks.warnings.extend(warnings::memory(&p));
-            write_solution(&p, &dir, &sol.nodes.positions, &navier_fields(&p.case, &sol))?;
+            write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, &navier_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
-            write_summary(&dir, &NavierSummary::new(&p, &sol, &checks, t0), term, seconds())?;
+            let target = publish(staged, &NavierSummary::new(&p, &sol, &checks, t0))?;
+            term.line(OUTPUT, seconds(), &target.display().to_string());
             if let (Some(to), Some(system)) = (&req.export_system, &sol.system) {
                 export::write(to, system, &sol.solver)?;
                 if !quiet {
@@ -108,9 +122,11 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
         Outcome::PdStatic(mut sol) => {
             let mut checks = warnings::peridynamics_static(&sol, p.navier.estimate.threshold);
             checks.warnings.extend(warnings::memory(&p));
-            write_solution(&p, &dir, &sol.nodes.positions[..sol.nodes.free], &pd_fields(&p.case, &sol))?;
+            let free = &sol.nodes.positions[..sol.nodes.free];
+            write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, &pd_fields(&p.case, &sol))?;
             sol.timings.record(OUTPUT, seconds());
-            write_summary(&dir, &PdSummary::new(&p, &sol, &checks, t0), term, seconds())?;
+            let target = publish(staged, &PdSummary::new(&p, &sol, &checks, t0))?;
+            term.line(OUTPUT, seconds(), &target.display().to_string());
             if !quiet {
                 print_pd(&sol);
             }
@@ -120,7 +136,7 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
             series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
             sim.timings.record(OUTPUT, seconds());
             let dynamic = Dynamic { nodes: sim.positions.len(), report: &sim.report, energies: &sim.energies, timings: &sim.timings };
-            write_dynamic(&p, &dir, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
+            write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
@@ -130,10 +146,19 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
             let dynamic = Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings };
-            write_dynamic(&p, &dir, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
+            write_dynamic(&p, staged, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
     }
     Ok(())
+}
+
+/// Write `summary.json` (the last file) into `staged` and replace the result folder
+/// with it; returns the result folder.
+fn publish(staged: StagedDir, summary: &impl Serialize) -> Result<PathBuf, AppError> {
+    output::write_json(&staged.path().join("summary.json"), summary)?;
+    let target = staged.target().to_path_buf();
+    staged.commit()?;
+    Ok(target)
 }
 
 /// Print the notes and warnings of `checks` (warnings also under `--quiet`: a doubtful
@@ -154,23 +179,11 @@ fn report_checks(checks: &Checks, strict: bool, quiet: bool) -> Result<(), AppEr
     Ok(())
 }
 
-/// `solution.vtu` of a static run: `points` with `fields`.
-fn write_solution(p: &Problem, dir: &Path, points: &[[f64; 2]], fields: &[crate::output::PointField]) -> Result<(), AppError> {
-    create_dir(dir)?;
-    write_points_vtu(&dir.join("solution.vtu"), points, &p.case.domain, fields)
-}
-
-/// `summary.json` of a static run, and the output line on the terminal.
-fn write_summary(dir: &Path, summary: &impl Serialize, term: &Terminal, seconds: f64) -> Result<(), AppError> {
-    output::write_json(&dir.join("summary.json"), summary)?;
-    term.line(OUTPUT, seconds, &dir.display().to_string());
-    Ok(())
-}
-
-/// `summary.json` of a time-dependent run with its checks, and its terminal lines.
+/// `summary.json` of a time-dependent run with its checks, the replacement of the
+/// result folder, and its terminal lines.
 fn write_dynamic<M: Serialize>(
     p: &Problem,
-    dir: &Path,
+    staged: StagedDir,
     d: Dynamic,
     model: M,
     t0: Instant,
@@ -179,8 +192,7 @@ fn write_dynamic<M: Serialize>(
 ) -> Result<(), AppError> {
     let mut checks = warnings::dynamic(d.energies, p.navier.estimate.threshold);
     checks.warnings.extend(warnings::memory(p));
-    let summary = DynamicSummary::new(p, &d, model, &checks, t0);
-    output::write_json(&dir.join("summary.json"), &summary)?;
+    let dir = publish(staged, &DynamicSummary::new(p, &d, model, &checks, t0))?;
     if !quiet {
         let (e0, e1) = (d.energies[0], d.energies.last().expect("recorded"));
         let total = |e: &EnergyRow| e[1] + e[2] + e[3];

@@ -80,11 +80,27 @@ pub fn time_grid(stable: f64, params: &DynamicsParams) -> Result<TimeGrid, RunEr
     })
 }
 
+/// Whether step `step` (0: the initial state) of `steps` is a snapshot. With
+/// `snapshot_every = k`: every k-th step from 0, and the last one. With `snapshots =
+/// N >= 1`: the N + 1 steps `round(j steps / N)`, j = 0..=N (t = 0, N - 1 evenly spaced
+/// states and the final one), every step when N >= steps. With N = 0: the last step only.
+pub fn is_snapshot(step: usize, steps: usize, params: &DynamicsParams) -> bool {
+    let n = params.snapshots;
+    match params.snapshot_every {
+        Some(k) => step.is_multiple_of(k) || step == steps,
+        None if n == 0 => step == steps,
+        None if n >= steps => true,
+        None => {
+            // Nearest j; for N < steps the targets are more than one step apart.
+            let round_div = |a: usize, b: usize| (a + b / 2) / b;
+            round_div(round_div(step * n, steps) * steps, n) == step
+        }
+    }
+}
+
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
-/// `snapshot` every `params.snapshot_every` steps, or at `params.snapshots` evenly
-/// spaced steps (and always at the start and the end)
-/// and recording `energies` (kinetic, elastic, external) at every step (every
-/// `ceil(steps / 1000)`-th step for longer runs). The loop is the [`INTEGRATE`] stage
+/// `snapshot` at the steps [`is_snapshot`] picks, and recording `energies` (kinetic,
+/// elastic, external) at every step (every `ceil(steps / 1000)`-th step for longer runs). The loop is the [`INTEGRATE`] stage
 /// of `timer`, interruptible by Ctrl-C between steps (`pipeline::interrupt`). Returns
 /// the report and the history.
 pub fn integrate(
@@ -97,7 +113,6 @@ pub fn integrate(
     mut snapshot: impl FnMut(usize, &State) -> Result<(), RunError>,
 ) -> Result<(DynamicReport, Vec<EnergyRow>), RunError> {
     let TimeGrid { dt, steps, stable } = grid;
-    let every = params.snapshot_every.unwrap_or((steps / params.snapshots.max(1)).max(1));
     // Energies cost one more pass over the operator: at most about 1000 rows.
     let energy_every = steps.div_ceil(1000).max(1);
     let mut history = Vec::with_capacity(steps.min(1000) + 2);
@@ -106,7 +121,9 @@ pub fn integrate(
         history.push([s.t, k, e, x]);
     };
     record(state, &mut history);
-    snapshot(0, state)?;
+    if is_snapshot(0, steps, params) {
+        snapshot(0, state)?;
+    }
     let progress = timer.progress();
     let _listening = interrupt::Interruptible::listen();
     let looped = timer.run(INTEGRATE, || {
@@ -124,7 +141,7 @@ pub fn integrate(
             if step % energy_every == 0 || step == steps {
                 record(state, &mut history);
             }
-            if step % every == 0 || step == steps {
+            if is_snapshot(step, steps, params) {
                 snapshot(step, state)?;
             }
             progress.advance(step as u64, steps as u64);
@@ -140,4 +157,50 @@ pub fn integrate(
         seconds: looped,
     };
     Ok((report, history))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(snapshots: usize, snapshot_every: Option<usize>) -> DynamicsParams {
+        DynamicsParams {
+            density: 1.0,
+            end_time: 1.0,
+            integrator: Integrator::Verlet,
+            time_step: None,
+            safety: 0.8,
+            initial_displacement: crate::elasticity::conditions::Value::Constant([0.0, 0.0]),
+            initial_velocity: crate::elasticity::conditions::Value::Constant([0.0, 0.0]),
+            snapshots,
+            snapshot_every,
+            allow_long: false,
+        }
+    }
+
+    fn taken(steps: usize, p: &DynamicsParams) -> Vec<usize> {
+        (0..=steps).filter(|&s| is_snapshot(s, steps, p)).collect()
+    }
+
+    #[test]
+    fn snapshots_n_gives_n_plus_one_states_with_the_start_and_the_end() {
+        for steps in [1, 2, 7, 10, 99, 100, 101, 1005, 123_457] {
+            for n in [1, 2, 3, 10, 20, 99, 100, 101, 10_000] {
+                let s = taken(steps, &params(n, None));
+                assert_eq!(s.len(), (n + 1).min(steps + 1), "steps {steps}, N {n}: {s:?}");
+                assert_eq!((s[0], *s.last().unwrap()), (0, steps), "steps {steps}, N {n}");
+                // Evenly spaced: gaps differ by at most one step.
+                let gaps: Vec<usize> = s.windows(2).map(|w| w[1] - w[0]).collect();
+                let (lo, hi) = (gaps.iter().min().unwrap(), gaps.iter().max().unwrap());
+                assert!(hi - lo <= 1, "steps {steps}, N {n}: gaps {lo}..{hi}");
+            }
+        }
+    }
+
+    #[test]
+    fn snapshots_zero_is_the_final_state_only_and_every_k_keeps_the_end() {
+        assert_eq!(taken(57, &params(0, None)), [57]);
+        assert_eq!(taken(25, &params(10, Some(10))), [0, 10, 20, 25]);
+        assert_eq!(taken(20, &params(10, Some(10))), [0, 10, 20]);
+    }
 }

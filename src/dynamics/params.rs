@@ -22,9 +22,10 @@ pub struct DynamicsParams {
     pub initial_displacement: Value,
     /// Initial velocity (a constant or an expression).
     pub initial_velocity: Value,
-    /// Snapshots in the .pvd series.
+    /// N: the series holds N + 1 states from t = 0 to the end (0: the final state
+    /// only); see [`is_snapshot`](crate::dynamics::driver::is_snapshot).
     pub snapshots: usize,
-    /// A snapshot every k steps, when given (instead of `snapshots`).
+    /// A snapshot every k steps and at the end, when given (instead of `snapshots`).
     pub snapshot_every: Option<usize>,
     /// Run more than [`MAX_STEPS`](crate::dynamics::driver::MAX_STEPS) steps
     /// (`mlsm run --allow-long`).

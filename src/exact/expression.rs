@@ -9,6 +9,9 @@ use super::{navier_body_force, Check, ExactSolution, ParameterError};
 use crate::elasticity::material::Material;
 use crate::expression::{Expression, ExpressionError};
 
+/// Stack of the thread that differentiates (only the pages used are allocated).
+const DERIVATION_STACK: usize = 256 << 20;
+
 /// `u = ux(x, y)`, `v = uy(x, y)` with their symbolic derivatives.
 #[derive(Debug, Clone)]
 pub struct ExpressionSolution {
@@ -30,7 +33,21 @@ impl ExpressionSolution {
     ];
 
     /// Differentiate `ux`, `uy` twice; refused for functions without derivatives.
+    /// exmex differentiates recursively on its expression tree, and a long formula (a
+    /// ten-term cubic) overflows a 2 MiB thread stack, so the work runs on a thread of
+    /// its own with [`DERIVATION_STACK`] bytes of stack.
     pub fn derive(ux: Expression, uy: Expression, material: Material) -> Result<Self, ExpressionError> {
+        std::thread::scope(|scope| {
+            std::thread::Builder::new()
+                .stack_size(DERIVATION_STACK)
+                .spawn_scoped(scope, || Self::derive_here(ux, uy, material))
+                .expect("a thread for the symbolic derivatives")
+                .join()
+                .expect("symbolic differentiation does not panic")
+        })
+    }
+
+    fn derive_here(ux: Expression, uy: Expression, material: Material) -> Result<Self, ExpressionError> {
         let first = |e: &Expression| -> Result<[Expression; 2], ExpressionError> { Ok([e.derivative(0)?, e.derivative(1)?]) };
         let (gu, gv) = (first(&ux)?, first(&uy)?);
         let second = |g: &[Expression; 2]| -> Result<[Expression; 3], ExpressionError> {

@@ -36,8 +36,8 @@ pub struct Parameter {
 pub enum ParameterValue {
     /// Numbers (a number is an array of one).
     Numbers(Vec<f64>),
-    /// A formula.
-    Expression(Expression),
+    /// A formula (boxed: it is much larger than a vector).
+    Expression(Box<Expression>),
 }
 
 /// Validated parameter values, by name.
@@ -70,7 +70,7 @@ impl Parameters {
     /// The formula `name`.
     pub fn expression(&self, name: &str) -> &Expression {
         match self.value(name) {
-            ParameterValue::Expression(e) => e,
+            ParameterValue::Expression(e) => e.as_ref(),
             ParameterValue::Numbers(_) => panic!("parameter {name} was validated as a formula"),
         }
     }

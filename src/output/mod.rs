@@ -5,6 +5,8 @@
 //! * [`write_atomic`], [`write_json`], [`write_csv`]: crash-safe file output (temp file in the
 //!   target directory, `fsync`, `rename`), so a reader never sees a half-written file and a
 //!   failed write leaves an earlier file intact.
+//! * [`StagedDir`]: a whole result directory written beside the old one and swapped in at
+//!   the end, so a re-run leaves no stale file and a failed run leaves the old one intact.
 //! * [`write_vtu`] / [`read_vtu`]: XML unstructured grid with triangle cells and point data,
 //!   written with `vtkio` (inline base64, Float64/Int32 arrays, so values are bit-exact).
 //! * [`write_pvd`]: a ParaView collection (time series) file, written by hand.
@@ -15,21 +17,23 @@
 //!   the process and of one stage (Linux `VmHWM`, reset through `clear_refs`).
 //!
 //! Errors are reported as [`OutputError`]; every variant names the file or field concerned.
-//! I/O and JSON errors keep the underlying error as [`std::error::Error::source`] rather than
-//! repeating its text in their own message, so print them with `{:#}` (anyhow) or walk the
-//! chain to see the operating-system reason.
+//! I/O and JSON errors end their message with the underlying reason (for I/O the
+//! operating system's, e.g. "Not a directory (os error 20)") and also keep that error
+//! as [`std::error::Error::source`]; printing the message alone is enough.
 
 use std::path::PathBuf;
 
 mod atomic;
 mod memory;
 mod plot;
+mod staged;
 mod system;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
 pub use memory::{available_memory_bytes, peak_memory_bytes, peak_since, restart_peak, PeakMark};
 pub use plot::{write_loglog_svg, Series};
+pub use staged::{remove_uncommitted, Owns, StagedDir};
 pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};
 pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};
 
@@ -37,8 +41,9 @@ pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuConten
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// An operating-system I/O operation on `path` failed (for atomic writes `path` is the
-    /// *target* file, not the hidden temporary file).
-    #[error("I/O error on `{}`", path.display())]
+    /// *target* file, not the hidden temporary file). The message ends with the
+    /// operating system's reason.
+    #[error("I/O error on `{}`: {source}", path.display())]
     Io {
         /// The file being written or read.
         path: PathBuf,
@@ -56,7 +61,7 @@ pub enum OutputError {
         detail: String,
     },
     /// `serde_json` could not serialise the value (e.g. a map with non-string keys).
-    #[error("JSON serialisation error for `{}`", path.display())]
+    #[error("JSON serialisation error for `{}`: {source}", path.display())]
     Json {
         /// The JSON file being written.
         path: PathBuf,
@@ -144,7 +149,7 @@ mod tests {
     #[test]
     fn error_messages_name_the_path_and_field() {
         let e = OutputError::io(std::path::Path::new("/x/y.vtu"), std::io::Error::other("boom"));
-        assert!(e.to_string().contains("/x/y.vtu"));
+        assert!(e.to_string().contains("/x/y.vtu") && e.to_string().ends_with(": boom"), "{e}");
         assert!(std::error::Error::source(&e).is_some());
         let e = OutputError::InvalidField { name: "u".into(), detail: "bad".into() };
         assert!(e.to_string().contains("`u`"));

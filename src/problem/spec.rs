@@ -123,7 +123,7 @@ pub struct DynamicsSpec {
     pub initial_displacement: Option<InitialSpec>,
     /// Initial velocity, default zero.
     pub initial_velocity: Option<InitialSpec>,
-    /// Number of snapshots written to the .pvd series (default 10).
+    /// N: the .pvd series holds N + 1 states, t = 0 to the end (default 10; 0: the final state only).
     pub snapshots: Option<usize>,
     /// Write a snapshot every k steps instead (exclusive with `snapshots`).
     pub snapshot_every: Option<usize>,

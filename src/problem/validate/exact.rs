@@ -40,7 +40,7 @@ pub(super) fn exact(c: &Ctx, s: &ExactSpec, material: Material) -> Result<NamedS
                     _ => return c.err(&field, format!("must be a formula in quotes or a number ({})", p.help)),
                 },
             };
-            parameters.set(p.name, ParameterValue::Expression(formula_of(c, &field, &formula)?));
+            parameters.set(p.name, ParameterValue::Expression(Box::new(formula_of(c, &field, &formula)?)));
             continue;
         }
         let values = match (p.kind, given.is_array(), numbers(given)) {
