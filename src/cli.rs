@@ -25,6 +25,20 @@ fn positive(text: &str) -> Result<f64, String> {
     }
 }
 
+/// A time budget: seconds (`120`), or with a unit (`90s`, `2m`, `1h 30m`); positive.
+fn budget(text: &str) -> Result<std::time::Duration, String> {
+    let t = text.trim();
+    let d = match t.parse::<f64>() {
+        Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => std::time::Duration::from_secs_f64(s),
+        Ok(s) => return Err(format!("must be a positive number of seconds, got {s}")),
+        Err(_) => humantime::parse_duration(t).map_err(|e| format!("\"{t}\" is not a duration ({e}); write e.g. 120, 90s, 2m"))?,
+    };
+    if d.is_zero() {
+        return Err("must be longer than zero".into());
+    }
+    Ok(d)
+}
+
 /// Model selector of `run`.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum ModelArg {
@@ -56,6 +70,10 @@ pub enum Command {
         /// Exit with code 4 when the run ends with warnings (results are still written).
         #[arg(long)]
         strict: bool,
+        /// Approximation and spacing by rule: fast, balanced or accurate (replaces the
+        /// scene's `preset`, [nodes] spacing and [approximation] basis, degree, support).
+        #[arg(long, value_name = "NAME")]
+        preset: Option<String>,
         /// Allow an explicit dynamic run of more than 1e8 time steps.
         #[arg(long)]
         allow_long: bool,
@@ -79,6 +97,19 @@ pub enum Command {
         #[arg(long, default_value_t = 3)]
         levels: usize,
         /// Output folder (default: output/<scene name>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Sweep spacing, basis and degree, stencil and solver within a time budget; write
+    /// the runs, the Pareto front of seconds against error (CSV, JSON, SVG, PNG) and the
+    /// cheapest configuration per accuracy decade.
+    Tradeoff {
+        /// Scene file (TOML) of a static Navier problem.
+        scene: PathBuf,
+        /// Time budget for the whole sweep: seconds, or 90s, 2m, 1h.
+        #[arg(long, default_value = "120", allow_negative_numbers = true, value_parser = budget)]
+        budget: std::time::Duration,
+        /// Output folder (default: output/<scene name>/tradeoff).
         #[arg(long)]
         out: Option<PathBuf>,
     },

@@ -21,7 +21,8 @@
 //! 9. [`resources`]: the memory a run will need, checked before it starts;
 //! 10. [`warnings`]: the checks that turn a doubtful result into a warning;
 //! 11. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
-//! 12. [`compare`]: the nonlocal-to-local comparison;
+//! 12. [`compare`]: the nonlocal-to-local comparison; [`tradeoff`]: the design and
+//!     the Pareto front of a speed-accuracy sweep;
 //! 13. [`app`]: the commands (the only printing).
 
 // Floor 1
@@ -67,6 +68,7 @@ pub mod model;
 
 // Floor 12
 pub mod compare;
+pub mod tradeoff;
 
 // Floor 13
 pub mod app;

@@ -47,7 +47,10 @@ struct Row {
     e_inf_whole: f64,
     rel_l2_whole: f64,
     solver_iterations: usize,
+    /// Wall-clock seconds of the peridynamic solve and its comparison.
     seconds: f64,
+    /// Peak resident memory during the run (bytes), where the platform reports it.
+    peak_memory_bytes: Option<u64>,
     vtu: String,
 }
 
@@ -128,6 +131,7 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
 fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference, dir: &Path, term: &Terminal) -> Result<Row, AppError> {
     let params = run.peridynamics.expect("a peridynamic run");
     let t0 = Instant::now();
+    let mark = output::restart_peak();
     let outcome = model::solve(run, term, |_| Ok(())).map_err(|e| AppError::of_scene(p, e))?;
     let (free, displacement) = (outcome.positions(), outcome.displacement());
     let interior = interior_flags(&p.case.domain, free, params.horizon);
@@ -165,6 +169,7 @@ fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference,
         rel_l2_whole: whole.rel_l2_u,
         solver_iterations: outcome.iterations(),
         seconds: t0.elapsed().as_secs_f64(),
+        peak_memory_bytes: output::peak_since(mark),
         vtu: name,
     })
 }
@@ -270,12 +275,26 @@ fn write_tables(title: &str, rows: &[Row], orders: &[Orders], dir: &Path) -> Res
                     r.e_inf_whole,
                     r.rel_l2_whole,
                     r.seconds,
+                    r.bonds as f64,
+                    r.peak_memory_bytes.map_or(f64::NAN, |b| b as f64),
                 ]
             })
             .collect();
         output::write_csv(
             &dir.join(format!("compare_{}.csv", o.quadrature)),
-            &["delta", "h", "nodes", "interior_nodes", "e_inf_interior", "rel_l2_interior", "e_inf_whole", "rel_l2_whole", "seconds"],
+            &[
+                "delta",
+                "h",
+                "nodes",
+                "interior_nodes",
+                "e_inf_interior",
+                "rel_l2_interior",
+                "e_inf_whole",
+                "rel_l2_whole",
+                "seconds",
+                "bonds",
+                "peak_memory_bytes",
+            ],
             &csv,
         )?;
         let order = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.2}"));
@@ -297,13 +316,14 @@ fn write_tables(title: &str, rows: &[Row], orders: &[Orders], dir: &Path) -> Res
 fn print_table(t: &Table, dir: &Path) {
     println!("reference: {}; m = {}, kernel {}", t.reference, t.m, t.kernel);
     println!(
-        "{:<13} {:>10} {:>8} {:>11} {:>11} {:>11} {:>11} {:>8}",
-        "quadrature", "delta", "nodes", "einf_int", "l2_int", "einf_all", "l2_all", "seconds"
+        "{:<13} {:>10} {:>8} {:>10} {:>11} {:>11} {:>11} {:>11} {:>8} {:>8}",
+        "quadrature", "delta", "nodes", "bonds", "einf_int", "l2_int", "einf_all", "l2_all", "seconds", "peak MB"
     );
     for r in &t.rows {
+        let peak = r.peak_memory_bytes.map_or("-".to_string(), |b| format!("{:.0}", b as f64 / 1e6));
         println!(
-            "{:<13} {:>10.4e} {:>8} {:>11.3e} {:>11.3e} {:>11.3e} {:>11.3e} {:>8.2}",
-            r.quadrature, r.delta, r.nodes, r.e_inf_interior, r.rel_l2_interior, r.e_inf_whole, r.rel_l2_whole, r.seconds
+            "{:<13} {:>10.4e} {:>8} {:>10} {:>11.3e} {:>11.3e} {:>11.3e} {:>11.3e} {:>8.2} {:>8}",
+            r.quadrature, r.delta, r.nodes, r.bonds, r.e_inf_interior, r.rel_l2_interior, r.e_inf_whole, r.rel_l2_whole, r.seconds, peak
         );
     }
     let f = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2}"));

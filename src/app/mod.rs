@@ -1,5 +1,5 @@
 //! The commands; the only module that prints. Each command is one file: [`check`],
-//! [`run`](mod@run), [`convergence`], [`compare`]; they share the terminal progress
+//! [`run`](mod@run), [`convergence`], [`compare`], [`tradeoff`]; they share the terminal progress
 //! ([`terminal`]), the point fields of `solution.vtu` ([`fields`]), the series writer
 //! of time-dependent runs ([`series`]) and the summary header ([`summary`]).
 
@@ -12,6 +12,7 @@ mod run;
 mod series;
 mod summary;
 mod terminal;
+mod tradeoff;
 
 use crate::cli::{Cli, Command, ModelArg};
 use crate::output::OutputError;
@@ -91,7 +92,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             print!("{}", crate::problem::reference::markdown());
             Ok(())
         }
-        Command::Run { scene, out, spacing, model, horizon, strict, allow_long, export_system } => {
+        Command::Run { scene, out, spacing, model, horizon, strict, preset, allow_long, export_system } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
@@ -103,6 +104,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 model,
                 horizon: *horizon,
                 strict: *strict,
+                preset: preset.clone(),
                 allow_long: *allow_long,
                 export_system: export_system.clone(),
             };
@@ -119,6 +121,9 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 reference_spacing: *reference_spacing,
             };
             compare::compare(&p, req, &dir, &term, cli.quiet)
+        }
+        Command::Tradeoff { scene, budget, out } => {
+            tradeoff::run(tradeoff::TradeoffRequest { scene: scene.clone(), budget: *budget, out: out.clone() }, cli.quiet)
         }
         Command::Convergence { scene, levels, out } => {
             let p = Problem::from_file(scene)?;

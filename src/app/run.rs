@@ -6,12 +6,14 @@ use super::series::Series;
 use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::terminal::Terminal;
 use super::{default_out, export, AppError};
+use crate::choice::Choice;
 use crate::dynamics::driver::EnergyRow;
 use crate::model::{self, Outcome};
 use crate::navier::Estimate;
 use crate::output::{self, StagedDir};
 use crate::peridynamics::PdParams;
 use crate::pipeline::{RunError, OUTPUT};
+use crate::problem::preset::Preset;
 use crate::problem::{Model, Problem};
 use crate::warnings::{self, Checks};
 use serde::Serialize;
@@ -27,13 +29,24 @@ pub(super) struct RunRequest {
     pub model: Option<Model>,
     pub horizon: Option<f64>,
     pub strict: bool,
+    pub preset: Option<String>,
     pub allow_long: bool,
     pub export_system: Option<PathBuf>,
 }
 
 /// The scene with the command line's overrides applied and checked.
 fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
-    let mut p = Problem::from_file(&req.scene)?;
+    let preset = match &req.preset {
+        Some(w) => Some(Preset::parse(w).map_err(|e| AppError::Usage(format!("--preset: {e}")))?),
+        None => None,
+    };
+    if preset.is_some() && req.spacing.is_some() {
+        return Err(AppError::Usage("--preset sets the spacing; give --preset or --spacing, not both".into()));
+    }
+    if preset.is_some() && req.model == Some(Model::Peridynamics) {
+        return Err(AppError::Usage("--preset chooses the MLSM nodes and approximation; the peridynamic model takes --horizon".into()));
+    }
+    let mut p = Problem::from_file_with_preset(&req.scene, preset)?;
     if let Some(d) = p.case.dynamics.as_mut() {
         d.allow_long = req.allow_long;
     }

@@ -1,6 +1,7 @@
 //! The validated problem: built once from a scene file by [`Problem::from_file`].
 //! After this point no code handles raw strings or unchecked numbers.
 
+pub mod preset;
 pub mod reference;
 pub mod spec;
 pub mod validate;
@@ -57,18 +58,28 @@ pub struct Problem {
 impl Problem {
     /// Read, parse and validate a scene file.
     pub fn from_file(path: &Path) -> Result<Problem, ProblemError> {
+        Problem::from_file_with_preset(path, None)
+    }
+
+    /// Parse and validate scene text; `path` is used in messages and for the default name.
+    pub fn from_str(text: &str, path: &Path) -> Result<Problem, ProblemError> {
+        Problem::from_str_with_preset(text, path, None)
+    }
+
+    /// [`Problem::from_file`] with `preset` in place of the scene's own `preset`.
+    pub fn from_file_with_preset(path: &Path, preset: Option<preset::Preset>) -> Result<Problem, ProblemError> {
         let text = std::fs::read_to_string(path).map_err(|e| ProblemError {
             file: path.to_path_buf(),
             field: "(file)".into(),
             reason: format!("cannot read the scene file: {e}"),
         })?;
-        Problem::from_str(&text, path)
+        Problem::from_str_with_preset(&text, path, preset)
     }
 
-    /// Parse and validate scene text; `path` is used in messages and for the default name.
-    pub fn from_str(text: &str, path: &Path) -> Result<Problem, ProblemError> {
+    /// [`Problem::from_str`] with `preset` in place of the scene's own `preset`.
+    pub fn from_str_with_preset(text: &str, path: &Path, preset: Option<preset::Preset>) -> Result<Problem, ProblemError> {
         let spec = validate::parse(text, path)?;
-        validate::validate(spec, path)
+        validate::validate(spec, path, preset)
     }
 
     /// The same problem at another node spacing (used by convergence studies and

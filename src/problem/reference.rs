@@ -3,6 +3,7 @@
 //! named exact solution. `mlsm options` prints it; problems/README.md carries it
 //! (a test keeps the two equal).
 
+use super::preset::Preset;
 use super::Model;
 use crate::case::OutputField;
 use crate::choice::{escape_cell, reference_markdown, Choice, OptionDoc};
@@ -20,6 +21,7 @@ use crate::peridynamics::{BondForce, KernelKind, Quadrature, SurfaceCorrection};
 pub fn options() -> Vec<OptionDoc> {
     vec![
         OptionDoc::of::<Model>(),
+        OptionDoc::of::<Preset>(),
         OptionDoc::of::<PrimitiveKind>(),
         OptionDoc::of::<CsgOp>(),
         OptionDoc::of::<FillKind>(),

@@ -11,6 +11,8 @@ use serde::{Deserialize, Deserializer};
 pub struct SceneSpec {
     /// Scene name (default: the file stem); names the output folder.
     pub name: Option<String>,
+    /// `fast`, `balanced` or `accurate`: approximation and spacing by rule.
+    pub preset: Option<String>,
     /// Free text shown in the summary.
     pub description: Option<String>,
     /// The solid.

@@ -17,6 +17,7 @@ pub use crate::mlsm::default_support;
 pub use approximation::{expected_nodes, DEFAULT_GHOST_NODES};
 pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO, POISSON_SNAP};
 
+use super::preset::Preset;
 use super::spec::{EstimateSpec, SceneSpec};
 use super::{Model, Problem, ProblemError};
 use crate::case::{Case, OutputField, Outputs};
@@ -124,18 +125,28 @@ impl Ctx<'_> {
 }
 
 /// Semantic validation: physics, geometry, consistency of names and options.
-pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
+pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Result<Problem, ProblemError> {
     let c = Ctx { path, constants: Constants::default() };
     let c = Ctx { constants: expressions::constants(&c, spec.constants.as_ref())?, ..c };
     let name = scene_name(&c, spec.name.as_deref(), path)?;
     let domain = domain::domain(&c, &spec.domain)?;
     let area = domain.area_estimate(400);
     let dynamic = spec.dynamics.is_some();
+    let preset = match preset {
+        Some(p) => Some(p),
+        None => spec.preset.as_deref().map(|w| c.choose::<Preset>("preset", Some(w))).transpose()?,
+    };
+    let mut notes = Vec::new();
+    if let Some(p) = preset {
+        if dynamic {
+            return c.err("preset", "presets were measured on static solves; with [dynamics] set [nodes] and [approximation] yourself");
+        }
+        notes.push(super::preset::apply(p, &mut spec, &domain, area, packing(FillKind::Scattered)));
+    }
     let fill = approximation::nodes(&c, &spec.nodes, &domain, area)?;
     let approximation = approximation::approximation(&c, &spec.approximation, fill.kind, dynamic)?;
     approximation::check_node_count(&c, &domain, &fill, &approximation, area)?;
     let mut material = material::material(&c, &spec.material)?;
-    let mut notes = Vec::new();
     if spec.peridynamics.is_some() {
         notes.extend(peridynamics::snap_poisson(&mut material));
     }
@@ -152,6 +163,10 @@ pub fn validate(spec: SceneSpec, path: &Path) -> Result<Problem, ProblemError> {
         None => None,
     };
     let model: Model = c.choose("model", spec.model.as_deref())?;
+    if model == Model::Peridynamics && preset.is_some() {
+        return c
+            .err("preset", "presets choose the MLSM nodes and approximation; the peridynamic model is set by [peridynamics] (horizon, m)");
+    }
     if model == Model::Peridynamics && peridynamics.is_none() {
         return c.err("model", "model = \"peridynamics\" needs a [peridynamics] table (horizon, quadrature, ...)");
     }

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Each preset on each shipped static scene with an exact solution, against the front
+# that benches/tradeoff.sh measured (output/bench_tradeoff/<scene>/tradeoff.json; run
+# it first, on the same machine). For a preset run of t seconds and error e, the front
+# time is that of the cheapest swept run with an error <= e; the ratio t / front time
+# must be <= 1.5 (issue 13). "ahead" = no swept run reached e.
+# Usage: bash benches/presets.sh [SCENE ...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --quiet
+scenes=("$@")
+[ ${#scenes[@]} -gt 0 ] || scenes=(cantilever cantilever_traction manufactured_dirichlet manufactured_traction lame kirsch flamant)
+out=output/bench_presets
+mkdir -p "$out"
+echo "| scene | preset | nodes | seconds | e_inf(sigma) | front seconds at that error | ratio |"
+echo "|---|---|---|---|---|---|---|"
+for scene in "${scenes[@]}"; do
+  for preset in fast balanced accurate; do
+    ./target/release/mlsm --quiet run "problems/$scene.toml" --preset "$preset" --out "$out/${scene}_$preset" 2> /dev/null || true
+    python3 - "$out/${scene}_$preset/summary.json" "output/bench_tradeoff/$scene/tradeoff.json" "$scene" "$preset" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+sweep = json.load(open(sys.argv[2]))
+t = s["timings_s"]["total"] - s["timings_s"].get("estimate", 0.0)
+e = s["errors"]["e_inf_sigma"]
+reach = [r["seconds"] for r in sweep["runs"] if r["status"] == "ok" and (r.get("exact") or {}).get("e_inf_sigma") is not None and r["exact"]["e_inf_sigma"] <= e]
+if reach:
+    f = min(reach)
+    ratio = f"{t / f:.2f}"
+    front = f"{f:.3f}"
+else:
+    ratio, front = "ahead", "-"
+print(f"| {sys.argv[3]} | {sys.argv[4]} | {s['nodes']} | {t:.3f} | {e:.2e} | {front} | {ratio} |")
+PY
+  done
+done

@@ -1,0 +1,289 @@
+//! `mlsm tradeoff`: the designed sweep of [`crate::tradeoff`] over spacing, basis and
+//! degree, stencil size and solver, cheapest predicted run first, until the time budget
+//! ends; each configuration is a scene file run as its own process. Writes
+//! `tradeoff.csv`, `tradeoff.json`, the front plot (`tradeoff.svg`, `tradeoff.png`),
+//! the configuration files (`configs/`) and each run's `summary.json` (`runs/`), and
+//! prints the table and the cheapest configuration per accuracy decade.
+
+mod child;
+mod report;
+
+use super::AppError;
+use crate::output::{self, available_memory_bytes, StagedDir};
+use crate::problem::{Model, Problem, ProblemError};
+use crate::resources::{self, MemoryEstimate};
+use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
+use crate::tradeoff::variant::{Edits, Setting};
+use child::{Ending, Norms};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// What `tradeoff` was asked for.
+pub(super) struct TradeoffRequest {
+    pub scene: PathBuf,
+    pub budget: Duration,
+    pub out: Option<PathBuf>,
+}
+
+/// Share of the budget given to runs; the rest is kept for writing the results.
+const RUN_SHARE: f64 = 0.97;
+
+/// How a configuration ended.
+#[derive(Serialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[serde(rename_all = "kebab-case")]
+enum Status {
+    /// Ran and reported.
+    Ok,
+    /// Not started: its memory estimate exceeds the available memory.
+    Refused,
+    /// Not started: its predicted time exceeds what is left of the budget.
+    Skipped,
+    /// Ran and failed (exit code and reason).
+    Failed,
+    /// Stopped at the end of the budget.
+    Stopped,
+}
+
+/// One configuration of the sweep and what became of it.
+#[derive(Serialize, Clone, Debug)]
+struct Row {
+    id: String,
+    family: String,
+    level: usize,
+    /// Far-field spacing (a graded spacing function scaled with it).
+    spacing: f64,
+    status: Status,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reason: Option<String>,
+    estimated_nodes: f64,
+    estimated_peak_memory_bytes: f64,
+    nodes: Option<u64>,
+    /// Seconds of the run without its error estimate.
+    seconds: Option<f64>,
+    estimate_seconds: Option<f64>,
+    /// Wall-clock seconds of the whole process (estimate and output included).
+    wall_seconds: Option<f64>,
+    peak_memory_bytes: Option<f64>,
+    /// Errors against the scene's exact solution.
+    exact: Option<Norms>,
+    /// The run's error estimate.
+    estimated: Option<Norms>,
+    warnings: usize,
+    on_front_sigma: bool,
+    on_front_u: bool,
+    /// The scene snippet of this configuration.
+    snippet: String,
+}
+
+/// Which error a front is drawn on.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Field {
+    Sigma,
+    U,
+}
+
+impl Row {
+    /// e_inf of `field`: exact when the run has it, else estimated; with `true` for exact.
+    fn error(&self, field: Field) -> Option<(f64, bool)> {
+        let pick = |n: &Option<Norms>| {
+            n.and_then(|n| match field {
+                Field::Sigma => n.e_inf_sigma,
+                Field::U => Some(n.e_inf_u),
+            })
+        };
+        pick(&self.exact).map(|e| (e, true)).or_else(|| pick(&self.estimated).map(|e| (e, false)))
+    }
+
+    /// The error that steers the sweep: sigma where computed, else u.
+    fn measure(&self) -> Option<f64> {
+        self.error(Field::Sigma).or_else(|| self.error(Field::U)).map(|e| e.0)
+    }
+}
+
+/// A configuration ready to run.
+struct Plan {
+    edits: Edits,
+    text: String,
+    estimate: MemoryEstimate,
+    spacing: f64,
+}
+
+/// The family's configuration at `level` of the ladder.
+fn plan(p: &Problem, text: &str, setting: Option<&Setting>, level: usize) -> Result<Plan, ProblemError> {
+    let spacing = design::spacing(p.navier.fill.spacing, level);
+    let edits = Edits::of(p, setting, spacing)?;
+    let text = edits.apply(text, &p.source)?;
+    let variant = Problem::from_str(&text, &p.source)?;
+    Ok(Plan { edits, estimate: resources::of(&variant), text, spacing })
+}
+
+/// The families of the sweep with their settings: those of [`design::families`] that
+/// the scene accepts, without repeats of the scene's own setting.
+fn families(p: &Problem, text: &str) -> (Vec<(String, Option<Setting>)>, Vec<String>) {
+    let mut notes = Vec::new();
+    let at_scene = |s: Option<&Setting>| -> Result<Problem, ProblemError> {
+        let edits = Edits::of(p, s, p.navier.fill.spacing)?;
+        Problem::from_str(&edits.apply(text, &p.source)?, &p.source)
+    };
+    let phs4 = Setting { basis: "phs", degree: 4, support: None, solver: None };
+    let phs4_support = at_scene(Some(&phs4)).map(|v| v.navier.approximation.support).unwrap_or(30);
+    let signature =
+        |v: &Problem| format!("{:?}|{}|{:?}", v.navier.approximation.basis, v.navier.approximation.support, v.navier.solver.kind);
+    let mut kept: Vec<(String, Option<Setting>, String)> = Vec::new();
+    for (name, setting) in design::families(phs4_support) {
+        match at_scene(setting.as_ref()) {
+            Ok(v) => {
+                let sig = signature(&v);
+                if let Some(shipped) = kept.iter_mut().find(|k| k.2 == sig) {
+                    shipped.0 = format!("{} = {name}", shipped.0);
+                } else {
+                    kept.push((name, setting, sig));
+                }
+            }
+            Err(e) => notes.push(format!("family \"{name}\" left out: {}: {}", e.field, e.reason)),
+        }
+    }
+    (kept.into_iter().map(|(n, s, _)| (n, s)).collect(), notes)
+}
+
+/// Refuse scenes the sweep cannot study.
+fn check_scene(p: &Problem) -> Result<(), AppError> {
+    let file = p.source.display();
+    if p.case.dynamics.is_some() {
+        return Err(AppError::Usage(format!("{file}: tradeoff sweeps the static solve; remove the [dynamics] table")));
+    }
+    if p.model == Model::Peridynamics {
+        return Err(AppError::Usage(format!(
+            "{file}: tradeoff sweeps the Navier model; for peridynamics `mlsm compare` prints each horizon's cost next to its error"
+        )));
+    }
+    if p.case.exact.is_none() && p.navier.estimate.method == crate::navier::EstimateMethod::None {
+        return Err(AppError::Usage(format!(
+            "{file}: the scene has no [exact] solution and estimate.method = \"none\": a sweep without any error measures nothing"
+        )));
+    }
+    Ok(())
+}
+
+/// Run the sweep of `req` (module docs).
+pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
+    let p = Problem::from_file(&req.scene)?;
+    check_scene(&p)?;
+    let text = std::fs::read_to_string(&req.scene).map_err(|e| AppError::Output(output::OutputError::io(&req.scene, e)))?;
+    let start = Instant::now();
+    let deadline = start + req.budget.mul_f64(RUN_SHARE);
+    let target = req.out.clone().unwrap_or_else(|| super::default_out(&p).join("tradeoff"));
+    let staged = StagedDir::create(&target, |_| true)?;
+    let dir = staged.path().to_path_buf();
+    for sub in ["configs", "runs"] {
+        super::create_dir(&dir.join(sub))?;
+    }
+    let (families, notes) = families(&p, &text);
+    if !quiet {
+        eprintln!(
+            "tradeoff of {} within {:.0} s: {} families ({})",
+            p.name,
+            req.budget.as_secs_f64(),
+            families.len(),
+            families.iter().map(|f| f.0.as_str()).collect::<Vec<_>>().join("; ")
+        );
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+    }
+    let available = available_memory_bytes();
+    let mut sweep = Sweep::new(families.iter().map(|f| f.0.clone()).collect());
+    let mut plans: Vec<Option<Plan>> = families.iter().map(|_| None).collect();
+    let mut rows: Vec<Row> = Vec::new();
+    loop {
+        // A configuration for every running family: levels too coarse for its stencil
+        // are passed over; any other refusal stops the family.
+        for (f, (_, setting)) in families.iter().enumerate() {
+            while sweep.families[f].stopped.is_none() && plans[f].is_none() {
+                let level = sweep.families[f].next_level;
+                match plan(&p, &text, setting.as_ref(), level) {
+                    Ok(pl) => plans[f] = Some(pl),
+                    Err(e) if e.reason.contains("too few for supports") && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
+                    Err(e) => sweep.stop(f, format!("{}: {}", e.field, e.reason)),
+                }
+            }
+        }
+        let work = |f: usize, _level: usize| plans[f].as_ref().map_or(f64::INFINITY, |pl| pl.estimate.nonzeros);
+        let Some((f, predicted)) = sweep.next(work) else { break };
+        let pl = plans[f].take().expect("planned above");
+        let mut row = Row {
+            id: format!("r{:02}", rows.len() + 1),
+            family: families[f].0.clone(),
+            level: sweep.families[f].next_level,
+            spacing: pl.spacing,
+            status: Status::Ok,
+            reason: None,
+            estimated_nodes: pl.estimate.nodes,
+            estimated_peak_memory_bytes: pl.estimate.peak_bytes,
+            nodes: None,
+            seconds: None,
+            estimate_seconds: None,
+            wall_seconds: None,
+            peak_memory_bytes: None,
+            exact: None,
+            estimated: None,
+            warnings: 0,
+            on_front_sigma: false,
+            on_front_u: false,
+            snippet: pl.edits.snippet(),
+        };
+        let left = deadline.saturating_duration_since(Instant::now()).as_secs_f64();
+        if let Some(avail) = available.filter(|a| pl.estimate.peak_bytes > *a) {
+            let why = format!(
+                "needs about {:.2} GB ({}), more than the {:.2} GB available",
+                pl.estimate.peak_bytes / 1e9,
+                resources::describe(&pl.estimate),
+                avail / 1e9
+            );
+            sweep.stop(f, format!("its next run {why}"));
+            (row.status, row.reason) = (Status::Refused, Some(why));
+        } else if let Some(t) = predicted.filter(|t| *t > left) {
+            let why = format!("predicted {t:.1} s, {left:.1} s of the budget left");
+            sweep.stop(f, format!("its next run is {why}"));
+            (row.status, row.reason) = (Status::Skipped, Some(why));
+        } else {
+            let config = dir.join("configs").join(format!("{}.toml", row.id));
+            output::write_atomic(&config, pl.text.as_bytes())?;
+            let launched = Instant::now();
+            let ending = child::run(&config, &dir.join("runs").join(&row.id), deadline)?;
+            let wall = launched.elapsed().as_secs_f64();
+            match ending {
+                Ending::Finished(r) => {
+                    (row.nodes, row.seconds, row.estimate_seconds) = (Some(r.nodes), Some(r.seconds), Some(r.estimate_seconds));
+                    (row.wall_seconds, row.peak_memory_bytes, row.warnings) = (Some(wall), r.peak_memory_bytes, r.warnings);
+                    (row.exact, row.estimated) = (r.exact, r.estimated);
+                    sweep.record(f, Measured { work: pl.estimate.nonzeros, seconds: wall, error: row.measure() });
+                }
+                Ending::Failed(why) => {
+                    sweep.stop(f, format!("a run failed ({why})"));
+                    (row.status, row.reason, row.wall_seconds) = (Status::Failed, Some(why), Some(wall));
+                }
+                Ending::Stopped => {
+                    (row.status, row.reason, row.wall_seconds) =
+                        (Status::Stopped, Some("the budget ended during the run".into()), Some(wall));
+                    for g in 0..families.len() {
+                        sweep.stop(g, "the budget ended".into());
+                    }
+                }
+            }
+        }
+        if !quiet {
+            eprintln!("{}", report::progress_line(&row, start.elapsed().as_secs_f64()));
+        }
+        rows.push(row);
+    }
+    let mut summary = report::Summary::new(&p, req.budget, rows, &families, &sweep, notes, start);
+    summary.write(&dir)?;
+    let target = staged.target().to_path_buf();
+    staged.commit()?;
+    if !quiet {
+        summary.print(&target);
+    }
+    Ok(())
+}
