@@ -27,14 +27,19 @@ fn positive(text: &str) -> Result<f64, String> {
 
 /// A time budget: seconds (`120`), or with a unit (`90s`, `2m`, `1h 30m`); positive.
 fn budget(text: &str) -> Result<std::time::Duration, String> {
+    /// A year: longer budgets are typos (and a deadline past the clock's range panics).
+    const LONGEST: f64 = 3.2e7;
     let t = text.trim();
     let d = match t.parse::<f64>() {
-        Ok(s) if s.is_finite() && s > 0.0 && s < 1e9 => std::time::Duration::from_secs_f64(s),
+        Ok(s) if s.is_finite() && s > 0.0 => std::time::Duration::from_secs_f64(s.min(2.0 * LONGEST)),
         Ok(s) => return Err(format!("must be a positive number of seconds, got {s}")),
         Err(_) => humantime::parse_duration(t).map_err(|e| format!("\"{t}\" is not a duration ({e}); write e.g. 120, 90s, 2m"))?,
     };
     if d.is_zero() {
         return Err("must be longer than zero".into());
+    }
+    if d.as_secs_f64() > LONGEST {
+        return Err(format!("{t} is longer than a year ({LONGEST:.1e} s)"));
     }
     Ok(d)
 }

@@ -90,7 +90,7 @@ fn tradeoff_never_starts_a_run_its_memory_estimate_refuses() {
     for r in &refused {
         let id = r["id"].as_str().unwrap();
         assert!(r["estimated_peak_memory_bytes"].as_f64().unwrap() > limit);
-        assert!(r["reason"].as_str().unwrap().contains("more than the 0.18 GB available"), "{r}");
+        assert!(r["reason"].as_str().unwrap().contains("more than the 0.2 GB available"), "{r}");
         assert!(r["seconds"].is_null() && r["nodes"].is_null());
         assert!(!out.join("runs").join(id).exists() && !out.join("configs").join(format!("{id}.toml")).exists());
     }
@@ -120,6 +120,12 @@ fn tradeoff_refuses_bad_budgets_and_scenes_it_cannot_sweep() {
         assert_eq!(o.status.code(), Some(2), "--budget {budget}");
         assert!(stderr(&o).contains(says), "--budget {budget}: {}", stderr(&o));
     }
+    let o = mlsm(&["tradeoff", &problem("lame"), "--budget", "100000000y", "--out", out], &[]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("longer than a year"), "{}", stderr(&o));
+    let o = mlsm(&["tradeoff", &problem("lame"), "--budget", "5", "--out", out], &[("MLSM_MEMORY_LIMIT", "lots")]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("MLSM_MEMORY_LIMIT"), "{}", stderr(&o));
     let o = mlsm(&["tradeoff", &problem("steel_plate_dynamic"), "--budget", "5", "--out", out], &[]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("static solve"), "{}", stderr(&o));

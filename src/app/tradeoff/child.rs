@@ -42,7 +42,8 @@ pub(super) struct Report {
     pub peak_memory_bytes: Option<f64>,
     pub exact: Option<Norms>,
     pub estimated: Option<Norms>,
-    pub warnings: usize,
+    /// The checks that warned (`summary.json` `warnings[].check`).
+    pub warnings: Vec<String>,
 }
 
 /// How a child run ended.
@@ -103,6 +104,6 @@ pub(super) fn run(config: &Path, dir: &Path, deadline: Instant) -> Result<Ending
         peak_memory_bytes: s["peak_memory_bytes"].as_f64(),
         exact: Norms::of(&s["errors"]),
         estimated: Norms::of(&s["estimated_errors"]),
-        warnings: s["warnings"].as_array().map_or(0, Vec::len),
+        warnings: s["warnings"].as_array().map_or(Vec::new(), |w| w.iter().filter_map(|w| w["check"].as_str().map(String::from)).collect()),
     }))
 }

@@ -9,7 +9,7 @@ mod child;
 mod report;
 
 use super::AppError;
-use crate::output::{self, available_memory_bytes, StagedDir};
+use crate::output::{self, StagedDir};
 use crate::problem::{Model, Problem, ProblemError};
 use crate::resources::{self, MemoryEstimate};
 use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
@@ -29,11 +29,15 @@ pub(super) struct TradeoffRequest {
 /// Share of the budget given to runs; the rest is kept for writing the results.
 const RUN_SHARE: f64 = 0.97;
 
+/// Warnings that make a run's errors untrustworthy (the solve itself is in doubt).
+const DOUBTFUL_SOLVE: [&str; 3] = ["residual", "conditioning", "underflow"];
+
 /// How a configuration ended.
-#[derive(Serialize, Clone, Copy, PartialEq, Eq, Debug)]
+#[derive(Serialize, Clone, Copy, PartialEq, Eq, Debug, Default)]
 #[serde(rename_all = "kebab-case")]
 enum Status {
     /// Ran and reported.
+    #[default]
     Ok,
     /// Not started: its memory estimate exceeds the available memory.
     Refused,
@@ -46,7 +50,7 @@ enum Status {
 }
 
 /// One configuration of the sweep and what became of it.
-#[derive(Serialize, Clone, Debug)]
+#[derive(Serialize, Clone, Debug, Default)]
 struct Row {
     id: String,
     family: String,
@@ -69,7 +73,9 @@ struct Row {
     exact: Option<Norms>,
     /// The run's error estimate.
     estimated: Option<Norms>,
-    warnings: usize,
+    /// The checks that warned; a run whose linear solve is doubtful (`residual`,
+    /// `conditioning`, `underflow`) is listed but never on a front or in the advice.
+    warnings: Vec<String>,
     on_front_sigma: bool,
     on_front_u: bool,
     /// The scene snippet of this configuration.
@@ -95,6 +101,12 @@ impl Row {
         pick(&self.exact).map(|e| (e, true)).or_else(|| pick(&self.estimated).map(|e| (e, false)))
     }
 
+    /// A finished run whose solve is trustworthy (see `warnings`): one that may be on a
+    /// front or recommended.
+    fn trusted(&self) -> bool {
+        self.status == Status::Ok && !self.warnings.iter().any(|w| DOUBTFUL_SOLVE.contains(&w.as_str()))
+    }
+
     /// The error that steers the sweep: sigma where computed, else u.
     fn measure(&self) -> Option<f64> {
         self.error(Field::Sigma).or_else(|| self.error(Field::U)).map(|e| e.0)
@@ -106,6 +118,8 @@ struct Plan {
     edits: Edits,
     text: String,
     estimate: MemoryEstimate,
+    /// `resources::check`'s refusal when the estimate exceeds the available memory.
+    refused: Option<String>,
     spacing: f64,
 }
 
@@ -115,7 +129,8 @@ fn plan(p: &Problem, text: &str, setting: Option<&Setting>, level: usize) -> Res
     let edits = Edits::of(p, setting, spacing)?;
     let text = edits.apply(text, &p.source)?;
     let variant = Problem::from_str(&text, &p.source)?;
-    Ok(Plan { edits, estimate: resources::of(&variant), text, spacing })
+    let refused = resources::check(&variant).err().map(|e| format!("{}: {}", e.field, e.reason));
+    Ok(Plan { edits, estimate: resources::of(&variant), refused, text, spacing })
 }
 
 /// The families of the sweep with their settings: those of [`design::families`] that
@@ -168,9 +183,18 @@ fn check_scene(p: &Problem) -> Result<(), AppError> {
 
 /// Run the sweep of `req` (module docs).
 pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
-    let p = Problem::from_file(&req.scene)?;
+    let text = std::fs::read_to_string(&req.scene).map_err(|e| ProblemError {
+        file: req.scene.clone(),
+        field: "(file)".into(),
+        reason: format!("cannot read the scene file: {e}"),
+    })?;
+    let p = Problem::from_str(&text, &req.scene)?;
     check_scene(&p)?;
-    let text = std::fs::read_to_string(&req.scene).map_err(|e| AppError::Output(output::OutputError::io(&req.scene, e)))?;
+    // A malformed memory limit is an error of the command, not of every configuration.
+    match resources::check(&p) {
+        Err(e) if e.field == "MLSM_MEMORY_LIMIT" => return Err(e.into()),
+        _ => {}
+    }
     let start = Instant::now();
     let deadline = start + req.budget.mul_f64(RUN_SHARE);
     let target = req.out.clone().unwrap_or_else(|| super::default_out(&p).join("tradeoff"));
@@ -192,7 +216,6 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             eprintln!("note: {n}");
         }
     }
-    let available = available_memory_bytes();
     let mut sweep = Sweep::new(families.iter().map(|f| f.0.clone()).collect());
     let mut plans: Vec<Option<Plan>> = families.iter().map(|_| None).collect();
     let mut rows: Vec<Row> = Vec::new();
@@ -228,20 +251,14 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             peak_memory_bytes: None,
             exact: None,
             estimated: None,
-            warnings: 0,
+            warnings: Vec::new(),
             on_front_sigma: false,
             on_front_u: false,
             snippet: pl.edits.snippet(),
         };
         let left = deadline.saturating_duration_since(Instant::now()).as_secs_f64();
-        if let Some(avail) = available.filter(|a| pl.estimate.peak_bytes > *a) {
-            let why = format!(
-                "needs about {:.2} GB ({}), more than the {:.2} GB available",
-                pl.estimate.peak_bytes / 1e9,
-                resources::describe(&pl.estimate),
-                avail / 1e9
-            );
-            sweep.stop(f, format!("its next run {why}"));
+        if let Some(why) = pl.refused {
+            sweep.stop(f, format!("its next run was refused ({why})"));
             (row.status, row.reason) = (Status::Refused, Some(why));
         } else if let Some(t) = predicted.filter(|t| *t > left) {
             let why = format!("predicted {t:.1} s, {left:.1} s of the budget left");
@@ -258,7 +275,8 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
                     (row.nodes, row.seconds, row.estimate_seconds) = (Some(r.nodes), Some(r.seconds), Some(r.estimate_seconds));
                     (row.wall_seconds, row.peak_memory_bytes, row.warnings) = (Some(wall), r.peak_memory_bytes, r.warnings);
                     (row.exact, row.estimated) = (r.exact, r.estimated);
-                    sweep.record(f, Measured { work: pl.estimate.nonzeros, seconds: wall, error: row.measure() });
+                    let error = if row.trusted() { row.measure() } else { None };
+                    sweep.record(f, Measured { work: pl.estimate.nonzeros, seconds: wall, error });
                 }
                 Ending::Failed(why) => {
                     sweep.stop(f, format!("a run failed ({why})"));

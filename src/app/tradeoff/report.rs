@@ -65,8 +65,8 @@ pub(super) struct Summary {
 fn mark_front(rows: &mut [Row], field: Field) -> Vec<String> {
     let points: Vec<(f64, f64)> = rows
         .iter()
-        .map(|r| match (r.status, r.seconds, r.error(field)) {
-            (Status::Ok, Some(t), Some((e, _))) => (t, e),
+        .map(|r| match (r.trusted(), r.seconds, r.error(field)) {
+            (true, Some(t), Some((e, _))) => (t, e),
             _ => (f64::NAN, f64::NAN),
         })
         .collect();
@@ -86,7 +86,7 @@ fn advice(rows: &[Row], field: Field) -> Vec<Advice> {
     let done: Vec<(&Row, f64, f64, bool)> = rows
         .iter()
         .filter_map(|r| Some((r, r.seconds?, r.error(field)?.0, r.error(field)?.1)))
-        .filter(|x| x.0.status == Status::Ok && x.2 > 0.0)
+        .filter(|x| x.0.trusted() && x.2 > 0.0)
         .collect();
     let Some(hi) = done.iter().map(|x| x.2).reduce(f64::max) else { return Vec::new() };
     let lo = done.iter().map(|x| x.2).fold(f64::INFINITY, f64::min);
@@ -222,6 +222,7 @@ impl Summary {
                 (true, true) => "sigma, u",
                 (true, false) => "sigma",
                 (false, true) => "u",
+                _ if !r.trusted() => "(doubtful solve: off the fronts)",
                 _ => "",
             };
             println!(
@@ -318,7 +319,7 @@ fn write_csv(path: &Path, rows: &[Row]) -> Result<(), AppError> {
             num(s.and_then(|n| n.e_inf_sigma)),
             r.on_front_sigma.to_string(),
             r.on_front_u.to_string(),
-            r.warnings.to_string(),
+            r.warnings.join(" "),
             r.reason.clone().unwrap_or_default(),
         ])
         .map_err(bad)?;
@@ -345,5 +346,33 @@ pub(super) fn progress_line(r: &Row, elapsed: f64) -> String {
             )
         }
         s => format!("{head}: {s:?}: {}", r.reason.as_deref().unwrap_or("")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Norms;
+    use super::*;
+
+    fn row(id: &str, seconds: f64, e_sigma: f64, warnings: &[&str]) -> Row {
+        Row {
+            id: id.into(),
+            seconds: Some(seconds),
+            exact: Some(Norms { e_inf_u: e_sigma, e_inf_sigma: Some(e_sigma), rel_l2_u: e_sigma, rel_l2_sigma: Some(e_sigma) }),
+            warnings: warnings.iter().map(|w| w.to_string()).collect(),
+            ..Row::default()
+        }
+    }
+
+    /// A run whose solve is in doubt is neither on a front nor recommended, however
+    /// good its numbers look; an error-threshold warning does not exclude a run.
+    #[test]
+    fn doubtful_solves_stay_off_the_front_and_the_advice() {
+        let mut rows = vec![row("a", 1.0, 1e-3, &[]), row("b", 0.5, 1e-5, &["residual"]), row("c", 0.1, 2e-2, &["estimate"])];
+        assert_eq!(mark_front(&mut rows, Field::Sigma), ["c", "a"]);
+        assert!(!rows[1].on_front_sigma);
+        let advice = advice(&rows, Field::Sigma);
+        assert!(advice.iter().all(|a| a.id != "b"));
+        assert_eq!(advice.last().map(|a| (a.id.as_str(), a.bound)), Some(("a", 1e-3)));
     }
 }
