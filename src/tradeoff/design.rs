@@ -113,12 +113,7 @@ impl Sweep {
             };
             return Some(last.seconds * (work / last.work).powf(exponent));
         }
-        let rate = self
-            .families
-            .iter()
-            .flat_map(|s| s.runs.iter())
-            .map(|m| m.seconds / m.work.powf(DEFAULT_EXPONENT))
-            .fold(None, |a: Option<f64>, r| Some(a.map_or(r, |a| a.max(r))))?;
+        let rate = self.families.iter().flat_map(|s| s.runs.iter()).map(|m| m.seconds / m.work.powf(DEFAULT_EXPONENT)).reduce(f64::max)?;
         Some(rate * work.powf(DEFAULT_EXPONENT))
     }
 

@@ -19,6 +19,14 @@ pub(super) struct Norms {
 }
 
 impl Norms {
+    /// e_inf of `field` (`None` for sigma when the run computed no stress).
+    pub fn e_inf(&self, field: super::Field) -> Option<f64> {
+        match field {
+            super::Field::Sigma => self.e_inf_sigma,
+            super::Field::U => Some(self.e_inf_u),
+        }
+    }
+
     /// The norms of a `summary.json` object; `None` when it has none (`unavailable`).
     fn of(v: &Value) -> Option<Norms> {
         let get = |k: &str| v.get(k).and_then(Value::as_f64);

@@ -92,12 +92,7 @@ enum Field {
 impl Row {
     /// e_inf of `field`: exact when the run has it, else estimated; with `true` for exact.
     fn error(&self, field: Field) -> Option<(f64, bool)> {
-        let pick = |n: &Option<Norms>| {
-            n.and_then(|n| match field {
-                Field::Sigma => n.e_inf_sigma,
-                Field::U => Some(n.e_inf_u),
-            })
-        };
+        let pick = |n: &Option<Norms>| n.and_then(|n| n.e_inf(field));
         pick(&self.exact).map(|e| (e, true)).or_else(|| pick(&self.estimated).map(|e| (e, false)))
     }
 
@@ -240,21 +235,10 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             family: families[f].0.clone(),
             level: sweep.families[f].next_level,
             spacing: pl.spacing,
-            status: Status::Ok,
-            reason: None,
             estimated_nodes: pl.estimate.nodes,
             estimated_peak_memory_bytes: pl.estimate.peak_bytes,
-            nodes: None,
-            seconds: None,
-            estimate_seconds: None,
-            wall_seconds: None,
-            peak_memory_bytes: None,
-            exact: None,
-            estimated: None,
-            warnings: Vec::new(),
-            on_front_sigma: false,
-            on_front_u: false,
             snippet: pl.edits.snippet(),
+            ..Row::default()
         };
         let left = deadline.saturating_duration_since(Instant::now()).as_secs_f64();
         if let Some(why) = pl.refused {

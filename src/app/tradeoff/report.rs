@@ -188,10 +188,10 @@ impl Summary {
             let mut g = PointGroup { label: fam.name.clone(), exact: Vec::new(), estimated: Vec::new() };
             for r in runs {
                 let Some(t) = r.seconds else { continue };
-                if let Some(e) = r.exact.and_then(|n| if field == Field::Sigma { n.e_inf_sigma } else { Some(n.e_inf_u) }) {
+                if let Some(e) = r.exact.and_then(|n| n.e_inf(field)) {
                     g.exact.push((t, e));
                 }
-                if let Some(e) = r.estimated.and_then(|n| if field == Field::Sigma { n.e_inf_sigma } else { Some(n.e_inf_u) }) {
+                if let Some(e) = r.estimated.and_then(|n| n.e_inf(field)) {
                     g.estimated.push((t, e));
                 }
             }
@@ -214,9 +214,7 @@ impl Summary {
             "{:<4} {:<28} {:>10} {:>8} {:>8} {:>8} {:>10} {:>10} {:>10} {:>10}  front",
             "id", "family", "spacing", "nodes", "seconds", "peak MB", "e_inf(u)", "est.", "e_inf(sig)", "est."
         );
-        let e = |n: &Option<super::Norms>, f: Field| {
-            n.and_then(|n| if f == Field::Sigma { n.e_inf_sigma } else { Some(n.e_inf_u) }).map_or("-".into(), |v| format!("{v:.2e}"))
-        };
+        let e = |n: &Option<super::Norms>, f: Field| n.and_then(|n| n.e_inf(f)).map_or("-".into(), |v| format!("{v:.2e}"));
         for r in self.runs.iter().filter(|r| r.status == Status::Ok) {
             let mark = match (r.on_front_sigma, r.on_front_u) {
                 (true, true) => "sigma, u",
