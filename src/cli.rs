@@ -53,6 +53,32 @@ pub enum ModelArg {
     Peridynamics,
 }
 
+/// The norm of `run --target-error` (the names of `summary.json`).
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum TargetNormArg {
+    /// Relative max-norm error of the displacement.
+    #[value(name = "e_inf_u")]
+    EInfU,
+    /// Relative max-norm error of the stress.
+    #[value(name = "e_inf_sigma")]
+    EInfSigma,
+    /// Relative L2 error of the displacement.
+    #[value(name = "rel_l2_u")]
+    RelL2U,
+    /// Relative L2 error of the stress.
+    #[value(name = "rel_l2_sigma")]
+    RelL2Sigma,
+}
+
+/// How `run --target-error` refines.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum RefinementArg {
+    /// Graded refinement where the per-node estimate is large.
+    Local,
+    /// The whole spacing function scaled by one factor.
+    Uniform,
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -86,6 +112,20 @@ pub enum Command {
         /// (MatrixMarket and PETSc binary, with the unknowns' nodes and positions).
         #[arg(long, value_name = "DIR")]
         export_system: Option<PathBuf>,
+        /// Refine until the estimated relative error (of --target-norm) is at most E:
+        /// solve, estimate, refine where the per-node estimate is large, repeat.
+        #[arg(long, value_name = "E", allow_negative_numbers = true, value_parser = positive)]
+        target_error: Option<f64>,
+        /// The norm --target-error is set on.
+        #[arg(long, value_enum, default_value = "e_inf_u", requires = "target_error")]
+        target_norm: TargetNormArg,
+        /// How --target-error refines: local (graded where the estimate is large) or
+        /// uniform (the whole spacing scaled; grids are always refined uniformly).
+        #[arg(long, value_enum, default_value = "local", requires = "target_error")]
+        refinement: RefinementArg,
+        /// Time budget of --target-error: seconds, or 90s, 2m, 1h (default: no limit).
+        #[arg(long, allow_negative_numbers = true, value_parser = budget, requires = "target_error")]
+        budget: Option<std::time::Duration>,
     },
     /// Print every option word a scene file may use, with its default and meaning (Markdown).
     Options,

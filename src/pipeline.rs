@@ -258,6 +258,9 @@ pub enum RunError {
     /// Writing a snapshot during time integration failed.
     #[error(transparent)]
     Snapshot(OutputError),
+    /// An error target was set, but the run's error could not be estimated.
+    #[error("--target-error needs the error estimate, which is unavailable: {reason}")]
+    Estimate { reason: String },
     /// The user interrupted the time loop (Ctrl-C).
     #[error("interrupted at step {step} (t = {t:.4e} s); the partial results were removed, earlier results are untouched")]
     Interrupted { step: usize, t: f64 },

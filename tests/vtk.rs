@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use mlsm::cli::{Cli, Command};
+use mlsm::cli::Cli;
 use mlsm::output::read_vtu;
 use std::path::PathBuf;
 
@@ -15,21 +15,10 @@ fn run_scene(name: &str, edit: impl Fn(String) -> String) -> (tempfile::TempDir,
     let text = std::fs::read_to_string(format!("{}/problems/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
     std::fs::write(&scene_path, edit(text)).unwrap();
     let out = dir.path().join("res");
-    mlsm::app::run(&Cli {
-        quiet: true,
-        command: Command::Run {
-            scene: scene_path.clone(),
-            out: Some(out.clone()),
-            spacing: None,
-            model: None,
-            horizon: None,
-            strict: false,
-            preset: None,
-            allow_long: false,
-            export_system: None,
-        },
-    })
-    .unwrap();
+    let cli =
+        <Cli as clap::Parser>::try_parse_from(["mlsm", "--quiet", "run", scene_path.to_str().unwrap(), "--out", out.to_str().unwrap()])
+            .unwrap();
+    mlsm::app::run(&cli).unwrap();
     (dir, scene_path, out)
 }
 

@@ -1,5 +1,5 @@
 //! The commands; the only module that prints. Each command is one file: [`check`],
-//! [`run`](mod@run), [`convergence`], [`compare`], [`tradeoff`]; they share the terminal progress
+//! [`run`](mod@run), [`convergence`], [`compare`], [`tradeoff`] (and `run --target-error`, [`target`]); they share the terminal progress
 //! ([`terminal`]), the point fields of `solution.vtu` ([`fields`]), the series writer
 //! of time-dependent runs ([`series`]) and the summary header ([`summary`]).
 
@@ -11,6 +11,7 @@ mod fields;
 mod run;
 mod series;
 mod summary;
+mod target;
 mod terminal;
 mod tradeoff;
 
@@ -92,7 +93,21 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             print!("{}", crate::problem::reference::markdown());
             Ok(())
         }
-        Command::Run { scene, out, spacing, model, horizon, strict, preset, allow_long, export_system } => {
+        Command::Run {
+            scene,
+            out,
+            spacing,
+            model,
+            horizon,
+            strict,
+            preset,
+            allow_long,
+            export_system,
+            target_error,
+            target_norm,
+            refinement,
+            budget,
+        } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
@@ -107,6 +122,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 preset: preset.clone(),
                 allow_long: *allow_long,
                 export_system: export_system.clone(),
+                target: target_error.map(|tolerance| target::request(tolerance, *target_norm, *refinement, *budget)),
             };
             run::run(req, &term, cli.quiet)
         }

@@ -4,6 +4,7 @@
 use super::fields::{navier_fields, pd_fields, write_points_vtu};
 use super::series::Series;
 use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
+use super::target::{self, TargetReport};
 use super::terminal::Terminal;
 use super::{default_out, export, AppError};
 use crate::choice::Choice;
@@ -15,6 +16,7 @@ use crate::peridynamics::PdParams;
 use crate::pipeline::{RunError, OUTPUT};
 use crate::problem::preset::Preset;
 use crate::problem::{Model, Problem};
+use crate::tradeoff::target::Target;
 use crate::warnings::{self, Checks};
 use serde::Serialize;
 use std::ffi::OsStr;
@@ -32,6 +34,8 @@ pub(super) struct RunRequest {
     pub preset: Option<String>,
     pub allow_long: bool,
     pub export_system: Option<PathBuf>,
+    /// `--target-error` and its options.
+    pub target: Option<Target>,
 }
 
 /// The scene with the command line's overrides applied and checked.
@@ -82,6 +86,16 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         }
         p.navier.keep_system = true;
     }
+    if let Some(t) = &req.target {
+        if p.model != Model::Navier {
+            return Err(AppError::Usage(
+                "--target-error refines the MLSM nodes of a Navier run; the peridynamic model takes --horizon".into(),
+            ));
+        }
+        if let Some(why) = crate::tradeoff::target::refusal(&p, t) {
+            return Err(AppError::Usage(format!("{}: {why}", req.scene.display())));
+        }
+    }
     crate::resources::check(&p)?;
     Ok(p)
 }
@@ -89,7 +103,8 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
 /// The entries of a result folder that `run` writes: a re-run replaces those of the
 /// earlier run (and the staging folder of older versions); anything else in the
 /// folder (`compare/`, `convergence.csv`, the user's files) is kept.
-const RUN_ENTRIES: [&str; 6] = ["solution.vtu", "summary.json", "snapshots", "series.pvd", "energies.csv", ".snapshots.partial"];
+const RUN_ENTRIES: [&str; 7] =
+    ["solution.vtu", "summary.json", "target.csv", "snapshots", "series.pvd", "energies.csv", ".snapshots.partial"];
 
 /// Whether `name` is one of [`RUN_ENTRIES`].
 fn run_owns(name: &OsStr) -> bool {
@@ -109,29 +124,17 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
         }
     }
     let t0 = Instant::now();
+    if let Some(t) = &req.target {
+        let (outcome, report) = target::pursue(&p, t, quiet)?;
+        target::write_csv(&dir, &report)?;
+        return write_navier_static(&outcome.problem, outcome.solution, staged, t0, &req, Some(&report), term, quiet);
+    }
     let mut series = Series::new(&dir, &p.case.domain);
     let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     let t_out = Instant::now();
     let seconds = || t_out.elapsed().as_secs_f64();
     match outcome {
-        Outcome::NavierStatic(mut sol) => {
-            let mut checks = warnings::navier_static(&sol, &p.navier, &p.case);
-            checks.warnings.extend(warnings::memory(&p));
-            write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, &navier_fields(&p.case, &sol))?;
-            sol.timings.record(OUTPUT, seconds());
-            let target = publish(staged, &NavierSummary::new(&p, &sol, &checks, t0))?;
-            term.line(OUTPUT, seconds(), &target.display().to_string());
-            if let (Some(to), Some(system)) = (&req.export_system, &sol.system) {
-                export::write(to, system, &sol.solver)?;
-                if !quiet {
-                    println!("system written: {}", to.display());
-                }
-            }
-            if !quiet {
-                print_navier(&sol);
-            }
-            report_checks(&checks, req.strict, quiet)?;
-        }
+        Outcome::NavierStatic(sol) => write_navier_static(&p, sol, staged, t0, &req, None, term, quiet)?,
         Outcome::PdStatic(mut sol) => {
             let mut checks = warnings::peridynamics_static(&sol, p.navier.estimate.threshold);
             checks.warnings.extend(warnings::memory(&p));
@@ -163,6 +166,43 @@ pub(super) fn run(req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), A
         }
     }
     Ok(())
+}
+
+/// Write `solution.vtu` and `summary.json` of a static Navier run (with the history of
+/// `--target-error`), export its system if asked, print its result and checks.
+#[allow(clippy::too_many_arguments)]
+fn write_navier_static(
+    p: &Problem,
+    mut sol: crate::navier::Solution,
+    staged: StagedDir,
+    t0: Instant,
+    req: &RunRequest,
+    target: Option<&TargetReport>,
+    term: &Terminal,
+    quiet: bool,
+) -> Result<(), AppError> {
+    let t_out = Instant::now();
+    let seconds = || t_out.elapsed().as_secs_f64();
+    let dir = staged.path().to_path_buf();
+    let mut checks = warnings::navier_static(&sol, &p.navier, &p.case);
+    checks.warnings.extend(warnings::memory(p));
+    checks.warnings.extend(target.and_then(TargetReport::warning));
+    write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, &navier_fields(&p.case, &sol))?;
+    sol.timings.record(OUTPUT, seconds());
+    let mut summary = NavierSummary::new(p, &sol, &checks, t0);
+    summary.target = target;
+    let written = publish(staged, &summary)?;
+    term.line(OUTPUT, seconds(), &written.display().to_string());
+    if let (Some(to), Some(system)) = (&req.export_system, &sol.system) {
+        export::write(to, system, &sol.solver)?;
+        if !quiet {
+            println!("system written: {}", to.display());
+        }
+    }
+    if !quiet {
+        print_navier(&sol);
+    }
+    report_checks(&checks, req.strict, quiet)
 }
 
 /// Write `summary.json` (the last file) into `staged` and replace the result folder

@@ -111,6 +111,9 @@ pub(super) struct NavierSummary<'a> {
     #[serde(flatten)]
     checks: &'a Checks,
     outputs: Outputs,
+    /// The history of `--target-error`, when it was set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) target: Option<&'a super::target::TargetReport>,
 }
 
 impl<'a> NavierSummary<'a> {
@@ -136,6 +139,7 @@ impl<'a> NavierSummary<'a> {
             equilibrium: sol.equilibrium,
             checks,
             outputs: p.case.outputs,
+            target: None,
         }
     }
 }

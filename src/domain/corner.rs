@@ -63,7 +63,10 @@ mod tests {
             ],
             parts: (0..8).map(|k| format!("edge{k}")).collect(),
         };
-        let nodes = generate(&domain, &FillParams { spacing: 0.1, refine: None, kind: FillKind::Scattered, seed: 1, relax_iterations: 0 });
+        let nodes = generate(
+            &domain,
+            &FillParams { spacing: 0.1, refine: None, adapted: None, kind: FillKind::Scattered, seed: 1, relax_iterations: 0 },
+        );
         let c = corners(&domain, &nodes);
         let reentrant: Vec<Point> = c.iter().filter(|c| c.reentrant).map(|c| c.position).collect();
         assert_eq!(reentrant.len(), 1, "{c:?}");

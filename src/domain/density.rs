@@ -16,6 +16,7 @@ use super::boundary::discretise_boundary;
 use super::shape::{Domain, Point};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use serde::Serialize;
+use std::num::NonZeroUsize;
 use std::sync::Arc;
 
 /// A refinement of the node spacing (the `[nodes.refine]` table, validated).
@@ -31,23 +32,54 @@ pub struct Refinement {
     pub points: Vec<Point>,
 }
 
+/// A spacing given at sample points (an adapted node set: the spacing each node of
+/// the previous set asked for); between samples `h(x)` is the inverse-distance mean
+/// of the [`SAMPLE_NEIGHBOURS`] nearest samples (exact at a sample).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpacingSamples {
+    /// Sample positions.
+    pub points: Vec<Point>,
+    /// Spacing at each sample (m), positive.
+    pub spacing: Vec<f64>,
+}
+
+/// Samples averaged by [`SpacingSamples`] between sample points.
+pub const SAMPLE_NEIGHBOURS: usize = 3;
+
+impl SpacingSamples {
+    /// The same samples with every spacing multiplied by `factor`.
+    pub fn scaled(&self, factor: f64) -> SpacingSamples {
+        SpacingSamples { points: self.points.clone(), spacing: self.spacing.iter().map(|h| h * factor).collect() }
+    }
+
+    /// The smallest sampled spacing.
+    pub fn min(&self) -> f64 {
+        self.spacing.iter().copied().fold(f64::INFINITY, f64::min)
+    }
+}
+
 /// `h(x)` of a node set (module docs); cheap to clone.
 #[derive(Clone)]
 pub struct SpacingField {
     far: f64,
     refinement: Option<(Refinement, Arc<ImmutableKdTree<f64, 2>>)>,
+    samples: Option<(Arc<SpacingSamples>, Arc<ImmutableKdTree<f64, 2>>)>,
 }
 
 impl std::fmt::Debug for SpacingField {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SpacingField").field("far", &self.far).field("refinement", &self.refinement.as_ref().map(|r| &r.0)).finish()
+        f.debug_struct("SpacingField")
+            .field("far", &self.far)
+            .field("refinement", &self.refinement.as_ref().map(|r| &r.0))
+            .field("samples", &self.samples.as_ref().map(|s| s.0.points.len()))
+            .finish()
     }
 }
 
 impl SpacingField {
     /// The constant spacing `h`.
     pub fn uniform(h: f64) -> Self {
-        SpacingField { far: h, refinement: None }
+        SpacingField { far: h, refinement: None, samples: None }
     }
 
     /// Spacing `far` away from the targets of `refinement` on `domain`. The distance to
@@ -62,23 +94,35 @@ impl SpacingField {
             }
         }
         let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&targets).expect("finite refinement targets");
-        SpacingField { far, refinement: Some((refinement.clone(), Arc::new(tree))) }
+        SpacingField { far, refinement: Some((refinement.clone(), Arc::new(tree))), samples: None }
+    }
+
+    /// This field capped by `samples`: `h(x) = min(h_self(x), h_samples(x))`.
+    pub fn capped_by(mut self, samples: Arc<SpacingSamples>) -> Self {
+        let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&samples.points).expect("finite spacing samples");
+        self.samples = Some((samples, Arc::new(tree)));
+        self
     }
 
     /// `h(x)`.
     pub fn at(&self, x: Point) -> f64 {
-        match &self.refinement {
+        let graded = match &self.refinement {
             None => self.far,
             Some((r, tree)) => {
                 let d = tree.query(&x).nearest_one::<SquaredEuclidean<f64>>().execute().distance.sqrt();
                 (r.spacing + r.growth * d).min(self.far)
             }
+        };
+        match &self.samples {
+            None => graded,
+            Some((s, tree)) => graded.min(sampled(s, tree, x)),
         }
     }
 
     /// The smallest spacing anywhere.
     pub fn min(&self) -> f64 {
-        self.refinement.as_ref().map_or(self.far, |(r, _)| r.spacing.min(self.far))
+        let graded = self.refinement.as_ref().map_or(self.far, |(r, _)| r.spacing.min(self.far));
+        self.samples.as_ref().map_or(graded, |(s, _)| graded.min(s.min()))
     }
 
     /// The largest spacing (far from the targets).
@@ -88,7 +132,7 @@ impl SpacingField {
 
     /// Whether the spacing is the same everywhere.
     pub fn is_uniform(&self) -> bool {
-        self.refinement.is_none()
+        self.refinement.is_none() && self.samples.is_none()
     }
 
     /// About how many nodes a fill of `domain` at this spacing holds: `int dA / h^2`,
@@ -129,6 +173,22 @@ impl SpacingField {
         }
         total
     }
+}
+
+/// `sum w_k h_k / sum w_k` over the nearest samples, `w_k = 1 / d_k^2`; the sample's
+/// own spacing at a sample.
+fn sampled(s: &SpacingSamples, tree: &ImmutableKdTree<f64, 2>, x: Point) -> f64 {
+    let k = NonZeroUsize::new(SAMPLE_NEIGHBOURS.min(s.points.len()).max(1)).expect("at least one");
+    let (mut num, mut den) = (0.0, 0.0);
+    for n in tree.query(&x).nearest_n::<SquaredEuclidean<f64>>(k).execute() {
+        let h = s.spacing[n.item as usize];
+        if n.distance <= (1e-12 * h).powi(2) {
+            return h;
+        }
+        num += h / n.distance;
+        den += 1.0 / n.distance;
+    }
+    num / den
 }
 
 #[cfg(test)]

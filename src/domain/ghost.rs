@@ -80,7 +80,7 @@ mod tests {
     use crate::domain::{CsgOp, Primitive, Region};
 
     fn nodes(domain: &Domain, h: f64) -> NodeSet {
-        generate(domain, &FillParams { spacing: h, refine: None, kind: FillKind::Grid, seed: 0, relax_iterations: 0 })
+        generate(domain, &FillParams { spacing: h, refine: None, adapted: None, kind: FillKind::Grid, seed: 0, relax_iterations: 0 })
     }
 
     /// On a rectangle every boundary node gets its ghost at `p + h n`, outside the

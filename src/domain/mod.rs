@@ -5,6 +5,7 @@
 //! interior nodes. Every boundary node knows the parts it touches and the outward
 //! unit normal of each (corner rule in [`boundary`]).
 
+pub mod adapt;
 pub mod boundary;
 pub mod cells;
 pub mod corner;
@@ -16,8 +17,9 @@ pub mod shape;
 
 use crate::choice::choice;
 pub use boundary::BoundarySample;
-pub use density::{Refinement, SpacingField};
+pub use density::{Refinement, SpacingField, SpacingSamples};
 pub use shape::{CsgOp, Domain, Point, Primitive, PrimitiveKind, Region};
+use std::sync::Arc;
 
 choice! {
     /// How interior nodes are placed.
@@ -37,6 +39,10 @@ pub struct FillParams {
     /// Graded spacing towards boundary parts or points (scattered fills only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub refine: Option<Refinement>,
+    /// A spacing adapted to an error indicator (`run --target-error`), capping the
+    /// spacing of `spacing` and `refine` (scattered fills only).
+    #[serde(skip)]
+    pub adapted: Option<Arc<SpacingSamples>>,
     /// Interior fill.
     pub kind: FillKind,
     /// Seed of every random choice.
@@ -48,10 +54,19 @@ pub struct FillParams {
 impl FillParams {
     /// The spacing function `h(x)` of these parameters on `domain`.
     pub fn field(&self, domain: &Domain) -> SpacingField {
-        match &self.refine {
+        let field = match &self.refine {
             None => SpacingField::uniform(self.spacing),
             Some(r) => SpacingField::graded(domain, self.spacing, r),
+        };
+        match &self.adapted {
+            None => field,
+            Some(s) => field.capped_by(s.clone()),
         }
+    }
+
+    /// Whether the spacing is the same everywhere.
+    pub fn is_uniform(&self) -> bool {
+        self.refine.is_none() && self.adapted.is_none()
     }
 
     /// The same parameters with the spacing function multiplied by `factor`:
@@ -64,6 +79,7 @@ impl FillParams {
             r.spacing *= factor;
             r.growth *= factor;
         }
+        p.adapted = p.adapted.map(|s| Arc::new(s.scaled(factor)));
         p
     }
 }

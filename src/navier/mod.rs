@@ -92,7 +92,7 @@ pub(crate) mod test_case {
         };
         let support = if fill == FillKind::Grid { 13 } else { 12 };
         let params = NavierParams {
-            fill: FillParams { spacing: h, refine: None, kind: fill, seed: 1, relax_iterations: 0 },
+            fill: FillParams { spacing: h, refine: None, adapted: None, kind: fill, seed: 1, relax_iterations: 0 },
             approximation: Approximation {
                 basis: Basis::Monomials { degree: 2 },
                 weight: Weight::Gaussian { sigma: 1.0 },

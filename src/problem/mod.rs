@@ -8,6 +8,7 @@ pub mod validate;
 
 use crate::case::Case;
 use crate::choice::choice;
+use crate::domain::FillParams;
 use crate::navier::NavierParams;
 use crate::peridynamics::PdParams;
 use std::path::{Path, PathBuf};
@@ -86,31 +87,34 @@ impl Problem {
     /// `--spacing`); refused when the spacing is not positive or would give more than
     /// [`validate::MAX_NODES`] or fewer than two supports' worth of nodes.
     pub fn with_spacing(&self, spacing: f64) -> Result<Problem, ProblemError> {
-        let reason =
-            if !(spacing.is_finite() && spacing > 0.0) { Some(format!("spacing must be a positive number, got {spacing}")) } else { None };
-        // A graded spacing h(x) is scaled as a whole: every h(x) by the same factor.
-        let fill = self.navier.fill.scaled(if spacing > 0.0 { spacing / self.navier.fill.spacing } else { 1.0 });
-        let expected = validate::expected_nodes(&self.case.domain, &fill, self.case.domain.area_estimate(400));
-        let reason = reason.or_else(|| {
-            if expected > validate::MAX_NODES {
-                Some(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES))
-            } else if expected < 2.0 * self.navier.approximation.support as f64 {
-                Some(format!(
-                    "spacing {spacing} gives about {expected:.0} nodes, too few for supports of {}",
-                    self.navier.approximation.support
-                ))
-            } else {
-                None
-            }
-        });
-        match reason {
-            Some(reason) => Err(ProblemError { file: self.source.clone(), field: "nodes.spacing".into(), reason }),
-            None => {
-                let mut p = self.clone();
-                p.navier.fill = fill;
-                Ok(p)
-            }
+        if !(spacing.is_finite() && spacing > 0.0) {
+            return Err(self.spacing_error(format!("spacing must be a positive number, got {spacing}")));
         }
+        // A graded spacing h(x) is scaled as a whole: every h(x) by the same factor.
+        self.with_fill(self.navier.fill.scaled(spacing / self.navier.fill.spacing))
+    }
+
+    /// The same problem with the nodes of `fill` (an adapted spacing, a scaled one),
+    /// refused like [`Problem::with_spacing`] when the node count is out of range.
+    pub fn with_fill(&self, fill: FillParams) -> Result<Problem, ProblemError> {
+        let expected = validate::expected_nodes(&self.case.domain, &fill, self.case.domain.area_estimate(400));
+        let spacing = fill.spacing;
+        if expected > validate::MAX_NODES {
+            return Err(self.spacing_error(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES)));
+        }
+        if expected < 2.0 * self.navier.approximation.support as f64 {
+            return Err(self.spacing_error(format!(
+                "spacing {spacing} gives about {expected:.0} nodes, too few for supports of {}",
+                self.navier.approximation.support
+            )));
+        }
+        let mut p = self.clone();
+        p.navier.fill = fill;
+        Ok(p)
+    }
+
+    fn spacing_error(&self, reason: String) -> ProblemError {
+        ProblemError { file: self.source.clone(), field: "nodes.spacing".into(), reason }
     }
 
     /// The same problem with other peridynamic parameters (used by `compare` and

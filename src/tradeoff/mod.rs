@@ -6,4 +6,5 @@
 
 pub mod design;
 pub mod front;
+pub mod target;
 pub mod variant;

@@ -43,7 +43,7 @@ pub(super) fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Resul
         return c.err("nodes.relax", format!("{relax} sweeps; the fill settles within tens (seed 002 uses about 10); at most 1000"));
     }
     let refine = s.refine.as_ref().map(|r| refinement(c, r, domain, kind, spacing)).transpose()?;
-    Ok(FillParams { spacing, refine, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
+    Ok(FillParams { spacing, refine, adapted: None, kind, seed: s.seed.unwrap_or(0), relax_iterations: relax })
 }
 
 /// Largest growth rate of a refinement: the spacing of neighbouring nodes then
@@ -217,9 +217,10 @@ pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dyna
 /// About how many nodes a fill holds: `area / h^2` times the packing of the fill, or
 /// for a graded spacing the integral of `1 / h(x)^2` ([`crate::domain::SpacingField::node_estimate`]).
 pub fn expected_nodes(domain: &Domain, fill: &FillParams, area: f64) -> f64 {
-    match &fill.refine {
-        None => area / fill.spacing.powi(2) * packing(fill.kind),
-        Some(_) => fill.field(domain).node_estimate(domain, 2.0 * MAX_NODES) * packing(fill.kind),
+    if fill.is_uniform() {
+        area / fill.spacing.powi(2) * packing(fill.kind)
+    } else {
+        fill.field(domain).node_estimate(domain, 2.0 * MAX_NODES) * packing(fill.kind)
     }
 }
 

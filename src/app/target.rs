@@ -1,0 +1,150 @@
+//! `mlsm run --target-error E`: the refinement loop of [`crate::tradeoff::target`],
+//! one terminal line per step, and its history in `target.csv` and in `summary.json`
+//! (`target`).
+
+use super::AppError;
+use crate::cli::{RefinementArg, TargetNormArg};
+use crate::output;
+use crate::pipeline::Silent;
+use crate::problem::Problem;
+use crate::tradeoff::target::{self, Outcome, Refinement, Step, Stop, Target, TargetNorm};
+use crate::warnings::Warning;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Duration;
+
+/// The target of the command line.
+pub(super) fn request(tolerance: f64, norm: TargetNormArg, refinement: RefinementArg, budget: Option<Duration>) -> Target {
+    let norm = match norm {
+        TargetNormArg::EInfU => TargetNorm::EInfU,
+        TargetNormArg::EInfSigma => TargetNorm::EInfSigma,
+        TargetNormArg::RelL2U => TargetNorm::RelL2U,
+        TargetNormArg::RelL2Sigma => TargetNorm::RelL2Sigma,
+    };
+    let refinement = match refinement {
+        RefinementArg::Local => Refinement::Local,
+        RefinementArg::Uniform => Refinement::Uniform,
+    };
+    Target { tolerance, norm, refinement, budget }
+}
+
+/// `summary.json`'s `target`: what was asked, how it ended, and every step.
+#[derive(Serialize)]
+pub(super) struct TargetReport {
+    tolerance: f64,
+    norm: TargetNorm,
+    refinement: Refinement,
+    budget_s: Option<f64>,
+    reached: bool,
+    /// Why the loop ended (`stop`), with its numbers.
+    #[serde(flatten)]
+    stop: Stop,
+    message: String,
+    steps: Vec<Step>,
+}
+
+impl TargetReport {
+    /// The warning of a target that was not reached (the best estimate and why).
+    pub(super) fn warning(&self) -> Option<Warning> {
+        let best = self.steps.last()?;
+        (!self.reached).then(|| Warning {
+            check: "target",
+            message: format!(
+                "--target-error {:e} ({}) not reached: the best estimate is {:.2e} at {} nodes; {}",
+                self.tolerance,
+                self.norm.name(),
+                best.estimate,
+                best.nodes,
+                self.message
+            ),
+        })
+    }
+}
+
+/// Run the loop for `target` on `p`, printing a line per step unless `quiet`.
+pub(super) fn pursue(p: &Problem, target: &Target, quiet: bool) -> Result<(Outcome, TargetReport), AppError> {
+    if !quiet {
+        eprintln!(
+            "target: {} <= {:e}, {} refinement{}",
+            target.norm.name(),
+            target.tolerance,
+            match target.refinement {
+                Refinement::Local => "local",
+                Refinement::Uniform => "uniform",
+            },
+            target.budget.map_or(String::new(), |b| format!(", budget {:.0} s", b.as_secs_f64()))
+        );
+    }
+    let mut k = 0;
+    let outcome = target::pursue(p, target, &Silent, |s| {
+        k += 1;
+        if !quiet {
+            let error = s.error.map_or(String::new(), |e| format!(" (true {e:.2e})"));
+            eprintln!(
+                "step {k}: {:>8} nodes, spacing {:.3e}..{:.3e}, estimate {:.2e}{error}, {:.2} s",
+                s.nodes, s.spacing_min, s.spacing_max, s.estimate, s.seconds
+            );
+        }
+    })
+    .map_err(|e| AppError::of_scene(p, e))?;
+    if !quiet {
+        for n in &outcome.notes {
+            eprintln!("note: {n}");
+        }
+        eprintln!("target: {}", outcome.stop.describe());
+    }
+    let report = TargetReport {
+        tolerance: target.tolerance,
+        norm: target.norm,
+        refinement: target.refinement,
+        budget_s: target.budget.map(|b| b.as_secs_f64()),
+        reached: matches!(outcome.stop, Stop::Reached),
+        stop: outcome.stop.clone(),
+        message: outcome.stop.describe(),
+        steps: outcome.history.clone(),
+    };
+    Ok((outcome, report))
+}
+
+/// `target.csv`: one row per step.
+pub(super) fn write_csv(dir: &Path, report: &TargetReport) -> Result<(), AppError> {
+    let nan = |o: Option<f64>| o.unwrap_or(f64::NAN);
+    let rows: Vec<Vec<f64>> = report
+        .steps
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            vec![
+                (k + 1) as f64,
+                s.nodes as f64,
+                s.spacing_min,
+                s.spacing_max,
+                s.seconds,
+                s.estimate,
+                nan(s.error),
+                s.estimated.e_inf_u,
+                nan(s.estimated.e_inf_sigma),
+                nan(s.errors.map(|e| e.e_inf_u)),
+                nan(s.errors.and_then(|e| e.e_inf_sigma)),
+            ]
+        })
+        .collect();
+    output::write_csv(
+        &dir.join("target.csv"),
+        &[
+            "step",
+            "nodes",
+            "spacing_min",
+            "spacing_max",
+            "seconds",
+            "estimate",
+            "error",
+            "estimated_e_inf_u",
+            "estimated_e_inf_sigma",
+            "e_inf_u",
+            "e_inf_sigma",
+        ],
+        &rows,
+    )?;
+    Ok(())
+}

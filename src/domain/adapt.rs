@@ -1,0 +1,123 @@
+//! A node spacing adapted to a per-node error indicator (`mlsm run --target-error`).
+//!
+//! Node `i` with spacing `h_i` and indicator `eta_i` (its estimated error, relative,
+//! in the norm of the target) asks for the spacing that would bring its error to a
+//! fraction [`SAFETY`] of the tolerance `tau`, if the error falls like `h^q`:
+//!
+//! ```text
+//! h_i' = h_i * clamp((SAFETY tau / eta_i)^(1/q), MIN_FACTOR, 1)
+//! ```
+//!
+//! (never coarser than before: the loop starts coarse and only refines). The wishes are
+//! then graded so that the spacing grows by at most `g` per unit of distance,
+//!
+//! ```text
+//! h'(x_i) = min_j (h_j' + g |x_i - x_j|),
+//! ```
+//!
+//! computed by a shortest-path sweep over the graph of each node's [`GRAPH_NEIGHBOURS`]
+//! nearest nodes (a path is never shorter than the straight line, so the result is at
+//! least the exact envelope and differs from it by the detour of the graph). The
+//! grading keeps the density free of jumps and widens a refined spot to the support
+//! around it, where the error is made as much as where it shows.
+
+use super::density::SpacingSamples;
+use super::shape::Point;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::num::NonZeroUsize;
+
+/// Fraction of the tolerance a refined node aims at (indicators are estimates, and
+/// the order is a guess: aiming at the tolerance itself takes an extra step half of
+/// the time).
+pub const SAFETY: f64 = 0.5;
+
+/// Smallest factor a spacing is multiplied by in one step (at most 16x the nodes
+/// locally, so that a wrong order guess cannot explode the node count).
+pub const MIN_FACTOR: f64 = 0.25;
+
+/// Spacing gained per unit of distance from a refined node (as `[nodes.refine]`
+/// `growth`; below 1/2, the largest the scene accepts).
+pub const GROWTH: f64 = 0.1;
+
+/// Neighbours of a node in the grading graph.
+pub const GRAPH_NEIGHBOURS: usize = 8;
+
+/// The factor node spacing is multiplied by for indicator `eta`, tolerance `tau` and
+/// order `q` (module docs).
+pub fn refinement_factor(eta: f64, tau: f64, order: f64) -> f64 {
+    if eta.is_nan() {
+        return MIN_FACTOR;
+    }
+    if eta <= 0.0 {
+        return 1.0;
+    }
+    (SAFETY * tau / eta).powf(1.0 / order).clamp(MIN_FACTOR, 1.0)
+}
+
+/// The adapted spacing of nodes at `positions` with spacing `spacing` and
+/// `indicator`, graded with growth `g` (module docs).
+pub fn adapted_spacing(positions: &[Point], spacing: &[f64], indicator: &[f64], tau: f64, order: f64, g: f64) -> SpacingSamples {
+    let wish: Vec<f64> = spacing.iter().zip(indicator).map(|(h, eta)| h * refinement_factor(*eta, tau, order)).collect();
+    SpacingSamples { points: positions.to_vec(), spacing: graded_envelope(positions, &wish, g) }
+}
+
+/// `min_j (wish_j + g d(i, j))` over paths of the nearest-neighbour graph (Dijkstra
+/// from every node at once, each starting at its own wish).
+pub fn graded_envelope(positions: &[Point], wish: &[f64], g: f64) -> Vec<f64> {
+    let n = positions.len();
+    if n < 2 {
+        return wish.to_vec();
+    }
+    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(positions).expect("finite node positions");
+    let k = NonZeroUsize::new((GRAPH_NEIGHBOURS + 1).min(n)).expect("two nodes");
+    let mut h = wish.to_vec();
+    // Keys are spacings, positive and finite: their bit patterns order like the values.
+    let mut heap: BinaryHeap<Reverse<(u64, usize)>> = (0..n).map(|i| Reverse((h[i].to_bits(), i))).collect();
+    let mut done = vec![false; n];
+    while let Some(Reverse((bits, i))) = heap.pop() {
+        if done[i] || bits != h[i].to_bits() {
+            continue;
+        }
+        done[i] = true;
+        for nb in tree.query(&positions[i]).nearest_n::<SquaredEuclidean<f64>>(k).execute() {
+            let j = nb.item as usize;
+            let candidate = h[i] + g * nb.distance.sqrt();
+            if !done[j] && candidate < h[j] {
+                h[j] = candidate;
+                heap.push(Reverse((candidate.to_bits(), j)));
+            }
+        }
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The factor follows `(SAFETY tau / eta)^(1/q)` inside its clamp.
+    #[test]
+    fn factor_from_indicator() {
+        assert_eq!(refinement_factor(1e-5, 1e-3, 2.0), 1.0, "well below the tolerance: kept");
+        assert!((refinement_factor(2e-3, 1e-3, 2.0) - 0.5).abs() < 1e-15, "4x the aim at order 2: halved");
+        assert_eq!(refinement_factor(1.0, 1e-3, 2.0), MIN_FACTOR, "far above: clamped");
+        assert_eq!(refinement_factor(f64::NAN, 1e-3, 2.0), MIN_FACTOR, "a NaN indicator refines");
+        assert_eq!(refinement_factor(0.0, 1e-3, 2.0), 1.0);
+    }
+
+    /// On a line of nodes 0.1 apart with one small wish, the envelope rises by g per
+    /// unit of distance from it, and never above the wishes.
+    #[test]
+    fn envelope_grows_linearly_from_a_refined_node() {
+        let positions: Vec<Point> = (0..21).map(|i| [0.1 * i as f64, 0.0]).collect();
+        let mut wish = vec![0.1; 21];
+        wish[10] = 0.01;
+        let h = graded_envelope(&positions, &wish, 0.3);
+        for (i, hi) in h.iter().enumerate() {
+            let expected = (0.01 + 0.3 * 0.1 * (i as f64 - 10.0).abs()).min(0.1);
+            assert!((hi - expected).abs() < 1e-12, "node {i}: {hi} vs {expected}");
+        }
+    }
+}

@@ -1,0 +1,355 @@
+//! `mlsm run --target-error E`: solve, estimate, refine where the estimate's per-node
+//! indicator is large, and repeat until the estimated error is below `E` or a limit
+//! (time budget, memory, node count, a stalled estimate, [`MAX_STEPS`]) ends the loop.
+//!
+//! Each step solves the static Navier problem on the current nodes with the
+//! higher-degree estimate ([`crate::navier::estimate`]); its per-node indicator
+//! `eta_i` (relative to the field's largest value, as the e_inf norms) sets the next
+//! spacing ([`crate::domain::adapt`]):
+//!
+//! * `local` (default, scattered fills): every node asks for
+//!   `h_i (SAFETY tau / eta_i)^(1/q)` (clamped to `[1/4, 1]`), graded so that the
+//!   spacing grows at most 0.3 per unit of distance;
+//! * `uniform` (and any grid fill, which has one spacing): the whole spacing function
+//!   is scaled by the smallest of those factors.
+//!
+//! The tolerance per node is `tau = E` for an e_inf target; for a relative-L2 target
+//! it is `E * est_e_inf / est_rel_l2` of the same field (a node error at that level
+//! keeps the L2 norm at `E` if the ratio of the two norms holds). The order `q` is the
+//! approximation's polynomial degree minus one (at least 1): for degree `p` the
+//! second-derivative operators are consistent to `O(h^(p-1))`, the pessimistic end of
+//! the measured orders, so a step overshoots rather than falls short.
+
+use crate::domain::adapt::{self, GROWTH};
+use crate::domain::{FillKind, SpacingSamples};
+use crate::navier::{self, ErrorEstimate, EstimateMethod};
+use crate::pipeline::{Progress, RunError};
+use crate::post::ErrorNorms;
+use crate::problem::validate::expected_nodes;
+use crate::problem::Problem;
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Steps after which the loop stops even if the target is not reached.
+pub const MAX_STEPS: usize = 12;
+
+/// Exponent of the time of a solve against its node count, for the prediction of the
+/// next step's time (sparse LU grows a little faster than linearly).
+pub const TIME_EXPONENT: f64 = 1.2;
+
+/// A step whose estimate fell by less than this fraction makes no progress; two in a
+/// row end the loop.
+pub const STALL_FALL: f64 = 0.1;
+
+/// The norm a target is set on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TargetNorm {
+    /// Relative max-norm error of the displacement.
+    EInfU,
+    /// Relative max-norm error of the stress.
+    EInfSigma,
+    /// Relative L2 error of the displacement.
+    RelL2U,
+    /// Relative L2 error of the stress.
+    RelL2Sigma,
+}
+
+impl TargetNorm {
+    /// The name used in `summary.json` (`e_inf_u`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            TargetNorm::EInfU => "e_inf_u",
+            TargetNorm::EInfSigma => "e_inf_sigma",
+            TargetNorm::RelL2U => "rel_l2_u",
+            TargetNorm::RelL2Sigma => "rel_l2_sigma",
+        }
+    }
+
+    /// Whether the norm is of the stress.
+    pub fn of_stress(self) -> bool {
+        matches!(self, TargetNorm::EInfSigma | TargetNorm::RelL2Sigma)
+    }
+
+    /// This norm of `n` (None when `n` has no stress part).
+    pub fn of(self, n: &ErrorNorms) -> Option<f64> {
+        match self {
+            TargetNorm::EInfU => Some(n.e_inf_u),
+            TargetNorm::EInfSigma => n.e_inf_sigma,
+            TargetNorm::RelL2U => Some(n.rel_l2_u),
+            TargetNorm::RelL2Sigma => n.rel_l2_sigma,
+        }
+    }
+}
+
+/// How the nodes are refined between steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Refinement {
+    /// Graded, where the indicator asks for it.
+    Local,
+    /// The whole spacing function scaled by one factor.
+    Uniform,
+}
+
+/// What `--target-error` asks for.
+#[derive(Debug, Clone, Copy)]
+pub struct Target {
+    /// The error to reach (relative), positive.
+    pub tolerance: f64,
+    /// The norm it is set on.
+    pub norm: TargetNorm,
+    /// How nodes are refined.
+    pub refinement: Refinement,
+    /// Wall-clock limit of the whole loop.
+    pub budget: Option<Duration>,
+}
+
+/// One solve of the loop.
+#[derive(Debug, Clone, Serialize)]
+pub struct Step {
+    /// Nodes of the step.
+    pub nodes: usize,
+    /// Smallest and largest target spacing of its nodes (m).
+    pub spacing_min: f64,
+    /// Largest target spacing (m).
+    pub spacing_max: f64,
+    /// Seconds of the step (solve and estimate).
+    pub seconds: f64,
+    /// The estimated error in the target's norm.
+    pub estimate: f64,
+    /// The true error in the target's norm, when the scene has an exact solution.
+    pub error: Option<f64>,
+    /// All estimated norms.
+    pub estimated: ErrorNorms,
+    /// All true norms, when known.
+    pub errors: Option<ErrorNorms>,
+}
+
+/// Why the loop ended.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "stop", rename_all = "snake_case")]
+pub enum Stop {
+    /// The estimate is at or below the target.
+    Reached,
+    /// The next step was predicted to take longer than the budget left.
+    Budget {
+        /// Predicted seconds of the next step.
+        predicted_s: f64,
+        /// Seconds left.
+        left_s: f64,
+    },
+    /// The next step's nodes would not fit (memory estimate or node limit).
+    Memory {
+        /// The refusal.
+        reason: String,
+    },
+    /// The estimate stopped falling (round-off, or a singularity the estimate cannot
+    /// resolve).
+    Stalled,
+    /// [`MAX_STEPS`] solves were made.
+    Steps,
+    /// The next solve failed; the last good step is kept.
+    Failed {
+        /// The failure.
+        reason: String,
+    },
+}
+
+impl Stop {
+    /// A sentence for the terminal.
+    pub fn describe(&self) -> String {
+        match self {
+            Stop::Reached => "target reached".into(),
+            Stop::Budget { predicted_s, left_s } => {
+                format!("the budget ends: the next step would take about {predicted_s:.1} s, {left_s:.1} s are left")
+            }
+            Stop::Memory { reason } => format!("the next step does not fit: {reason}"),
+            Stop::Stalled => format!("the estimate stalled (fell less than {:.0} % in two steps running)", 100.0 * STALL_FALL),
+            Stop::Steps => format!("{MAX_STEPS} steps made"),
+            Stop::Failed { reason } => format!("the next step failed: {reason}"),
+        }
+    }
+}
+
+/// The loop's result: its history, why it ended, and the problem and solution of the
+/// step with the smallest estimate (usually the last; a refinement can make the
+/// estimate rise, and the better step is then kept).
+pub struct Outcome {
+    /// One entry per solve.
+    pub history: Vec<Step>,
+    /// Why the loop ended.
+    pub stop: Stop,
+    /// Index into `history` of the step returned.
+    pub best: usize,
+    /// The problem of the best step (its node spacing).
+    pub problem: Problem,
+    /// The solution of the best step.
+    pub solution: navier::Solution,
+    /// What the loop changed in the request, to print (a grid refined uniformly, the
+    /// estimate switched on).
+    pub notes: Vec<String>,
+}
+
+/// Why `target` cannot be pursued on `p`, if it cannot.
+pub fn refusal(p: &Problem, target: &Target) -> Option<String> {
+    if !(target.tolerance > 0.0 && target.tolerance < 1.0) {
+        return Some(format!("--target-error must lie in (0, 1) (a relative error), got {}", target.tolerance));
+    }
+    if target.budget.is_some_and(|b| b.is_zero()) {
+        return Some("--budget must be positive".into());
+    }
+    if p.case.dynamics.is_some() {
+        return Some("--target-error refines a static Navier run; this scene is dynamic".into());
+    }
+    if target.norm.of_stress() && !p.case.outputs.needs_gradient() {
+        return Some(format!("--target-norm {} needs the stress, which this scene does not compute (outputs)", target.norm.name()));
+    }
+    None
+}
+
+/// Pursue `target` from the nodes of `p`, reporting each step to `on_step`.
+pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step: impl FnMut(&Step)) -> Result<Outcome, RunError> {
+    let t0 = Instant::now();
+    let mut notes = Vec::new();
+    let mut problem = p.clone();
+    if problem.navier.estimate.method != EstimateMethod::HigherDegree {
+        problem.navier.estimate.method = EstimateMethod::HigherDegree;
+        notes.push("the error estimate is switched on (estimate.method = \"higher-degree\"): the target is set on it".into());
+    }
+    let mut refinement = target.refinement;
+    if refinement == Refinement::Local && problem.navier.fill.kind == FillKind::Grid {
+        refinement = Refinement::Uniform;
+        notes.push("a grid has one spacing: refined uniformly (fill = \"scattered\" refines locally)".into());
+    }
+    let order = (problem.navier.approximation.basis.polynomial_degree() as f64 - 1.0).max(1.0);
+    let mut history: Vec<Step> = Vec::new();
+    let mut solution = navier::solve(&problem.case, &problem.navier, progress)?;
+    // The best step so far (smallest estimate): its index, problem and solution.
+    let mut best: Option<(usize, Problem, navier::Solution)> = None;
+    let stop = loop {
+        let step_seconds = t0.elapsed().as_secs_f64() - history.iter().map(|s| s.seconds).sum::<f64>();
+        let Some(estimate) = solution.estimate.done() else {
+            let reason = match &solution.estimate {
+                navier::Estimate::Unavailable(why) => why.clone(),
+                _ => "no estimate".into(),
+            };
+            match best {
+                None => return Err(RunError::Estimate { reason }),
+                Some(_) => break Stop::Failed { reason: format!("no estimate: {reason}") },
+            }
+        };
+        let Some(value) = target.norm.of(&estimate.norms) else {
+            return Err(RunError::Estimate { reason: format!("the estimate has no {}", target.norm.name()) });
+        };
+        let step = Step {
+            nodes: solution.nodes.len(),
+            spacing_min: solution.nodes.local_spacing.iter().copied().fold(f64::INFINITY, f64::min),
+            spacing_max: solution.nodes.local_spacing.iter().copied().fold(0.0, f64::max),
+            seconds: step_seconds,
+            estimate: value,
+            error: solution.errors.as_ref().and_then(|e| target.norm.of(e)),
+            estimated: estimate.norms,
+            errors: solution.errors,
+        };
+        on_step(&step);
+        history.push(step);
+        let k = history.len() - 1;
+        let next = if value <= target.tolerance {
+            Err(Stop::Reached)
+        } else if history.len() >= MAX_STEPS {
+            Err(Stop::Steps)
+        } else if stalled(&history) {
+            Err(Stop::Stalled)
+        } else {
+            next_problem(&problem, &solution, estimate, target, refinement, order).map_err(|reason| Stop::Memory { reason })
+        };
+        let improved = best.as_ref().is_none_or(|(b, _, _)| value < history[*b].estimate);
+        let next = match next {
+            Ok(next) => next,
+            Err(stop) => {
+                if improved {
+                    best = Some((k, problem, solution));
+                }
+                break stop;
+            }
+        };
+        if let Some(budget) = target.budget {
+            let last = &history[k];
+            let nodes = expected_nodes(&next.case.domain, &next.navier.fill, next.case.domain.area_estimate(400));
+            let predicted_s = last.seconds * (nodes / last.nodes as f64).max(1.0).powf(TIME_EXPONENT);
+            let left_s = budget.as_secs_f64() - t0.elapsed().as_secs_f64();
+            if predicted_s > left_s {
+                if improved {
+                    best = Some((k, problem, solution));
+                }
+                break Stop::Budget { predicted_s, left_s };
+            }
+        }
+        let solved = navier::solve(&next.case, &next.navier, progress);
+        if improved {
+            best = Some((k, problem, solution));
+        }
+        match solved {
+            Ok(s) => {
+                solution = s;
+                problem = next;
+            }
+            Err(e @ RunError::Interrupted { .. }) => return Err(e),
+            Err(e) => break Stop::Failed { reason: e.to_string() },
+        }
+    };
+    let (best, problem, solution) = best.expect("the first step is solved and estimated");
+    if best + 1 < history.len() {
+        notes.push(format!(
+            "the estimate of step {} ({:.2e}) is the smallest; later steps rose, and step {} is the result written",
+            best + 1,
+            history[best].estimate,
+            best + 1
+        ));
+    }
+    Ok(Outcome { history, stop, best, problem, solution, notes })
+}
+
+/// Two steps running whose estimate fell by less than [`STALL_FALL`].
+fn stalled(history: &[Step]) -> bool {
+    let n = history.len();
+    n >= 3 && (n - 2..n).all(|k| history[k].estimate > (1.0 - STALL_FALL) * history[k - 1].estimate)
+}
+
+/// The problem of the next step: the spacing refined by the indicator of `estimate`
+/// (module docs), checked for node count and memory.
+fn next_problem(
+    p: &Problem,
+    sol: &navier::Solution,
+    estimate: &ErrorEstimate,
+    target: &Target,
+    refinement: Refinement,
+    order: f64,
+) -> Result<Problem, String> {
+    let (indicator, e_inf) = if target.norm.of_stress() {
+        (estimate.per_node_sigma.as_deref().expect("stress computed (refusal)"), estimate.norms.e_inf_sigma.expect("stress"))
+    } else {
+        (estimate.per_node_u.as_slice(), estimate.norms.e_inf_u)
+    };
+    let value = target.norm.of(&estimate.norms).expect("norm present");
+    // A relative-L2 target as a per-node tolerance (module docs).
+    let tau = if value > 0.0 { target.tolerance * e_inf / value } else { target.tolerance };
+    let fill = match refinement {
+        Refinement::Uniform => {
+            let factor = indicator.iter().map(|&eta| adapt::refinement_factor(eta, tau, order)).fold(1.0, f64::min);
+            p.navier.fill.scaled(factor)
+        }
+        Refinement::Local => {
+            let samples: SpacingSamples =
+                adapt::adapted_spacing(&sol.nodes.positions, &sol.nodes.local_spacing, indicator, tau, order, GROWTH);
+            let mut fill = p.navier.fill.clone();
+            fill.adapted = Some(Arc::new(samples));
+            fill
+        }
+    };
+    let next = p.with_fill(fill).map_err(|e| e.reason)?;
+    crate::resources::check(&next).map_err(|e| e.reason)?;
+    Ok(next)
+}

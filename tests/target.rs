@@ -1,0 +1,120 @@
+//! `mlsm run --target-error`: the loop reaches a target from a coarse start and stops
+//! there, the true error then lies within 2x the target (the bound: the
+//! estimate's measured effectivities are 0.78..1.13), a target out of reach is warned
+//! with the best estimate (exit 4 under --strict), and bad input is refused.
+//! (The refinement rule and the grading are unit-tested in src/domain/adapt.rs.)
+
+mod common;
+
+use common::f;
+use mlsm::pipeline::Silent;
+use mlsm::tradeoff::target::{pursue, Outcome, Refinement, Stop, Target, TargetNorm};
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn mlsm(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mlsm")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().expect("cannot start mlsm")
+}
+
+fn problem(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml")).display().to_string()
+}
+
+fn target(tolerance: f64, norm: TargetNorm, refinement: Refinement) -> Target {
+    Target { tolerance, norm, refinement, budget: None }
+}
+
+/// Every step is refined from the one before, the last is reached and the true
+/// error of the result is within 2 E.
+fn assert_reached(o: &Outcome, e: f64, what: &str) {
+    let steps: Vec<(usize, f64, Option<f64>)> = o.history.iter().map(|s| (s.nodes, s.estimate, s.error)).collect();
+    assert!(matches!(o.stop, Stop::Reached), "{what}: {:?}, steps {steps:?}", o.stop);
+    assert_eq!(o.best + 1, o.history.len(), "{what}: the reached step is the result");
+    let last = &o.history[o.best];
+    assert!(last.estimate <= e, "{what}: {steps:?}");
+    let error = last.error.expect("exact solution");
+    assert!(error <= 2.0 * e, "{what}: true error {error:.3e} above 2 x {e:e}; steps {steps:?}");
+    assert!(o.history.len() >= 2, "{what}: the coarse start must need refinement; {steps:?}");
+    for w in o.history.windows(2) {
+        assert!(w[1].nodes > w[0].nodes, "{what}: a step did not refine: {steps:?}");
+    }
+}
+
+/// The test: `--target-error 1e-3` on Lame meets the target and stops. Started
+/// from spacing 1e-3 (estimate about 1e-2), the loop must refine at least once.
+#[test]
+fn lame_reaches_1e_3_from_a_coarse_start_and_stops() {
+    let p = common::scene("lame", &[("nodes.spacing", f(1e-3))]);
+    let o = pursue(&p, &target(1e-3, TargetNorm::EInfU, Refinement::Local), &Silent, |_| {}).unwrap();
+    assert_reached(&o, 1e-3, "lame e_inf(u) 1e-3");
+    assert!(o.notes.iter().any(|n| n.contains("estimate is switched on")), "{:?}", o.notes);
+}
+
+/// A stress target in relative L2 on Lame, refined uniformly.
+#[test]
+fn lame_reaches_a_stress_l2_target_uniformly() {
+    let p = common::scene("lame", &[("nodes.spacing", f(1e-3))]);
+    let o = pursue(&p, &target(1e-4, TargetNorm::RelL2Sigma, Refinement::Uniform), &Silent, |_| {}).unwrap();
+    assert_reached(&o, 1e-4, "lame rel_l2(sigma) 1e-4");
+}
+
+/// On a grid (one spacing) the loop refines uniformly and says so; the manufactured
+/// scene reaches 1e-5 in e_inf(u).
+#[test]
+fn manufactured_grid_reaches_1e_5_uniformly() {
+    let p = common::scene("manufactured_traction", &[("nodes.spacing", f(0.1))]);
+    let o = pursue(&p, &target(1e-5, TargetNorm::EInfU, Refinement::Local), &Silent, |_| {}).unwrap();
+    assert_reached(&o, 1e-5, "manufactured_traction e_inf(u) 1e-5");
+    assert!(o.notes.iter().any(|n| n.contains("refined uniformly")), "{:?}", o.notes);
+}
+
+/// A target below what a 4 s budget can reach: exit 0 with a warning naming the best
+/// estimate, the history in target.csv and summary.json, exit 4 under --strict.
+#[test]
+fn unreachable_target_is_warned_and_strict_exits_4() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lame");
+    let args = ["run", &problem("lame"), "--spacing", "1e-3", "--target-error", "1e-9", "--budget", "4", "--out", out.to_str().unwrap()];
+    let o = mlsm(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{err}");
+    assert!(err.contains("warning [target]") && err.contains("not reached: the best estimate is"), "{err}");
+    let summary: Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["target"]["reached"], false);
+    assert_eq!(summary["target"]["stop"], "budget", "{}", summary["target"]);
+    let csv = std::fs::read_to_string(out.join("target.csv")).unwrap();
+    assert_eq!(csv.lines().count(), summary["target"]["steps"].as_array().unwrap().len() + 1);
+    let mut strict = args.to_vec();
+    strict.push("--strict");
+    assert_eq!(mlsm(&strict).status.code(), Some(4));
+}
+
+/// Bad input names the option and the reason, exit 2, nothing written.
+#[test]
+fn bad_targets_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x");
+    let o = out.to_str().unwrap();
+    for (args, expect) in [
+        (vec!["--target-error", "0"], "positive"),
+        (vec!["--target-error", "-0.001"], "positive"),
+        (vec!["--target-error", "2"], "(0, 1)"),
+        (vec!["--target-error", "1e-3", "--budget", "0"], "positive number of seconds"),
+        (vec!["--target-norm", "e_inf_sigma"], "--target-error"),
+    ] {
+        let mut a = vec!["run", "problems/lame.toml", "--out", o];
+        a.extend(args.iter().copied());
+        let r = mlsm(&a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} wrote results");
+    }
+    let r = mlsm(&["run", &problem("pd_tension"), "--model", "peridynamics", "--target-error", "1e-3", "--out", o]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--horizon"));
+    let r = mlsm(&["run", &problem("steel_plate_dynamic"), "--target-error", "1e-3", "--out", o]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("dynamic"));
+}
