@@ -183,3 +183,38 @@ pub enum Command {
         out: Option<PathBuf>,
     },
 }
+
+/// The command line with a negative number in exponent form after a long option
+/// joined to it (`--spacing -1e-3` -> `--spacing=-1e-3`): clap's negative-number rule
+/// knows `-1` and `-0.5` but reads `-1e-3` as short flags, and answers with a wrong tip
+/// instead of the option's own message.
+pub fn joined_negative_values<I: IntoIterator<Item = std::ffi::OsString>>(args: I) -> Vec<std::ffi::OsString> {
+    let mut out: Vec<std::ffi::OsString> = Vec::new();
+    for arg in args {
+        let negative_number = arg.to_str().is_some_and(|a| a.starts_with('-') && a.parse::<f64>().is_ok());
+        match out.last_mut() {
+            Some(option) if negative_number && option.to_str().is_some_and(|o| o.starts_with("--") && o.len() > 2 && !o.contains('=')) => {
+                option.push("=");
+                option.push(&arg);
+            }
+            _ => out.push(arg),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn negative_exponent_values_are_joined_to_their_option() {
+        let args = |v: &[&str]| v.iter().map(std::ffi::OsString::from).collect::<Vec<_>>();
+        assert_eq!(
+            joined_negative_values(args(&["mlsm", "run", "s.toml", "--spacing", "-1e-3", "--out", "o"])),
+            args(&["mlsm", "run", "s.toml", "--spacing=-1e-3", "--out", "o"])
+        );
+        // Not a number, or not after a long option: left alone.
+        assert_eq!(joined_negative_values(args(&["mlsm", "-q", "-1e-3", "--out", "-x"])), args(&["mlsm", "-q", "-1e-3", "--out", "-x"]));
+    }
+}

@@ -21,7 +21,7 @@ fn main() -> ExitCode {
             std::process::exit(130);
         }
     });
-    let cli = mlsm::cli::Cli::parse();
+    let cli = mlsm::cli::Cli::parse_from(mlsm::cli::joined_negative_values(std::env::args_os()));
     match mlsm::app::run(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -274,7 +274,9 @@ fn unstable_time_step_names_the_file() {
 #[test]
 fn negative_command_line_numbers_name_the_option() {
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/cantilever.toml");
-    for (option, value) in [("--spacing", "-1"), ("--horizon", "-0.1"), ("--spacing", "0")] {
+    for (option, value) in
+        [("--spacing", "-1"), ("--horizon", "-0.1"), ("--spacing", "0"), ("--spacing", "-1e-3"), ("--target-error", "-1e-3")]
+    {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_mlsm")).arg("run").arg(&scene).args([option, value]).output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{option} {value}: {err}");

@@ -98,7 +98,7 @@ fn bad_targets_are_refused() {
     let o = out.to_str().unwrap();
     for (args, expect) in [
         (vec!["--target-error", "0"], "positive"),
-        (vec!["--target-error", "-0.001"], "positive"),
+        (vec!["--target-error", "-1e-3"], "positive"),
         (vec!["--target-error", "2"], "(0, 1)"),
         (vec!["--target-error", "1e-3", "--budget", "0"], "positive number of seconds"),
         (vec!["--target-norm", "e_inf_sigma"], "--target-error"),

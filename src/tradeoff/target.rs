@@ -25,7 +25,6 @@ use crate::domain::{FillKind, SpacingSamples};
 use crate::navier::{self, ErrorEstimate, EstimateMethod};
 use crate::pipeline::{Progress, RunError};
 use crate::post::ErrorNorms;
-use crate::problem::validate::expected_nodes;
 use crate::problem::Problem;
 use serde::Serialize;
 use std::sync::Arc;
@@ -263,35 +262,18 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         } else if stalled(&history) {
             Err(Stop::Stalled)
         } else {
-            next_problem(&problem, &solution, estimate, target, refinement, order).map_err(|reason| Stop::Memory { reason })
+            next_problem(&problem, &solution, estimate, target, refinement, order)
+                .map_err(|reason| Stop::Memory { reason })
+                .and_then(|(next, nodes)| within_budget(target, t0, &history[k], nodes).map(|()| next))
         };
-        let improved = best.as_ref().is_none_or(|(b, _, _)| value < history[*b].estimate);
-        let next = match next {
-            Ok(next) => next,
-            Err(stop) => {
-                if improved {
-                    best = Some((k, problem, solution));
-                }
-                break stop;
-            }
-        };
-        if let Some(budget) = target.budget {
-            let last = &history[k];
-            let nodes = expected_nodes(&next.case.domain, &next.navier.fill, next.case.domain.area_estimate(400));
-            let predicted_s = last.seconds * (nodes / last.nodes as f64).max(1.0).powf(TIME_EXPONENT);
-            let left_s = budget.as_secs_f64() - t0.elapsed().as_secs_f64();
-            if predicted_s > left_s {
-                if improved {
-                    best = Some((k, problem, solution));
-                }
-                break Stop::Budget { predicted_s, left_s };
-            }
-        }
-        let solved = navier::solve(&next.case, &next.navier, progress);
-        if improved {
+        if best.as_ref().is_none_or(|(b, _, _)| value < history[*b].estimate) {
             best = Some((k, problem, solution));
         }
-        match solved {
+        let next = match next {
+            Ok(next) => next,
+            Err(stop) => break stop,
+        };
+        match navier::solve(&next.case, &next.navier, progress) {
             Ok(s) => {
                 solution = s;
                 problem = next;
@@ -312,6 +294,20 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
     Ok(Outcome { history, stop, best, problem, solution, notes })
 }
 
+/// `Err(Stop::Budget)` when the next step, of about `nodes` nodes, is predicted to take
+/// longer than what is left of the budget (the last step's seconds times the node ratio
+/// to the power [`TIME_EXPONENT`]).
+fn within_budget(target: &Target, t0: Instant, last: &Step, nodes: f64) -> Result<(), Stop> {
+    let Some(budget) = target.budget else { return Ok(()) };
+    let predicted_s = last.seconds * (nodes / last.nodes as f64).max(1.0).powf(TIME_EXPONENT);
+    let left_s = budget.as_secs_f64() - t0.elapsed().as_secs_f64();
+    if predicted_s > left_s {
+        Err(Stop::Budget { predicted_s, left_s })
+    } else {
+        Ok(())
+    }
+}
+
 /// Two steps running whose estimate fell by less than [`STALL_FALL`].
 fn stalled(history: &[Step]) -> bool {
     let n = history.len();
@@ -319,7 +315,7 @@ fn stalled(history: &[Step]) -> bool {
 }
 
 /// The problem of the next step: the spacing refined by the indicator of `estimate`
-/// (module docs), checked for node count and memory.
+/// (module docs), checked for node count and memory; with its expected node count.
 fn next_problem(
     p: &Problem,
     sol: &navier::Solution,
@@ -327,7 +323,7 @@ fn next_problem(
     target: &Target,
     refinement: Refinement,
     order: f64,
-) -> Result<Problem, String> {
+) -> Result<(Problem, f64), String> {
     let (indicator, e_inf) = if target.norm.of_stress() {
         (estimate.per_node_sigma.as_deref().expect("stress computed (refusal)"), estimate.norms.e_inf_sigma.expect("stress"))
     } else {
@@ -350,6 +346,6 @@ fn next_problem(
         }
     };
     let next = p.with_fill(fill).map_err(|e| e.reason)?;
-    crate::resources::check(&next).map_err(|e| e.reason)?;
-    Ok(next)
+    let memory = crate::resources::check(&next).map_err(|e| e.reason)?;
+    Ok((next, memory.nodes))
 }
