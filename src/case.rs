@@ -13,6 +13,7 @@ use crate::elasticity::material::Material;
 use crate::exact::{ExactKind, ExactSolution, ExpressionSolution, NamedSolution};
 use crate::expression::VectorExpression;
 use crate::pipeline::RunError;
+use crate::post::probe::Probe;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -29,6 +30,8 @@ pub struct Outputs {
     pub von_mises: bool,
     /// Error fields and norms against the exact solution.
     pub error: bool,
+    /// Stress at the probes only (a stress `[[probe]]`; not written as a field).
+    pub stress_at_probes: bool,
 }
 
 choice! {
@@ -62,7 +65,7 @@ impl Outputs {
 
     /// Whether post-processing needs the displacement gradient.
     pub fn needs_gradient(&self) -> bool {
-        self.strain || self.stress || self.von_mises || self.error
+        self.strain || self.stress || self.von_mises || self.error || self.stress_at_probes
     }
 }
 
@@ -83,6 +86,8 @@ pub struct Case {
     pub outputs: Outputs,
     /// Time-dependent run settings, when the scene has a `[dynamics]` table.
     pub dynamics: Option<DynamicsParams>,
+    /// Point values the scene asks for (`[[probe]]`).
+    pub probes: Vec<Probe>,
 }
 
 impl Case {

@@ -134,9 +134,11 @@ pub enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
     },
-    /// Solve at K halvings of the spacing; print and write errors and observed orders.
+    /// Solve at K halvings of the spacing; print and write errors (exact where the scene has
+    /// one, estimated always), differences between levels, observed orders, and the probes
+    /// extrapolated with an error bar.
     Convergence {
-        /// Scene file (TOML) with an [exact] solution.
+        /// Scene file (TOML) of a static problem (errors where it has an [exact] solution, estimates, level differences and extrapolated probes always).
         scene: PathBuf,
         /// Number of halvings of the spacing (K + 1 runs).
         #[arg(long, default_value_t = 3)]

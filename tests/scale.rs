@@ -37,6 +37,9 @@ fn scaled(name: &str, fill: &str, factor: f64) -> Problem {
             points.iter_mut().for_each(scale);
         }
     }
+    for probe in doc.get_mut("probe").and_then(|p| p.as_array_mut()).into_iter().flatten() {
+        scale(probe.get_mut("at").unwrap());
+    }
     for key in ["length", "depth", "radius", "inner", "outer"] {
         if let Some(v) = doc["exact"].as_table_mut().unwrap().get_mut(key) {
             scale(v);

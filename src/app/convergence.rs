@@ -1,18 +1,35 @@
-//! `mlsm convergence`: the static Navier solve at K halvings of the node spacing
-//! against the scene's exact solution; errors, per-level and fitted observed orders
-//! (`convergence.csv`, `convergence.json`), with each level's own error estimate
-//! beside its true error. Both files are rewritten after every level (atomically,
-//! `complete: false` until the last), so a failure or a kill at a fine level loses
-//! nothing that finished.
+//! `mlsm convergence`: the static Navier solve at K halvings of the node spacing, for
+//! any static scene. Each level reports
+//! - its errors against the exact solution and their observed orders, where the scene
+//!   has one;
+//! - its own error estimate (`estimate.method`; switched on, with a note, for a scene
+//!   without an exact solution);
+//! - the difference to the next finer level: `e_inf` of `u_{k-1} - u_k` (and of the
+//!   stress, away from singular corners) at the nodes of level `k-1`, the finer field
+//!   interpolated there by moving least squares, relative to the finer field's
+//!   largest value; with their observed orders;
+//! - the value of every `[[probe]]` of the scene, extrapolated over the last three
+//!   levels by Richardson with a GCI error bar (`post::richardson`).
+//!
+//! `convergence.csv` and `convergence.json` are rewritten after every level
+//! (atomically, `complete: false` until the last), so a failure or a kill at a fine
+//! level loses nothing that finished.
 
 use super::summary::Header;
 use super::terminal::Terminal;
 use super::{create_dir, AppError};
-use crate::navier;
+use crate::choice::Choice;
+use crate::domain::Point;
+use crate::mlsm::interpolate::mls_values;
+use crate::navier::{self, EstimateMethod};
 use crate::output;
-use crate::pipeline::{Stage, StageTimings, OUTPUT};
+use crate::pipeline::{RunError, Stage, StageTimings, OUTPUT};
 use crate::post::observed_order;
+use crate::post::probe::ProbeQuantity;
+use crate::post::relative_errors;
+use crate::post::richardson::{extrapolate, Extrapolation};
 use crate::problem::Problem;
+use crate::warnings::singular_corners;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -26,15 +43,38 @@ struct Level {
     nodes: usize,
     h: f64,
     spacing: f64,
-    e_inf_u: f64,
+    /// Errors against the exact solution (scenes with one).
+    e_inf_u: Option<f64>,
     e_inf_sigma: Option<f64>,
-    rel_l2_u: f64,
+    rel_l2_u: Option<f64>,
     order_e_inf_u: Option<f64>,
     order_e_inf_sigma: Option<f64>,
-    /// The run's own error estimate (`estimate.method`), beside the true error.
+    /// The run's own error estimate (`estimate.method`).
     estimated_e_inf_u: Option<f64>,
     estimated_e_inf_sigma: Option<f64>,
+    /// `e_inf` of this level's field against the next finer level's (filled in when
+    /// that level finishes).
+    difference_e_inf_u: Option<f64>,
+    difference_e_inf_sigma: Option<f64>,
+    order_difference_u: Option<f64>,
+    order_difference_sigma: Option<f64>,
+    /// The probes' values, in scene order.
+    probes: Vec<f64>,
     seconds: f64,
+}
+
+/// A probe over the levels.
+#[derive(Serialize)]
+struct ProbeSeries {
+    name: String,
+    quantity: ProbeQuantity,
+    at: Point,
+    /// One value per finished level.
+    values: Vec<f64>,
+    /// The exact value, where the scene has a closed-form solution.
+    exact: Option<f64>,
+    /// Richardson over the last three levels (two when only two finished).
+    extrapolation: Option<Extrapolation>,
 }
 
 #[derive(Serialize)]
@@ -48,13 +88,29 @@ struct ConvergenceTable<'a> {
     levels: Vec<Level>,
     fitted_order_e_inf_u: Option<f64>,
     fitted_order_e_inf_sigma: Option<f64>,
+    fitted_order_difference_u: Option<f64>,
+    fitted_order_difference_sigma: Option<f64>,
+    /// The formal order `max(p - 1, 1)` the extrapolation is capped by.
+    formal_order: f64,
+    probes: Vec<ProbeSeries>,
+    notes: Vec<String>,
+    /// Doubts about the study: the finest level's estimate above `estimate.threshold`
+    /// (the levels are not in the asymptotic range, so their orders and
+    /// extrapolations prove nothing).
+    warnings: Vec<String>,
+}
+
+/// What a level keeps for the difference to the next one.
+struct LevelFields {
+    positions: Vec<Point>,
+    displacement: Vec<[f64; 2]>,
+    stress: Option<Vec<[f64; 3]>>,
+    /// Nodes farther than the singular-corner radius from every singular corner.
+    regular: Vec<bool>,
 }
 
 /// Run the study of `p` over `levels` halvings and write its tables into `dir`.
 pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
-    if p.case.exact.is_none() {
-        return Err(AppError::Usage(format!("{}: convergence needs an [exact] solution in the scene", p.source.display())));
-    }
     if p.case.dynamics.is_some() {
         return Err(AppError::Usage(format!(
             "{}: convergence studies the static solve; remove the [dynamics] table to study the static problem",
@@ -64,52 +120,163 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
     if levels > 8 {
         return Err(AppError::Usage(format!("--levels {levels}: at most 8 halvings (each multiplies the node count by 4)")));
     }
+    if levels == 0 {
+        return Err(AppError::Usage("--levels 0: a study needs at least one halving (two levels)".into()));
+    }
+    let mut p = p.clone();
+    let mut notes = Vec::new();
+    if p.case.exact.is_none() && p.navier.estimate.method == EstimateMethod::None {
+        p.navier.estimate.method = EstimateMethod::HigherDegree;
+        notes.push("the scene has no exact solution: the error estimate is switched on (estimate.method = \"higher-degree\")".to_string());
+    }
+    if !quiet {
+        for n in &notes {
+            eprintln!("note: {n}");
+        }
+    }
     // Refuse an unaffordable finest level before solving the coarse ones.
     crate::resources::check(&p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?)?;
     create_dir(dir)?;
     let t0 = Instant::now();
     let area = p.case.domain.area_estimate(400);
     let mut rows: Vec<Level> = Vec::new();
+    let mut coarser: Option<LevelFields> = None;
     for k in 0..=levels {
-        match solve_level(p, (k, levels), rows.last(), area, term, quiet) {
-            Ok(level) => rows.push(level),
+        let (level, fields) = match solve_level(&p, (k, levels), rows.last(), area, term, quiet) {
+            Ok(done) => done,
             Err(e) => {
                 if !rows.is_empty() {
                     eprintln!("level {k} failed; the {} finished level(s) are in {}", rows.len(), dir.join("convergence.csv").display());
                 }
                 return Err(e);
             }
+        };
+        if let (Some(c), Some(before)) = (&coarser, rows.last_mut()) {
+            let (du, ds) = difference(c, &fields)?;
+            before.difference_e_inf_u = Some(du);
+            before.difference_e_inf_sigma = ds;
+            let n = rows.len();
+            if n >= 2 {
+                let (a, b) = (&rows[n - 2], &rows[n - 1]);
+                let (order_u, order_s) = (
+                    order(a.h, b.h, a.difference_e_inf_u, b.difference_e_inf_u),
+                    order(a.h, b.h, a.difference_e_inf_sigma, b.difference_e_inf_sigma),
+                );
+                rows[n - 1].order_difference_u = order_u;
+                rows[n - 1].order_difference_sigma = order_s;
+            }
         }
-        write_tables(p, &rows, levels + 1, dir, t0, k == levels && !quiet)?;
+        rows.push(level);
+        coarser = Some(fields);
+        let warnings = write_tables(&p, &rows, (levels + 1, &notes), dir, t0, k == levels && !quiet)?;
+        if k == levels {
+            // Also under --quiet: a doubtful study is never silent.
+            for w in warnings {
+                eprintln!("warning [estimate]: {w}");
+            }
+        }
     }
     Ok(())
 }
 
+/// `ln(a / b) / ln(h_a / h_b)` for two positive values.
+fn order(h_a: f64, h_b: f64, a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) if a > 0.0 && b > 0.0 => Some((a / b).ln() / (h_a / h_b).ln()),
+        _ => None,
+    }
+}
+
+/// `e_inf` of the coarse level's displacement (and stress, at its regular nodes)
+/// against the fine level's, interpolated at the coarse nodes.
+fn difference(coarse: &LevelFields, fine: &LevelFields) -> Result<(f64, Option<f64>), AppError> {
+    let shape = |e| AppError::Run(RunError::Shape(e));
+    let u = mls_values(&fine.positions, &fine.displacement, &coarse.positions).map_err(shape)?;
+    let (du, _) = relative_errors(&coarse.displacement, &u);
+    let ds = match (&coarse.stress, &fine.stress) {
+        (Some(cs), Some(fs)) => {
+            let s = mls_values(&fine.positions, fs, &coarse.positions).map_err(shape)?;
+            let keep = |v: &[[f64; 3]]| -> Vec<[f64; 3]> { v.iter().zip(&coarse.regular).filter(|(_, r)| **r).map(|(x, _)| *x).collect() };
+            Some(relative_errors(&keep(cs), &keep(&s)).0)
+        }
+        _ => None,
+    };
+    Ok((du, ds))
+}
+
 /// Write `convergence.csv` and `convergence.json` for the levels finished so far (and
-/// print the table when `print`).
-fn write_tables(p: &Problem, rows: &[Level], requested: usize, dir: &Path, t0: Instant, print: bool) -> Result<(), AppError> {
+/// print the table when `print`); returns the study's warnings.
+fn write_tables(
+    p: &Problem,
+    rows: &[Level],
+    (requested, notes): (usize, &[String]),
+    dir: &Path,
+    t0: Instant,
+    print: bool,
+) -> Result<Vec<String>, AppError> {
     let mut timings = StageTimings::default();
     timings.record(LEVELS, rows.iter().map(|r| r.seconds).sum());
     let h: Vec<f64> = rows.iter().map(|r| r.h).collect();
-    let fitted_u = observed_order(&h, &rows.iter().map(|r| r.e_inf_u).collect::<Vec<_>>());
-    let es: Vec<f64> = rows.iter().map(|r| r.e_inf_sigma.unwrap_or(f64::NAN)).collect();
-    let fitted_sigma = if es.iter().all(|e| e.is_finite()) { observed_order(&h, &es) } else { None };
+    // A fitted order over the levels that have the column (all of them, or none).
+    let fitted = |column: &dyn Fn(&Level) -> Option<f64>| {
+        let (hs, es): (Vec<f64>, Vec<f64>) = rows.iter().filter_map(|r| column(r).map(|e| (r.h, e))).unzip();
+        observed_order(&hs, &es)
+    };
+    let formal_order = p.navier.approximation.formal_order();
+    let exact = p.case.exact_solution();
+    let probes = p
+        .case
+        .probes
+        .iter()
+        .enumerate()
+        .map(|(j, probe)| {
+            let values: Vec<f64> = rows.iter().map(|r| r.probes[j]).collect();
+            ProbeSeries {
+                name: probe.name.clone(),
+                quantity: probe.quantity,
+                at: probe.at,
+                extrapolation: extrapolate(&h, &values, formal_order),
+                values,
+                exact: exact.as_deref().map(|e| probe.quantity.exact(e, probe.at)),
+            }
+        })
+        .collect();
+    let threshold = p.navier.estimate.threshold;
+    let warnings = match rows.last() {
+        Some(last) => [("u", last.estimated_e_inf_u), ("sigma", last.estimated_e_inf_sigma)]
+            .iter()
+            .filter_map(|(what, e)| e.filter(|e| *e > threshold).map(|e| (what, e)))
+            .map(|(what, e)| {
+                format!(
+                    "the finest level's estimated e_inf({what}) ~ {e:.1e} is above the threshold {threshold:e}: the levels are not \
+                     in the asymptotic range, and their orders, differences and extrapolations are not to be trusted"
+                )
+            })
+            .collect(),
+        None => Vec::new(),
+    };
     let t_out = Instant::now();
-    write_csv(rows, dir)?;
+    write_csv(p, rows, dir)?;
     timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
     let table = ConvergenceTable {
         header: Header::new(p, &timings, t0),
         levels_requested: requested,
         complete: rows.len() == requested,
         levels: rows.to_vec(),
-        fitted_order_e_inf_u: fitted_u,
-        fitted_order_e_inf_sigma: fitted_sigma,
+        fitted_order_e_inf_u: fitted(&|r| r.e_inf_u),
+        fitted_order_e_inf_sigma: fitted(&|r| r.e_inf_sigma),
+        fitted_order_difference_u: fitted(&|r| r.difference_e_inf_u),
+        fitted_order_difference_sigma: fitted(&|r| r.difference_e_inf_sigma),
+        formal_order,
+        probes,
+        notes: notes.to_vec(),
+        warnings,
     };
     output::write_json(&dir.join("convergence.json"), &table)?;
     if print {
         print_table(&table, dir);
     }
-    Ok(())
+    Ok(table.warnings)
 }
 
 /// Solve level `k` of `0..=last` (spacing halved `k` times); its orders against the
@@ -122,7 +289,7 @@ fn solve_level(
     area: f64,
     term: &Terminal,
     quiet: bool,
-) -> Result<Level, AppError> {
+) -> Result<(Level, LevelFields), AppError> {
     let spacing = p.navier.fill.spacing / 2f64.powi(k as i32);
     if !quiet {
         eprintln!("level {k} ({} of {}): spacing {spacing:.4e}", k + 1, last + 1);
@@ -130,88 +297,128 @@ fn solve_level(
     let t0 = Instant::now();
     let q = p.with_spacing(spacing)?;
     let sol = navier::solve(&q.case, &q.navier, term)?;
-    let e = sol.errors.expect("exact solution present");
     let h = (area / sol.nodes.len() as f64).sqrt();
-    let order = |prev: Option<f64>, cur: Option<f64>| match (before, prev, cur) {
-        (Some(last), Some(a), Some(b)) if a > 0.0 && b > 0.0 => Some((a / b).ln() / (last.h / h).ln()),
-        _ => None,
-    };
-    Ok(Level {
+    let e = sol.errors;
+    let exact_order = |prev: Option<f64>, cur: Option<f64>| order(before?.h, h, prev, cur);
+    let corners = singular_corners(&q.case, &sol.nodes);
+    let regular = sol.nodes.positions.iter().map(|x| corners.iter().all(|c| (x[0] - c.at[0]).hypot(x[1] - c.at[1]) > c.radius)).collect();
+    let level = Level {
         nodes: sol.nodes.len(),
         h,
         spacing,
-        e_inf_u: e.e_inf_u,
-        e_inf_sigma: e.e_inf_sigma,
-        rel_l2_u: e.rel_l2_u,
-        order_e_inf_u: order(before.map(|r| r.e_inf_u), Some(e.e_inf_u)),
-        order_e_inf_sigma: order(before.and_then(|r| r.e_inf_sigma), e.e_inf_sigma),
+        e_inf_u: e.map(|e| e.e_inf_u),
+        e_inf_sigma: e.and_then(|e| e.e_inf_sigma),
+        rel_l2_u: e.map(|e| e.rel_l2_u),
+        order_e_inf_u: exact_order(before.and_then(|r| r.e_inf_u), e.map(|e| e.e_inf_u)),
+        order_e_inf_sigma: exact_order(before.and_then(|r| r.e_inf_sigma), e.and_then(|e| e.e_inf_sigma)),
         estimated_e_inf_u: sol.estimate.done().map(|x| x.norms.e_inf_u),
         estimated_e_inf_sigma: sol.estimate.done().and_then(|x| x.norms.e_inf_sigma),
+        difference_e_inf_u: None,
+        difference_e_inf_sigma: None,
+        order_difference_u: None,
+        order_difference_sigma: None,
+        probes: sol.probes.iter().map(|v| v.value).collect(),
         seconds: t0.elapsed().as_secs_f64(),
-    })
+    };
+    let fields =
+        LevelFields { stress: sol.stress.map(|s| s.sigma), positions: sol.nodes.positions, displacement: sol.displacement, regular };
+    Ok((level, fields))
 }
 
-fn write_csv(rows: &[Level], dir: &Path) -> Result<(), AppError> {
+fn write_csv(p: &Problem, rows: &[Level], dir: &Path) -> Result<(), AppError> {
     let nan = |o: Option<f64>| o.unwrap_or(f64::NAN);
     let csv: Vec<Vec<f64>> = rows
         .iter()
         .map(|l| {
-            vec![
+            let mut row = vec![
                 l.nodes as f64,
                 l.h,
                 l.spacing,
-                l.e_inf_u,
+                nan(l.e_inf_u),
                 nan(l.e_inf_sigma),
-                l.rel_l2_u,
+                nan(l.rel_l2_u),
                 nan(l.order_e_inf_u),
                 nan(l.order_e_inf_sigma),
                 nan(l.estimated_e_inf_u),
                 nan(l.estimated_e_inf_sigma),
-                l.seconds,
-            ]
+                nan(l.difference_e_inf_u),
+                nan(l.difference_e_inf_sigma),
+                nan(l.order_difference_u),
+                nan(l.order_difference_sigma),
+            ];
+            row.extend(&l.probes);
+            row.push(l.seconds);
+            row
         })
         .collect();
-    output::write_csv(
-        &dir.join("convergence.csv"),
-        &[
-            "nodes",
-            "h",
-            "spacing",
-            "e_inf_u",
-            "e_inf_sigma",
-            "rel_l2_u",
-            "order_e_inf_u",
-            "order_e_inf_sigma",
-            "estimated_e_inf_u",
-            "estimated_e_inf_sigma",
-            "seconds",
-        ],
-        &csv,
-    )?;
+    let probe_columns: Vec<String> = p.case.probes.iter().map(|q| format!("probe_{}", q.name)).collect();
+    let mut header = vec![
+        "nodes",
+        "h",
+        "spacing",
+        "e_inf_u",
+        "e_inf_sigma",
+        "rel_l2_u",
+        "order_e_inf_u",
+        "order_e_inf_sigma",
+        "estimated_e_inf_u",
+        "estimated_e_inf_sigma",
+        "difference_e_inf_u",
+        "difference_e_inf_sigma",
+        "order_difference_u",
+        "order_difference_sigma",
+    ];
+    header.extend(probe_columns.iter().map(String::as_str));
+    header.push("seconds");
+    output::write_csv(&dir.join("convergence.csv"), &header, &csv)?;
     Ok(())
 }
 
 fn print_table(table: &ConvergenceTable, dir: &Path) {
-    println!(
-        "{:>9} {:>11} {:>11} {:>11} {:>11} {:>7} {:>7} {:>9} {:>9}",
-        "nodes", "h", "e_inf_u", "e_inf_sig", "rel_l2_u", "p_u", "p_sig", "est_u", "est_sig"
-    );
     let e = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2e}"));
     let f = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2}"));
+    println!(
+        "{:>9} {:>10} {:>9} {:>9} {:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>6} {:>6}",
+        "nodes", "h", "e_inf_u", "e_inf_sig", "p_u", "p_sig", "est_u", "est_sig", "diff_u", "diff_sig", "pd_u", "pd_sig"
+    );
     for l in &table.levels {
         println!(
-            "{:>9} {:>11.3e} {:>11.3e} {:>11} {:>11.3e} {:>7} {:>7} {:>9} {:>9}",
+            "{:>9} {:>10.3e} {:>9} {:>9} {:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>6} {:>6}",
             l.nodes,
             l.h,
-            l.e_inf_u,
-            l.e_inf_sigma.map_or("-".into(), |v| format!("{v:.3e}")),
-            l.rel_l2_u,
+            e(l.e_inf_u),
+            e(l.e_inf_sigma),
             f(l.order_e_inf_u),
             f(l.order_e_inf_sigma),
             e(l.estimated_e_inf_u),
-            e(l.estimated_e_inf_sigma)
+            e(l.estimated_e_inf_sigma),
+            e(l.difference_e_inf_u),
+            e(l.difference_e_inf_sigma),
+            f(l.order_difference_u),
+            f(l.order_difference_sigma)
         );
     }
-    println!("fitted order: e_inf(u) {}  e_inf(sigma) {}", f(table.fitted_order_e_inf_u), f(table.fitted_order_e_inf_sigma));
+    println!(
+        "fitted order: e_inf(u) {}  e_inf(sigma) {}  level differences: u {}  sigma {}",
+        f(table.fitted_order_e_inf_u),
+        f(table.fitted_order_e_inf_sigma),
+        f(table.fitted_order_difference_u),
+        f(table.fitted_order_difference_sigma)
+    );
+    for s in &table.probes {
+        let values: Vec<String> = s.values.iter().map(|v| format!("{v:.6e}")).collect();
+        print!("probe {} ({} at [{}, {}]): {}", s.name, s.quantity.name(), s.at[0], s.at[1], values.join(", "));
+        if let Some(x) = &s.extrapolation {
+            print!("; extrapolated {:.6e} +- {:.1e} ({}", x.value, x.error_bar, x.behaviour.name());
+            if let Some(q) = x.observed_order {
+                print!(", observed order {q:.2}");
+            }
+            print!(")");
+        }
+        if let Some(x) = s.exact {
+            print!("; exact {x:.6e}");
+        }
+        println!();
+    }
     println!("written: {}", dir.join("convergence.csv").display());
 }

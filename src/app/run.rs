@@ -14,6 +14,7 @@ use crate::navier::Estimate;
 use crate::output::{self, StagedDir};
 use crate::peridynamics::PdParams;
 use crate::pipeline::{RunError, OUTPUT};
+use crate::post::probe::ProbeValue;
 use crate::problem::preset::Preset;
 use crate::problem::{Model, Problem};
 use crate::tradeoff::target::Target;
@@ -289,6 +290,7 @@ fn print_navier(sol: &crate::navier::Solution) {
         Estimate::Unavailable(why) => println!("estimated: unavailable ({why})"),
         Estimate::Off => println!("estimated: off (estimate.method = \"none\")"),
     }
+    print_probes(&sol.probes);
     if let Some(q) = &sol.equilibrium {
         println!(
             "equilibrium: reactions ({:.3e}, {:.3e}) + loads ({:.3e}, {:.3e}) + body ({:.3e}, {:.3e}), relative imbalance {:.1e}",
@@ -311,6 +313,18 @@ fn print_pd(sol: &crate::peridynamics::PdSolution) {
         print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", w.e_inf_u, w.rel_l2_u);
         if let Some(i) = i {
             print!("  interior: e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", i.e_inf_u, i.rel_l2_u);
+        }
+        println!();
+    }
+    print_probes(&sol.probes);
+}
+
+/// One line per probe: its value, and its exact value and error where known.
+fn print_probes(probes: &[ProbeValue]) {
+    for p in probes {
+        print!("probe {} ({} at [{}, {}]) = {:.6e}", p.name, p.quantity.name(), p.at[0], p.at[1], p.value);
+        if let Some(e) = p.exact {
+            print!("  exact {e:.6e}, relative error {:.2e}", (p.value - e).abs() / e.abs().max(f64::MIN_POSITIVE));
         }
         println!();
     }

@@ -14,6 +14,7 @@ use crate::output;
 use crate::peridynamics::solve::WeightsSummary;
 use crate::peridynamics::{Micromodulus, PdParams, PdSolution};
 use crate::pipeline::{StagePeaks, StageTimings};
+use crate::post::probe::ProbeValue;
 use crate::post::ErrorNorms;
 use crate::problem::Problem;
 use crate::warnings::Checks;
@@ -108,6 +109,8 @@ pub(super) struct NavierSummary<'a> {
     errors: Option<ErrorNorms>,
     estimated_errors: &'a navier::Estimate,
     equilibrium: Option<navier::equilibrium::Equilibrium>,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    probes: &'a [ProbeValue],
     #[serde(flatten)]
     checks: &'a Checks,
     outputs: Outputs,
@@ -137,6 +140,7 @@ impl<'a> NavierSummary<'a> {
             errors: sol.errors,
             estimated_errors: &sol.estimate,
             equilibrium: sol.equilibrium,
+            probes: &sol.probes,
             checks,
             outputs: p.case.outputs,
             target: None,
@@ -165,6 +169,8 @@ pub(super) struct PdSummary<'a> {
     solver: &'a SolveReport,
     errors: Option<ErrorNorms>,
     errors_interior: Option<ErrorNorms>,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    probes: &'a [ProbeValue],
     #[serde(flatten)]
     checks: &'a Checks,
     outputs: Outputs,
@@ -190,6 +196,7 @@ impl<'a> PdSummary<'a> {
             solver: &sol.solver,
             errors: sol.errors.map(|e| e.0),
             errors_interior: sol.errors.and_then(|e| e.1),
+            probes: &sol.probes,
             checks,
             outputs: p.case.outputs,
         }

@@ -1,10 +1,8 @@
 //! Nonlocal-to-local comparison: the local (Navier) displacement as a field that can
 //! be evaluated at the peridynamic nodes, either the scene's exact solution or an MLSM
-//! solution interpolated by moving least squares ([`interpolate`]); difference norms
+//! solution interpolated by moving least squares ([`crate::mlsm::interpolate`]); difference norms
 //! on the interior region and the whole plate are [`crate::post::masked_errors`], and
 //! observed orders in delta are [`crate::post::observed_order`] (least-squares slope).
-
-pub mod interpolate;
 
 use crate::domain::Point;
 use crate::exact::ExactSolution;
@@ -61,7 +59,9 @@ impl LocalReference {
     pub fn displacement_at(&self, points: &[Point]) -> Result<Vec<[f64; 2]>, RunError> {
         match self {
             LocalReference::Exact(e) => Ok(points.iter().map(|p| e.displacement(*p)).collect()),
-            LocalReference::Mlsm { positions, displacement, .. } => Ok(interpolate::mls_values(positions, displacement, points)?),
+            LocalReference::Mlsm { positions, displacement, .. } => {
+                Ok(crate::mlsm::interpolate::mls_values(positions, displacement, points)?)
+            }
         }
     }
 }

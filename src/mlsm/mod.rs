@@ -3,9 +3,11 @@
 //!
 //! [`basis`] defines the local bases and weights, [`wls`] one least-squares solve,
 //! [`rbffd`] one RBF-FD solve, [`shapes`] the parallel computation for all nodes of
-//! exactly the operators each node needs.
+//! exactly the operators each node needs, [`interpolate`] nodal fields at other
+//! points.
 
 pub mod basis;
+pub mod interpolate;
 pub mod ops;
 pub mod rbffd;
 pub mod shapes;
@@ -31,4 +33,12 @@ pub struct Approximation {
     /// whose two equations are tractions, so that such a node carries both its
     /// traction equations and the Navier equation (fictitious-point method).
     pub ghost_nodes: bool,
+}
+
+impl Approximation {
+    /// The order `q = max(p - 1, 1)` in `e ~ h^q` that a collocation with basis
+    /// degree `p` follows: the order of the fitted second derivatives.
+    pub fn formal_order(&self) -> f64 {
+        (self.basis.polynomial_degree() as f64 - 1.0).max(1.0)
+    }
 }

@@ -89,6 +89,7 @@ pub(crate) mod test_case {
             exact: Some(NamedSolution { kind: ExactKind::Polynomial, parameters }),
             outputs: Outputs::default(),
             dynamics: None,
+            probes: Vec::new(),
         };
         let support = if fill == FillKind::Grid { 13 } else { 12 };
         let params = NavierParams {

@@ -15,6 +15,7 @@ use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
+use crate::post::probe::{probe_values, NodalFields, ProbeValue};
 use crate::post::{ErrorNorms, ExactFields};
 
 /// Everything a static Navier run computed.
@@ -37,6 +38,8 @@ pub struct Solution {
     pub errors: Option<ErrorNorms>,
     /// Global force balance, when stresses exist (`equilibrium`).
     pub equilibrium: Option<Equilibrium>,
+    /// The scene's probes read from this solution.
+    pub probes: Vec<ProbeValue>,
     /// Estimated errors (`estimate`), with or without an exact solution.
     pub estimate: Estimate,
     /// Number of ghost nodes.
@@ -84,7 +87,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let Solved { x, nonzeros, report, system } = assemble_and_solve(case, &disc, exact, &params.solver, params.keep_system, &mut timer)?;
 
     let n = disc.nodes.len();
-    let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium) = timer.run(stage::POST, || {
+    let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
         let displacement = disc.dofs.displacements(&x, n);
         let pressure = disc.pressure(&case.material, &x);
         let gradient = case.outputs.needs_gradient().then(|| disc.gradients(&x));
@@ -92,11 +95,13 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         let exact_fields = exact.map(|e| ExactFields::at(e, &disc.nodes.positions, true));
         let errors = exact_fields.as_ref().map(|ef| ErrorNorms::against(&displacement, stress.as_ref(), ef));
         let equilibrium = stress.as_ref().map(|s| equilibrium::balance(case, &disc.nodes, s, exact));
+        let fields = NodalFields { positions: &disc.nodes.positions, displacement: &displacement, stress: stress.as_ref() };
+        let probes = probe_values(&case.probes, &fields, exact)?;
         let note = match &errors {
             Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
             None => String::new(),
         };
-        Ok(((displacement, pressure, gradient, stress, exact_fields, errors, equilibrium), note))
+        Ok(((displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes), note))
     })?;
 
     let estimate = match params.estimate.method {
@@ -138,6 +143,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         exact: exact_fields,
         errors,
         equilibrium,
+        probes,
         estimate,
         ghost_nodes,
         widened_supports,

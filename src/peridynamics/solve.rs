@@ -14,6 +14,7 @@ use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport};
 use crate::pipeline::{stage, Progress, RunError, Stage, StageTimer, StageTimings};
+use crate::post::probe::{probe_values, NodalFields, ProbeValue};
 
 /// Family search.
 pub const FAMILIES: Stage = Stage::new("families");
@@ -49,6 +50,8 @@ pub struct PdSolution {
     pub gradient: Option<Vec<Gradient>>,
     /// Stresses from the nonlocal gradient.
     pub stress: Option<StressField>,
+    /// The scene's probes read from this solution (free nodes).
+    pub probes: Vec<ProbeValue>,
     /// Exact displacement at the free nodes.
     pub exact: Option<ExactFields>,
     /// Errors on the whole plate and on the interior region.
@@ -131,13 +134,14 @@ struct Post {
     interior: Vec<bool>,
     gradient: Option<Vec<Gradient>>,
     stress: Option<StressField>,
+    probes: Vec<ProbeValue>,
     exact: Option<ExactFields>,
     errors: Option<(ErrorNorms, Option<ErrorNorms>)>,
 }
 
 /// Displacement of every node, nonlocal strain and stress, errors on the whole plate
-/// and on the interior region.
-fn post(case: &Case, params: &PdParams, disc: &Discretisation, exact: Option<&dyn ExactSolution>, x: &[f64]) -> Post {
+/// and on the interior region, the probes.
+fn post(case: &Case, params: &PdParams, disc: &Discretisation, exact: Option<&dyn ExactSolution>, x: &[f64]) -> Result<Post, RunError> {
     let nodes = &disc.nodes;
     let mut u = nodes.dofs().displacements(x, nodes.free);
     u.extend_from_slice(&nodes.prescribed);
@@ -145,12 +149,14 @@ fn post(case: &Case, params: &PdParams, disc: &Discretisation, exact: Option<&dy
     let interior = interior_flags(&case.domain, free, params.horizon);
     let gradient = case.outputs.needs_gradient().then(|| strain::gradients(nodes, &disc.families, &u));
     let stress = gradient.as_ref().map(|g| StressField::from_gradients(&case.material, g));
+    let fields = NodalFields { positions: free, displacement: &u[..nodes.free], stress: stress.as_ref() };
+    let probes = probe_values(&case.probes, &fields, exact)?;
     let exact = exact.map(|e| ExactFields::at(e, free, false));
     let errors = exact.as_ref().map(|ef| {
         let whole = masked_errors(&u, &ef.displacement, |_| true).expect("at least one free node");
         (whole, masked_errors(&u, &ef.displacement, |i| interior[i]))
     });
-    Post { displacement: u, interior, gradient, stress, exact, errors }
+    Ok(Post { displacement: u, interior, gradient, stress, probes, exact, errors })
 }
 
 /// Solve the static peridynamic problem of `case` with `params`.
@@ -178,7 +184,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     })?;
     drop(matrix);
     let post = timer.run(stage::POST, || {
-        let post = post(case, params, &disc, exact, &x);
+        let post = post(case, params, &disc, exact, &x)?;
         let note = match &post.errors {
             Some((w, i)) => format!("e_inf(u) = {:.3e} (interior {})", w.e_inf_u, i.map_or("-".into(), |i| format!("{:.3e}", i.e_inf_u))),
             None => String::new(),
@@ -203,6 +209,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         nonzeros,
         gradient: post.gradient,
         stress: post.stress,
+        probes: post.probes,
         exact: post.exact,
         errors: post.errors,
         micromodulus,

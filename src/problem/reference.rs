@@ -16,6 +16,7 @@ use crate::linalg::{PreconditionerKind, SolverMethod};
 use crate::mlsm::{BasisKind, WeightKind};
 use crate::navier::{EstimateMethod, Formulation};
 use crate::peridynamics::{BondForce, KernelKind, Quadrature, SurfaceCorrection};
+use crate::post::probe::ProbeQuantity;
 
 /// Every option of a scene, in the order of the scene tables.
 pub fn options() -> Vec<OptionDoc> {
@@ -35,6 +36,7 @@ pub fn options() -> Vec<OptionDoc> {
         OptionDoc::of::<PreconditionerKind>(),
         OptionDoc::of::<OutputField>(),
         OptionDoc::of::<EstimateMethod>(),
+        OptionDoc::of::<ProbeQuantity>(),
         OptionDoc::of::<ExactKind>(),
         OptionDoc::of::<Quadrature>(),
         OptionDoc::of::<KernelKind>(),

@@ -48,6 +48,21 @@ pub struct SceneSpec {
     /// Error estimate of the Navier model.
     #[serde(default)]
     pub estimate: EstimateSpec,
+    /// Point values to report (`[[probe]]`).
+    #[serde(default)]
+    pub probe: Vec<ProbeSpec>,
+}
+
+/// `[[probe]]`: one named point value.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeSpec {
+    /// Name (letters, digits, `_`, `-`; unique).
+    pub name: Option<String>,
+    /// The point `[x, y]`, on or inside the solid.
+    pub at: Option<PointSpec>,
+    /// `ux`, `uy`, `sigma_xx`, `sigma_yy`, `sigma_xy` or `von_mises`.
+    pub quantity: Option<String>,
 }
 
 /// `[estimate]`.

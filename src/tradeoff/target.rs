@@ -222,7 +222,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         refinement = Refinement::Uniform;
         notes.push("a grid has one spacing: refined uniformly (fill = \"scattered\" refines locally)".into());
     }
-    let order = (problem.navier.approximation.basis.polynomial_degree() as f64 - 1.0).max(1.0);
+    let order = problem.navier.approximation.formal_order();
     let mut history: Vec<Step> = Vec::new();
     let mut solution = navier::solve(&problem.case, &problem.navier, progress)?;
     // The best step so far (smallest estimate): its index, problem and solution.

@@ -11,6 +11,7 @@ mod exact;
 mod expressions;
 mod material;
 mod peridynamics;
+mod probes;
 mod solver;
 
 pub use crate::mlsm::default_support;
@@ -157,7 +158,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
     let present = parts_present(&domain, fill.spacing);
     let conditions = conditions::conditions(&c, &spec.boundary, &domain, &present, exact.is_some(), dynamic)?;
     let solver = solver::solver(&c, &spec.solver)?;
-    let outputs = outputs(&c, spec.output.fields.as_deref(), exact.is_some())?;
+    let mut outputs = outputs(&c, spec.output.fields.as_deref(), exact.is_some())?;
     let peridynamics = match &spec.peridynamics {
         Some(pd) => Some(peridynamics::peridynamics(&c, pd, &domain, &material, &spec.boundary, dynamic)?),
         None => None,
@@ -170,10 +171,14 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
     if model == Model::Peridynamics && peridynamics.is_none() {
         return c.err("model", "model = \"peridynamics\" needs a [peridynamics] table (horizon, quadrature, ...)");
     }
+    if dynamic && !spec.probe.is_empty() {
+        return c.err("probe", "probes read static solutions (run, convergence); a [dynamics] run writes its fields over time instead");
+    }
+    let probes = probes::probes(&c, &spec.probe, &domain, &mut outputs)?;
     Ok(Problem {
         name,
         source: path.to_path_buf(),
-        case: Case { domain, material, body_force, conditions, exact, outputs, dynamics },
+        case: Case { domain, material, body_force, conditions, exact, outputs, dynamics, probes },
         navier: NavierParams { fill, approximation, formulation, solver, estimate: estimate(&c, &spec.estimate)?, keep_system: false },
         peridynamics,
         model,

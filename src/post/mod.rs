@@ -1,7 +1,12 @@
 //! Error norms against an exact solution (verification.md, "Error norms"):
 //! `e_inf(u) = max_{i,c} |u_h - u| / max_{i,c} |u|`, the same for the stress
 //! components `(sigma_xx, sigma_yy, sigma_xy)`, and discrete relative L2 norms
-//! `sqrt(sum |u_h - u|^2 / sum |u|^2)` over the nodes.
+//! `sqrt(sum |u_h - u|^2 / sum |u|^2)` over the nodes; [`probe`]: point values a
+//! scene asks for; [`richardson`]: extrapolation over refinement levels with an
+//! error bar.
+
+pub mod probe;
+pub mod richardson;
 
 use crate::domain::Point;
 use crate::elasticity::stress::StressField;

@@ -1,11 +1,11 @@
-//! Moving least-squares interpolation of a nodal vector field at arbitrary points:
+//! Moving least-squares interpolation of a nodal field at arbitrary points:
 //! value shape functions (`mlsm::wls`) of a degree-2 monomial basis over the 12
 //! nearest source nodes, unweighted (the Gaussian weight of the solver is scaled by
 //! the distance to the nearest node, which degenerates when a target sits on a
 //! node). Reproduces quadratics exactly; error `O(h^3)` for smooth fields.
 
+use super::{wls::shape_functions, Basis, Op, ShapeError, Weight};
 use crate::domain::Point;
-use crate::mlsm::{wls::shape_functions, Basis, Op, ShapeError, Weight};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 use std::num::NonZeroUsize;
@@ -13,8 +13,9 @@ use std::num::NonZeroUsize;
 /// Support size of the interpolation (twice the 6 functions of the basis).
 pub const SUPPORT: usize = 12;
 
-/// `values` (at `source`) interpolated at every target point.
-pub fn mls_values(source: &[Point], values: &[[f64; 2]], targets: &[Point]) -> Result<Vec<[f64; 2]>, ShapeError> {
+/// `values` (at `source`, `K` components each) interpolated at every target point:
+/// `v(x) = sum_j phi_j(x) v_j` over the nearest [`SUPPORT`] source nodes.
+pub fn mls_values<const K: usize>(source: &[Point], values: &[[f64; K]], targets: &[Point]) -> Result<Vec<[f64; K]>, ShapeError> {
     let basis = Basis::Monomials { degree: 2 };
     let n = SUPPORT.min(source.len());
     let tree = ImmutableKdTree::<f64, 2>::new_from_slice(source).expect("finite source nodes");
@@ -33,11 +34,11 @@ pub fn mls_values(source: &[Point], values: &[[f64; 2]], targets: &[Point]) -> R
                 support: n,
                 ratio: e.ratio,
             })?;
-            let mut v = [0.0, 0.0];
+            let mut v = [0.0; K];
             for (w, f) in phi.iter().zip(&found) {
-                let u = values[f.item as usize];
-                v[0] += w * u[0];
-                v[1] += w * u[1];
+                for (v, u) in v.iter_mut().zip(&values[f.item as usize]) {
+                    *v += w * u;
+                }
             }
             Ok(v)
         })
