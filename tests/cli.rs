@@ -7,6 +7,10 @@
 //! directory as its current directory and an explicit `--out` inside it, so
 //! nothing is written into the repository.
 
+mod common;
+
+use common::describe;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -76,10 +80,6 @@ fn shipped(name: &str) -> String {
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn describe(o: &Output) -> String {
-    format!("exit {:?}\n--- stdout\n{}--- stderr\n{}", o.status.code(), String::from_utf8_lossy(&o.stdout), stderr(o))
 }
 
 /// `text` with every occurrence of each `from` replaced by its `to`; each `from`

@@ -8,6 +8,10 @@
 //! Every test runs the binary in its own temporary directory on small scenes of
 //! `problems/` (each run well under 2 s).
 
+mod common;
+
+use common::describe;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -42,15 +46,6 @@ fn edited(dir: &Path, file: &str, name: &str, edits: &[(&str, &str)]) -> PathBuf
     let p = dir.join(file);
     std::fs::write(&p, text).unwrap();
     p
-}
-
-fn describe(o: &Output) -> String {
-    format!(
-        "exit {:?}\n--- stdout\n{}--- stderr\n{}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn s(p: &Path) -> &str {

@@ -3,6 +3,10 @@
 //! with a GCI error bar that must hold the exact value; bad probes are refused
 //! naming the field.
 
+mod common;
+
+use common::describe;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -14,15 +18,6 @@ fn mlsm(dir: &Path, args: &[&str]) -> Output {
 
 fn shipped(name: &str) -> String {
     std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml"))).unwrap()
-}
-
-fn describe(o: &Output) -> String {
-    format!(
-        "exit {:?}\n--- stdout\n{}--- stderr\n{}",
-        o.status.code(),
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {

@@ -3,6 +3,10 @@
 //! Linux VmHWM), and the refusals it drives. Each run is its own process, so each
 //! peak is that run's.
 
+mod common;
+
+use common::describe;
+
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -15,10 +19,6 @@ fn mlsm(args: &[&str], limit: Option<&str>) -> Output {
         c.env("MLSM_MEMORY_LIMIT", l);
     }
     c.output().expect("cannot start the mlsm binary")
-}
-
-fn describe(o: &Output) -> String {
-    format!("exit {:?}\n{}{}", o.status.code(), String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
 }
 
 /// `(estimated, measured)` peak bytes of `mlsm run args...`.

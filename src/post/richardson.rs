@@ -27,8 +27,7 @@
 use serde::Serialize;
 
 /// How the values behave over the last three levels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Behaviour {
     /// Differences of one sign, shrinking: extrapolated with the observed order.
     Monotone,
@@ -56,6 +55,12 @@ impl Behaviour {
             Behaviour::TwoLevels => "two_levels",
             Behaviour::Resolved => "resolved",
         }
+    }
+}
+
+impl Serialize for Behaviour {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
     }
 }
 

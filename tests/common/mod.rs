@@ -100,3 +100,13 @@ pub fn pinned(edits: &[(&'static str, Option<toml::Value>)]) -> Vec<(&'static st
     all.extend_from_slice(edits);
     all
 }
+
+/// Exit code, stdout and stderr of a finished `mlsm` process, for assertion messages.
+pub fn describe(o: &std::process::Output) -> String {
+    format!(
+        "exit {:?}\n--- stdout\n{}--- stderr\n{}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
