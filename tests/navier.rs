@@ -212,6 +212,22 @@ fn bracket_with_concave_corner_and_holes_solves() {
     assert!(sol.displacement.iter().all(|u| u[0].is_finite() && u[1].is_finite()));
 }
 
+/// The bracket on a grid (holes included) against an independent P2 finite-element
+/// solution (`benches/fem_reference.py`, graded at the re-entrant corner:
+/// -4.9748e-4 m at h = 1 mm, -4.9742e-4 m at h = 2 mm).
+/// Measured here: -5.710e-4 m at h = 2 mm, -4.963e-4 m at h = 1 mm (0.23 %); with
+/// ghost nodes up to the re-entrant corner it was +2.2e-3 m, the wrong sign. Band 1 %
+/// at h = 1 mm: the error falls like h near the singular corner, and the reference is
+/// good to 0.1 %.
+#[test]
+fn bracket_on_a_grid_matches_the_finite_element_tip_deflection() {
+    let p = scene("bracket", &[("nodes.fill", s("grid")), ("nodes.relax", i(0)), ("nodes.spacing", f(0.001))]);
+    let sol = solve(&p);
+    let tip = sol.probes.iter().find(|q| q.name == "tip_deflection").expect("the shipped probe").value;
+    let reference = -4.9748e-4;
+    assert!(((tip - reference) / reference).abs() < 0.01, "tip deflection {tip:.4e} m, finite elements {reference:.4e} m");
+}
+
 /// Every shipped static Navier scene solved by an iterative method and by sparse LU
 /// gives the same displacements: BiCGSTAB+ILUT on all of them, and GMRES+AMG wherever it
 /// converges (tolerance 1e-10 on the equilibrated residual). The iterative solution
@@ -221,10 +237,12 @@ fn bracket_with_concave_corner_and_holes_solves() {
 /// cubic solution is reproduced). Band 1e-7: a wrong iterative solution (or one
 /// stopped early) is off by orders of magnitude more. On the scattered Kirsch and Lame
 /// node sets the multigrid stalls (README, known limits): that must be *reported* as a
-/// stagnation, which is what lets `auto` fall back to BiCGSTAB+ILU(0).
+/// stagnation, which is what lets `auto` fall back to BiCGSTAB+ILU(0). On the scattered
+/// bracket, since its re-entrant corner lost its ghosts, it runs out of iterations
+/// instead (true relative residual 5.1e-8 after 500): reported as such.
 #[test]
 fn iterative_and_direct_solutions_agree_on_every_shipped_scene() {
-    let stalls = ["kirsch", "lame"];
+    let stalls = ["kirsch", "lame", "bracket"];
     for name in ["cantilever", "kirsch", "lame", "flamant", "bracket", "steel_plate", "manufactured_dirichlet", "manufactured_traction"] {
         let lu = solve(&scene(name, &[("solver.kind", s("lu"))]));
         let scale = lu.displacement.iter().fold(0.0f64, |m, u| m.max(u[0].hypot(u[1])));
@@ -243,7 +261,8 @@ fn iterative_and_direct_solutions_agree_on_every_shipped_scene() {
             Err(e) => {
                 let m = e.to_string();
                 assert!(stalls.contains(&name), "{name}: {m}");
-                assert!(m.contains("stopped by stagnation") && m.contains("true relative residual"), "{name}: {m}");
+                let stopped = m.contains("stopped by stagnation") || m.contains("stopped by the iteration limit");
+                assert!(stopped && m.contains("true relative residual"), "{name}: {m}");
             }
         }
     }

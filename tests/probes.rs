@@ -143,7 +143,7 @@ fn bad_probes_are_refused_naming_the_field() {
 }
 
 /// The bracket does not converge at its shipped discretisation (README, "Known
-/// limits"): its tip deflection changes sign over the levels. The study says so: the
+/// limits"): its tip deflection is a third of the finite-element value and oscillates over the levels. The study says so: the
 /// finest level's estimate is above the threshold, so a warning (also under --quiet)
 /// and `warnings` in convergence.json say that the extrapolations are not to be
 /// trusted.
