@@ -11,8 +11,6 @@
 //! * a boundary node of another part lies within `1.2 h` of it (the wedge outside
 //!   a concave corner, where the continuations of the two sides disagree; a convex
 //!   corner keeps its ghosts, whose nearest foreign node is `sqrt(2) h` away);
-//! * its owner is a concave corner (a point `h/2` along one of its part normals is
-//!   not outside the solid);
 //! * its owner lies within [`REENTRANT_GHOST_FREE`] local spacings of a re-entrant
 //!   corner, where the stress is singular: there the extrapolation across the
 //!   boundary is wrong by O(1) however fine the nodes.
@@ -62,11 +60,6 @@ pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> V
             continue;
         }
         let own = &nodes.boundary[i].touches;
-        let concave =
-            own.len() > 1 && own.iter().any(|(_, m)| domain.signed_distance([p[0] + 0.5 * h * m[0], p[1] + 0.5 * h * m[1]]) < 0.25 * h);
-        if concave {
-            continue;
-        }
         let near_foreign_part = tree.query(&g).within::<SquaredEuclidean<f64>>((1.2 * h).powi(2)).execute().iter().any(|q| {
             let j = q.item as usize;
             j < nodes.boundary.len() && nodes.boundary[j].touches.iter().any(|(part, _)| !own.iter().any(|(o, _)| o == part))
