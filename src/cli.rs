@@ -126,6 +126,10 @@ pub enum Command {
         /// Time budget of --target-error: seconds, or 90s, 2m, 1h (default: no limit).
         #[arg(long, allow_negative_numbers = true, value_parser = budget, requires = "target_error")]
         budget: Option<std::time::Duration>,
+        /// PETSc options, after `--`, passed to PETSc unchanged (solver.kind = "petsc"),
+        /// e.g. `-- -ksp_type bcgs -pc_type hypre -ksp_monitor`.
+        #[arg(last = true, allow_hyphen_values = true, value_name = "PETSC_OPTIONS")]
+        petsc_options: Vec<String>,
     },
     /// Print every option word a scene file may use, with its default and meaning (Markdown).
     Options,
@@ -192,7 +196,13 @@ pub enum Command {
 /// instead of the option's own message.
 pub fn joined_negative_values<I: IntoIterator<Item = std::ffi::OsString>>(args: I) -> Vec<std::ffi::OsString> {
     let mut out: Vec<std::ffi::OsString> = Vec::new();
-    for arg in args {
+    let mut args = args.into_iter();
+    for arg in args.by_ref() {
+        if arg == "--" {
+            // What follows `--` belongs to PETSc, untouched.
+            out.push(arg);
+            break;
+        }
         let negative_number = arg.to_str().is_some_and(|a| a.starts_with('-') && a.parse::<f64>().is_ok());
         match out.last_mut() {
             Some(option) if negative_number && option.to_str().is_some_and(|o| o.starts_with("--") && o.len() > 2 && !o.contains('=')) => {
@@ -202,6 +212,7 @@ pub fn joined_negative_values<I: IntoIterator<Item = std::ffi::OsString>>(args: 
             _ => out.push(arg),
         }
     }
+    out.extend(args);
     out
 }
 
@@ -218,5 +229,8 @@ mod tests {
         );
         // Not a number, or not after a long option: left alone.
         assert_eq!(joined_negative_values(args(&["mlsm", "-q", "-1e-3", "--out", "-x"])), args(&["mlsm", "-q", "-1e-3", "--out", "-x"]));
+        // After `--`: PETSc's options, untouched.
+        let petsc = args(&["mlsm", "run", "s.toml", "--", "--x", "-1e-3"]);
+        assert_eq!(joined_negative_values(petsc.clone()), petsc);
     }
 }

@@ -8,6 +8,7 @@
 //! the floors below its own (`tests/architecture.rs` checks it).
 //! 1. [`choice`]: scene names, defaults and help of every option enum; [`output`]:
 //!    files; [`cli`]: the command line; [`expression`]: formulas of the scene file;
+//!    [`petsc`]: PETSc and MPI behind the feature `petsc`;
 //! 2. [`domain`]: geometry and nodes; [`linalg`]: sparse solvers; [`elasticity`]:
 //!    material, boundary conditions, unknown layout, stress;
 //! 3. [`mlsm`]: weighted least-squares shape functions; [`exact`]: closed-form and
@@ -30,6 +31,7 @@ pub mod choice;
 pub mod cli;
 pub mod expression;
 pub mod output;
+pub mod petsc;
 
 // Floor 2
 pub mod domain;

@@ -22,7 +22,10 @@ fn main() -> ExitCode {
         }
     });
     let cli = mlsm::cli::Cli::parse_from(mlsm::cli::joined_negative_values(std::env::args_os()));
-    match mlsm::app::run(&cli) {
+    let outcome = mlsm::app::run(&cli);
+    // Every rank of an MPI run ends PETSc (and MPI) before it exits.
+    mlsm::petsc::finish();
+    match outcome {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");

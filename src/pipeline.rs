@@ -123,6 +123,11 @@ impl StageTimings {
         }
     }
 
+    /// `(stage name, seconds)` of every stage that ran, in order.
+    pub fn named(&self) -> Vec<(String, f64)> {
+        self.0.iter().map(|(s, t)| (s.name().to_string(), *t)).collect()
+    }
+
     /// Seconds spent in `stage` (0 if it did not run).
     pub fn get(&self, stage: Stage) -> f64 {
         self.0.iter().find(|(s, _)| *s == stage).map_or(0.0, |(_, t)| *t)

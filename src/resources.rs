@@ -54,7 +54,7 @@ fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
         SolverKind::Bicgstab { .. } => 88.0 * nonzeros,
         // Matrix, its equilibrated copy and AMG's rows of it (16 B per entry each), the
         // coarse levels, and the Krylov basis.
-        SolverKind::Gmres { restart, .. } => 60.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
+        SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 60.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
         _ => 40.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
     }
 }

@@ -87,6 +87,10 @@ impl AppError {
 /// Run the command of `cli`.
 pub fn run(cli: &Cli) -> Result<(), AppError> {
     let term = Terminal::new(cli.quiet);
+    let launched = crate::petsc::launched_ranks();
+    if launched > 1 && !matches!(cli.command, Command::Run { .. }) {
+        return Err(AppError::Usage(format!("mpirun started {launched} ranks: only `mlsm run` runs over MPI")));
+    }
     match &cli.command {
         Command::Check { scene } => check::run(scene, cli.quiet),
         Command::Options => {
@@ -107,6 +111,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             target_norm,
             refinement,
             budget,
+            petsc_options,
         } => {
             let model = model.map(|m| match m {
                 ModelArg::Navier => Model::Navier,
@@ -123,6 +128,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 allow_long: *allow_long,
                 export_system: export_system.clone(),
                 target: target_error.map(|tolerance| target::request(tolerance, *target_norm, *refinement, *budget)),
+                petsc_options: petsc_options.clone(),
             };
             run::run(req, &term, cli.quiet)
         }

@@ -21,10 +21,12 @@
 pub mod aggregation;
 pub mod amg;
 pub mod bicgstab;
+pub mod distributed;
 pub mod gmres;
 pub mod ilut;
 pub mod lu;
 pub mod params;
+pub mod partition;
 pub mod precond;
 pub mod rowmat;
 pub mod scaling;
@@ -90,6 +92,9 @@ pub struct SolveReport {
     /// Hager–Higham estimate of `κ₁` of the solved (equilibrated) matrix, LU only:
     /// the solution keeps about `-log10(κ₁ ε)` correct digits.
     pub condition_estimate: Option<f64>,
+    /// Rows, entries, halo and stage times of each MPI rank (PETSc runs only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ranks: Option<distributed::RankReport>,
 }
 
 /// Why [`solve`] or [`assemble`] failed. Messages are plain language and say
@@ -121,10 +126,11 @@ pub enum SolveError {
     /// relative residual of the solved (equilibrated) system at the last iterate.
     #[error(
         "{method} did not converge in {iterations} iterations ({restarts} restarts), stopped by {limit}: \
-         true relative residual {relative_residual:.1e} (tolerance {tolerance:e}); try lu, a stronger \
-         preconditioner (ilut with smaller drop / larger fill) or more iterations"
+         true relative residual {relative_residual:.1e} (tolerance {tolerance:e}); {hint}"
     )]
     NoConvergence {
+        /// What to try next.
+        hint: &'static str,
         /// Iterations performed (the budget, unless the restart limit was hit
         /// first).
         iterations: usize,
@@ -138,6 +144,13 @@ pub enum SolveError {
         method: String,
         /// The requested tolerance.
         tolerance: f64,
+    },
+    /// PETSc or MPI failed (not a convergence failure: those are
+    /// [`SolveError::NoConvergence`] with PETSc's converged reason).
+    #[error("PETSc: {detail}")]
+    Petsc {
+        /// What failed.
+        detail: String,
     },
     /// The solution exceeds the double range (the loads are too large in these units).
     #[error("overflow: {detail}")]
@@ -250,8 +263,12 @@ fn iterative_report(
         restarts: 0,
         subnormal_unknowns: 0,
         condition_estimate: None,
+        ranks: None,
     }
 }
+
+/// What to try when an in-process Krylov solver does not converge.
+const IN_PROCESS_HINT: &str = "try lu, a stronger preconditioner (ilut with smaller drop / larger fill) or more iterations";
 
 /// What stopped a Krylov method that ran out of iterations.
 fn iteration_limit(max_iterations: usize) -> String {
@@ -308,6 +325,13 @@ pub(crate) fn solve_with_memory(
             Err(e) => Err(e),
         };
     }
+    if let SolverKind::Petsc { .. } = kind {
+        let (per_point, owner, points) = match layout {
+            Some(l) => (l.per_node, partition::morton_owners(l.positions, crate::petsc::world().size), l.positions.to_vec()),
+            None => (1, partition::block_owners(a.nrows(), crate::petsc::world().size), Vec::new()),
+        };
+        return distributed::solve_replicated(a, b, owner, per_point, &points, params);
+    }
     let n = a.nrows();
     if a.ncols() != n {
         return Err(SolveError::Dimension { detail: format!("matrix is {}x{}, expected square", n, a.ncols()) });
@@ -339,6 +363,7 @@ pub(crate) fn solve_with_memory(
             restarts: 0,
             subnormal_unknowns: 0,
             condition_estimate: None,
+            ranks: None,
         };
         return Ok((Vec::new(), report));
     }
@@ -358,7 +383,7 @@ pub(crate) fn solve_with_memory(
     let a_work = scaled.as_ref().unwrap_or(a);
 
     match kind {
-        SolverKind::Auto { .. } => unreachable!("resolved above"),
+        SolverKind::Auto { .. } | SolverKind::Petsc { .. } => unreachable!("resolved and returned above"),
         SolverKind::Lu => {
             let lu = lu::SparseLu::factor(a_work)?;
             let setup_seconds = t_setup.elapsed().as_secs_f64();
@@ -383,6 +408,7 @@ pub(crate) fn solve_with_memory(
                     restarts: 0,
                     subnormal_unknowns: 0,
                     condition_estimate: Some(kappa),
+                    ranks: None,
                 },
             ))
         }
@@ -410,6 +436,7 @@ pub(crate) fn solve_with_memory(
                     },
                 )),
                 bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
+                    hint: IN_PROCESS_HINT,
                     limit: if out.iterations >= max_iterations {
                         iteration_limit(max_iterations)
                     } else {
@@ -471,6 +498,7 @@ pub(crate) fn solve_with_memory(
                     },
                 )),
                 gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
+                    hint: IN_PROCESS_HINT,
                     limit: if out.status == gmres::Status::IterationLimit {
                         iteration_limit(max_iterations)
                     } else {

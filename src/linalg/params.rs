@@ -80,6 +80,23 @@ pub enum SolverKind {
         /// Krylov vectors kept before a restart.
         restart: usize,
     },
+    /// PETSc's KSP over the MPI ranks of the run (feature `petsc`,
+    /// [`super::distributed`]): GMRES(`restart`) with the preconditioner's PETSc
+    /// counterpart ([`Preconditioner::petsc_name`]) to the same true relative residual;
+    /// PETSc's options database overrides each default.
+    Petsc {
+        /// Right preconditioner (mapped to PETSc's).
+        preconditioner: Preconditioner,
+        /// Target true relative residual of the solved system (`> 0`).
+        tolerance: f64,
+        /// Iteration budget.
+        max_iterations: usize,
+        /// Krylov vectors kept before a restart.
+        restart: usize,
+        /// Preconditioner replaced by a distributed sparse LU (MUMPS): `lu` and `auto`'s
+        /// LU choice over MPI ranks.
+        direct: bool,
+    },
     /// LU while its factors fit comfortably, else BiCGSTAB with these settings
     /// ([`SolverKind::resolve`]).
     Auto {
@@ -113,6 +130,7 @@ impl SolverKind {
             SolverKind::Lu => SolverMethod::Lu,
             SolverKind::Bicgstab { .. } => SolverMethod::Bicgstab,
             SolverKind::Gmres { .. } => SolverMethod::Gmres,
+            SolverKind::Petsc { .. } => SolverMethod::Petsc,
             SolverKind::Auto { .. } => SolverMethod::Auto,
         }
     }
@@ -165,6 +183,10 @@ impl SolverKind {
             SolverKind::Lu => "lu".to_string(),
             SolverKind::Auto { preconditioner, .. } => format!("auto(lu|gmres+{})", preconditioner.label()),
             SolverKind::Gmres { preconditioner, restart, .. } => format!("gmres({restart})+{}", preconditioner.label()),
+            SolverKind::Petsc { direct: true, .. } => "petsc:gmres+mumps-lu".to_string(),
+            SolverKind::Petsc { preconditioner, restart, .. } => {
+                format!("petsc:gmres({restart})+{}", preconditioner.petsc_name().unwrap_or("?"))
+            }
             SolverKind::Bicgstab { preconditioner, .. } => {
                 format!("bicgstab+{}", preconditioner.label())
             }
@@ -179,6 +201,7 @@ choice! {
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
         Gmres = "gmres" => "right-preconditioned restarted GMRES(`restart`, default 30) to a true relative residual `tolerance`; stops when a restart cycle gains less than 1 %",
+        Petsc = "petsc" => "PETSc's KSP over the MPI ranks of `mpirun -n P` (build with `--features petsc`): GMRES(`restart`) with GAMG (amg, rigid-body modes), block-Jacobi ILU(0) (ilu0) or Jacobi to a true relative residual `tolerance`; PETSc options after `--` on the command line or in PETSC_OPTIONS override each",
     }
 }
 
@@ -193,6 +216,17 @@ choice! {
 }
 
 impl Preconditioner {
+    /// PETSc's counterpart (`-pc_type`): `gamg`, `bjacobi` (ILU(0) in each block),
+    /// `jacobi`; ILUT has none.
+    pub fn petsc_name(&self) -> Option<&'static str> {
+        match self {
+            Preconditioner::Amg => Some("gamg"),
+            Preconditioner::Ilu0 => Some("bjacobi"),
+            Preconditioner::Jacobi => Some("jacobi"),
+            Preconditioner::Ilut { .. } => None,
+        }
+    }
+
     /// Its name in a scene.
     pub fn kind(&self) -> PreconditionerKind {
         match self {

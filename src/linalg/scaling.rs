@@ -80,16 +80,23 @@ pub fn equilibrate_rows_with(a: &SparseMatrix, row_max: &[f64]) -> (SparseMatrix
 /// The row scales `d_i = ±1 / max_j |a_ij|` of [`equilibrate_rows`], from the row
 /// maxima of [`row_max_abs`].
 pub fn row_scales(a: &SparseMatrix, row_max: &[f64]) -> Vec<f64> {
-    let mut d: Vec<f64> = row_max.iter().map(|m| 1.0 / m).collect();
-    for (j, dj) in d.iter_mut().enumerate().take(a.ncols()) {
-        let rows = a.symbolic().row_idx_of_col_raw(j);
-        if let Ok(p) = rows.binary_search(&j) {
-            if a.val_of_col(j)[p] < 0.0 {
-                *dj = -*dj;
-            }
-        }
+    (0..a.nrows())
+        .map(|j| {
+            let rows = a.symbolic().row_idx_of_col_raw(j);
+            let diagonal = rows.binary_search(&j).map_or(0.0, |p| a.val_of_col(j)[p]);
+            row_scale(row_max[j], diagonal)
+        })
+        .collect()
+}
+
+/// The scale `d_i = ±1 / max_j |a_ij|` of a row, its sign that of the diagonal entry
+/// (module docs).
+pub fn row_scale(row_max: f64, diagonal: f64) -> f64 {
+    if diagonal < 0.0 {
+        -1.0 / row_max
+    } else {
+        1.0 / row_max
     }
-    d
 }
 
 /// `D b`, i.e. `b_i · d_i`.

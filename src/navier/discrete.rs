@@ -22,6 +22,9 @@ use crate::elasticity::dofs::{DofMap, Unknowns, PRESSURE};
 use crate::elasticity::material::Material;
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
+use crate::linalg::distributed::agree;
+use crate::linalg::partition::morton_owners;
+use crate::linalg::SolverKind;
 use crate::mlsm::{compute_shapes, degenerate_supports, Basis, Op, OpSet, Shapes};
 use crate::pipeline::{stage, RunError, Stage, StageTimer};
 
@@ -51,6 +54,10 @@ pub struct Discretisation {
     pub operators_computed: Vec<(String, usize)>,
     /// Unknown layout over nodes and ghosts.
     pub dofs: DofMap,
+    /// Owner rank of each node and ghost when the solve is distributed over MPI ranks
+    /// (`solver.kind = "petsc"`): a rank computes the shapes and rows of its own nodes
+    /// only (a ghost belongs to its node's rank).
+    pub owner: Option<Vec<u32>>,
 }
 
 impl Discretisation {
@@ -92,8 +99,20 @@ impl Discretisation {
             let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
             Ok(((positions, ghost, supports, needs, widened), note))
         })?;
+        let world = crate::petsc::world();
+        let owner = matches!(params.solver.kind, SolverKind::Petsc { .. }).then(|| {
+            let owner = morton_owners(&nodes.positions, world.size);
+            let ghosts: Vec<u32> = ghost_parents(&ghost, positions.len() - nodes.len()).into_iter().map(|i| owner[i]).collect();
+            [owner, ghosts].concat()
+        });
+        let mut needs = needs;
+        if let Some(owner) = &owner {
+            for (need, _) in needs.iter_mut().zip(owner).filter(|(_, &o)| o as usize != world.rank) {
+                *need = OpSet::EMPTY;
+            }
+        }
         let shapes = timer.run(SHAPES, || {
-            let s = compute_shapes(&positions, &supports, &params.approximation, &needs)?;
+            let s = agree(compute_shapes(&positions, &supports, &params.approximation, &needs).map_err(RunError::from))?;
             let note = format!("{} shape functions", s.count());
             Ok((s, note))
         })?;
@@ -115,7 +134,13 @@ impl Discretisation {
             shapes,
             operators_computed,
             dofs,
+            owner,
         })
+    }
+
+    /// Whether this rank computes node `i`'s shapes and rows (always, unless distributed).
+    pub fn owns(&self, i: usize) -> bool {
+        self.owner.as_ref().is_none_or(|o| o[i] as usize == crate::petsc::world().rank)
     }
 
     /// Position of node or ghost `i`.
@@ -157,10 +182,16 @@ impl Discretisation {
 
     /// Displacement gradient `[[u_x, u_y], [v_x, v_y]]` at every node (ghosts
     /// excluded) from the global vector `x`; needs first-derivative shapes everywhere.
+    ///
+    /// Distributed: each rank computes its own nodes' and the sum over ranks fills in
+    /// the rest (MPI aborts the job itself if that sum fails).
     pub fn gradients(&self, x: &[f64]) -> Vec<Gradient> {
-        (0..self.nodes.len())
+        let mut g: Vec<Gradient> = (0..self.nodes.len())
             .into_par_iter()
             .map(|i| {
+                if !self.owns(i) {
+                    return [[0.0; 2]; 2];
+                }
                 let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
                 let mut g = [[0.0; 2]; 2];
                 for (k, &j) in self.supports.of(i).iter().enumerate() {
@@ -172,8 +203,29 @@ impl Discretisation {
                 }
                 g
             })
-            .collect()
+            .collect();
+        if self.owner.is_some() {
+            let mut flat: Vec<f64> = g.iter().flatten().flatten().copied().collect();
+            if crate::petsc::sum_over_ranks(&mut flat).is_ok() {
+                for (gi, v) in g.iter_mut().zip(flat.chunks_exact(4)) {
+                    *gi = [[v[0], v[1]], [v[2], v[3]]];
+                }
+            }
+        }
+        g
     }
+}
+
+/// The node of each of the `count` ghosts (ghost `n + k` belongs to `parents[k]`).
+fn ghost_parents(ghost: &[Option<usize>], count: usize) -> Vec<usize> {
+    let n = ghost.len();
+    let mut parents = vec![0; count];
+    for (i, g) in ghost.iter().enumerate() {
+        if let Some(g) = g {
+            parents[g - n] = i;
+        }
+    }
+    parents
 }
 
 /// Positions of nodes and ghosts, and the ghost of each node.

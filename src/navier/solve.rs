@@ -13,6 +13,7 @@ use crate::domain::{NodeSet, Point};
 use crate::elasticity::dofs::{DofMap, Unknowns};
 use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
+use crate::linalg::distributed::{self, agree, Distribution};
 use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 use crate::post::probe::{probe_values, NodalFields, ProbeValue};
@@ -133,6 +134,11 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let unknowns = disc.dofs.len();
     let formulation = disc.dofs.unknowns();
     let Discretisation { nodes, boundary_equations, operators_computed, .. } = disc;
+    let timings = timer.finish();
+    let mut report = report;
+    if let Some(ranks) = report.ranks.as_mut() {
+        ranks.stage_seconds = distributed::stage_seconds_per_rank(&timings.named())?;
+    }
     Ok(Solution {
         nodes,
         boundary_equations,
@@ -153,7 +159,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         operators_computed,
         solver: report,
         system,
-        timings: timer.finish(),
+        timings,
     })
 }
 
@@ -179,6 +185,10 @@ pub(super) fn assemble_and_solve(
     keep: bool,
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
+    let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
+    if let Some(owner) = &disc.owner {
+        return assemble_and_solve_distributed(System { case, disc, exact }, owner, &positions, solver, timer);
+    }
     let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
         let (triplets, rhs) = System { case, disc, exact }.assemble()?;
         let m = linalg::assemble(&triplets)?;
@@ -187,11 +197,37 @@ pub(super) fn assemble_and_solve(
     })?;
     let nonzeros = matrix.compute_nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
-        let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
         let layout = linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions };
         let (x, report) = linalg::solve_nodal(&matrix, &rhs, solver, Some(layout))?;
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report), note))
     })?;
     Ok(Solved { x, nonzeros, report, system: keep.then_some((matrix, rhs)) })
+}
+
+/// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
+/// owns and PETSc solves them together ([`distributed::solve`]); the system is not
+/// kept (no rank holds it whole).
+fn assemble_and_solve_distributed(
+    system: System,
+    owner: &[u32],
+    positions: &[[f64; 2]],
+    solver: &SolverParams,
+    timer: &mut StageTimer,
+) -> Result<Solved, RunError> {
+    let dofs = system.disc.dofs;
+    let (triplets, rhs) = timer.run(stage::ASSEMBLY, || {
+        let (t, rhs) = agree(system.assemble())?;
+        let note = format!("{} unknowns, {} entries in this rank's rows", dofs.len(), t.len());
+        Ok(((t, rhs), note))
+    })?;
+    let (x, report) = timer.run(stage::SOLVE, || {
+        let dist = Distribution::new(owner.to_vec(), dofs.unknowns().per_node(), crate::petsc::world());
+        let entries = triplets.entries().iter().map(|t| (t.row, t.col, t.val));
+        let (x, report) = distributed::solve(&dist, entries, &rhs, positions, solver)?;
+        let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
+        Ok(((x, report), note))
+    })?;
+    let nonzeros = report.ranks.as_ref().map_or(0, |r| r.nonzeros.iter().sum());
+    Ok(Solved { x, nonzeros, report, system: None })
 }

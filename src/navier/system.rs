@@ -60,8 +60,10 @@ impl System<'_> {
         (e, rhs)
     }
 
-    /// Rows of every node, in parallel; returns the triplets and the right-hand side,
-    /// or the first node whose equations hold a non-finite number.
+    /// Rows of every node this rank owns ([`Discretisation::owns`]: all of them unless
+    /// the solve is distributed), in parallel; returns the triplets and the right-hand
+    /// side (zero in the rows of other ranks), or the first node whose equations hold
+    /// a non-finite number.
     pub fn assemble(&self) -> Result<(Triplets, Vec<f64>), RunError> {
         let (disc, dofs) = (self.disc, self.disc.dofs);
         let material = &self.case.material;
@@ -72,8 +74,10 @@ impl System<'_> {
             supports: &disc.supports,
             shapes: &disc.shapes,
         };
-        let per_node: Vec<(Entries, Vec<(usize, f64)>)> =
-            (0..disc.nodes.len()).into_par_iter().map(|i| self.node_rows(&writer, i)).collect();
+        let per_node: Vec<(Entries, Vec<(usize, f64)>)> = (0..disc.nodes.len())
+            .into_par_iter()
+            .map(|i| if disc.owns(i) { self.node_rows(&writer, i) } else { Default::default() })
+            .collect();
         let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();
         let mut triplets = Triplets::with_capacity(dofs.len(), total);
         let mut rhs = vec![0.0; dofs.len()];

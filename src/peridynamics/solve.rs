@@ -192,6 +192,11 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         Ok((post, note))
     })?;
     let Discretisation { nodes, families, weights, micromodulus } = disc;
+    let timings = timer.finish();
+    let mut report = report;
+    if let Some(ranks) = report.ranks.as_mut() {
+        ranks.stage_seconds = linalg::distributed::stage_seconds_per_rank(&timings.named())?;
+    }
     Ok(PdSolution {
         params: *params,
         unknowns: nodes.dofs().len(),
@@ -214,6 +219,6 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         errors: post.errors,
         micromodulus,
         solver: report,
-        timings: timer.finish(),
+        timings,
     })
 }

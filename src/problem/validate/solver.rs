@@ -75,6 +75,23 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
             }
             SolverKind::Auto { preconditioner, tolerance, max_iterations }
         }
+        SolverMethod::Petsc => {
+            if !crate::petsc::AVAILABLE {
+                return c.err(
+                    "solver.kind",
+                    "\"petsc\" needs a build with the PETSc backend: scripts/install-petsc.sh, then \
+                     cargo build --release --features petsc (README, PETSc and MPI)",
+                );
+            }
+            if preconditioner.petsc_name().is_none() {
+                return c.err(
+                    "solver.preconditioner",
+                    "PETSc has no ILUT; use \"amg\" (GAMG), \"ilu0\" or \"jacobi\", or PETSc's own options \
+                     (e.g. -pc_type hypre -pc_hypre_type euclid after `--`)",
+                );
+            }
+            SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart, direct: false }
+        }
         _ => SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart },
     })
 }
@@ -94,7 +111,7 @@ pub(super) fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemErr
                 ("restart", s.restart.is_some()),
             ];
             if let Some((k, _)) = iterative_only.iter().find(|(_, p)| *p) {
-                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\", \"gmres\" or \"auto\"");
+                return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\", \"gmres\", \"petsc\" or \"auto\"");
             }
             SolverKind::Lu
         }
