@@ -152,7 +152,8 @@ mod with_petsc {
     }
 
     /// What cannot be distributed is refused by every rank before any work, with the
-    /// reason: an explicit dynamic run, and ILUT, which PETSc lacks.
+    /// reason: an explicit dynamic run, ILUT (which PETSc lacks), and the export of a
+    /// system PETSc solved (never kept whole).
     #[test]
     fn mpirun_refuses_what_it_cannot_distribute() {
         let dir = tempfile::tempdir().unwrap();
@@ -168,6 +169,11 @@ mod with_petsc {
         let o = mlsm(2, &ilut, &out, &["-q"]);
         assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
         assert!(String::from_utf8_lossy(&o.stderr).contains("no PETSc counterpart"), "{}", describe(&o));
+        // PETSc's system is not kept: --export-system is refused, not silently skipped.
+        let petsc_scene = petsc_cantilever(dir.path());
+        let o = mlsm(0, &petsc_scene, &out, &["-q", "--export-system", dir.path().join("sys").to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+        assert!(String::from_utf8_lossy(&o.stderr).contains("--export-system"), "{}", describe(&o));
     }
 }
 

@@ -101,10 +101,8 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
             return Err(AppError::Usage(format!("{}: {why}", req.scene.display())));
         }
     }
-    let world = start_petsc(&mut p, req)?;
-    if world.rank == 0 {
-        crate::resources::check(&p)?;
-    }
+    start_petsc(&mut p, req)?;
+    crate::resources::check(&p)?;
     Ok(p)
 }
 
@@ -185,6 +183,8 @@ fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<petsc::World, AppErr
         if !note.is_empty() {
             p.notes.push(format!("{} MPI ranks; {note}", world.size));
         }
+    } else if req.export_system.is_some() {
+        return Err(AppError::Usage(format!("{why}: --export-system writes the system of an in-process solve; PETSc's is not kept")));
     } else if !matches!(active_solver(p).kind, SolverKind::Petsc { .. }) {
         return Err(AppError::Usage(format!(
             "{why}, but the solver is \"{}\": set solver.kind = \"petsc\"",
@@ -238,7 +238,12 @@ pub(super) fn run(mut req: RunRequest, term: &Terminal, quiet: bool) -> Result<(
 
 /// [`run`] of a prepared problem.
 fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Result<(), AppError> {
-    let staged = StagedDir::create(&req.out.clone().unwrap_or_else(|| default_out(&p)), run_owns)?;
+    let staged = StagedDir::create(&req.out.clone().unwrap_or_else(|| default_out(&p)), run_owns);
+    // Over MPI ranks, a rank that cannot write stops them all before the first collective.
+    if petsc::any_rank(staged.is_err()) && staged.is_ok() {
+        return Err(AppError::Run(RunError::Solve(crate::linalg::distributed::other_rank_failed())));
+    }
+    let staged = staged?;
     let dir = staged.path().to_path_buf();
     if !quiet {
         eprintln!("{}", model::announce(&p));
