@@ -22,14 +22,16 @@ fn main() -> ExitCode {
         }
     });
     let cli = mlsm::cli::Cli::parse_from(mlsm::cli::joined_negative_values(std::env::args_os()));
-    let outcome = mlsm::app::run(&cli);
-    // Every rank of an MPI run ends PETSc (and MPI) before it exits.
-    mlsm::petsc::finish();
-    match outcome {
+    let code = match mlsm::app::run(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
         }
-    }
+    };
+    // Every rank of an MPI run ends PETSc (and MPI) before it exits, after printing:
+    // MPI_Finalize waits for all ranks, so no rank's non-zero exit makes mpirun kill
+    // rank 0 before its message is out.
+    mlsm::petsc::finish();
+    code
 }

@@ -118,11 +118,11 @@ fn active_solver(p: &mut Problem) -> &mut SolverParams {
 /// more than one MPI rank. Over several ranks `auto` becomes PETSc with its settings
 /// (a note says so), and what cannot be distributed is refused. Ranks other than 0
 /// print nothing (their stdout and stderr go to /dev/null).
-fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<petsc::World, AppError> {
+fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<(), AppError> {
     let launched = petsc::launched_ranks();
     let asks = matches!(active_solver(p).kind, SolverKind::Petsc { .. });
     if launched == 1 && !asks && req.petsc_options.is_empty() {
-        return Ok(petsc::World::SERIAL);
+        return Ok(());
     }
     let why = if launched > 1 {
         format!("mpirun started {launched} ranks")
@@ -157,8 +157,8 @@ fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<petsc::World, AppErr
             SolverKind::Auto { preconditioner, tolerance, max_iterations } if preconditioner.petsc_name().is_some() => {
                 // The same rule as in one process: LU while its factors fit.
                 let estimate = crate::resources::of(p);
-                let share = crate::linalg::AUTO_LU_SHARE * crate::output::available_memory_bytes().unwrap_or(f64::INFINITY);
-                let direct = crate::linalg::lu_factor_bytes(estimate.nonzeros, estimate.unknowns) <= share;
+                let available = crate::output::available_memory_bytes();
+                let direct = matches!(active_solver(p).kind.resolve(estimate.unknowns, estimate.nonzeros, available).0, SolverKind::Lu);
                 let kind = SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART, direct };
                 let what = if direct { "the LU factors fit: MUMPS's distributed sparse LU" } else { "the LU factors do not fit: GMRES" };
                 (kind, format!("auto: {what} ({})", kind.label()))
@@ -191,7 +191,7 @@ fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<petsc::World, AppErr
             active_solver(p).kind.method().name()
         )));
     }
-    Ok(world)
+    Ok(())
 }
 
 /// Send this process's stdout and stderr to /dev/null (the ranks above 0 of an MPI

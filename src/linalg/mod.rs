@@ -28,6 +28,7 @@ pub mod lu;
 pub mod params;
 pub mod partition;
 pub mod precond;
+pub mod report;
 pub mod rowmat;
 pub mod scaling;
 pub mod smoother;
@@ -42,6 +43,7 @@ pub use amg::NodeLayout;
 pub use params::{
     lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE, GMRES_RESTART,
 };
+pub use report::{SolveError, SolveReport};
 pub use rowmat::{mul_add, row_matrix, RowMatrix};
 pub use triplets::{assemble, Triplets};
 
@@ -54,120 +56,6 @@ pub type SparseMatrix = faer::sparse::SparseColMat<usize, f64>;
 /// means the matrix is numerically singular (or nearly so) and the "solution"
 /// is garbage, so [`solve`] reports [`SolveError::Singular`] instead.
 pub const LU_RESIDUAL_LIMIT: f64 = 1e-6;
-
-/// What a successful [`solve`] did and how well.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct SolveReport {
-    /// e.g. `"lu"`, `"bicgstab+ilut(drop=1e-5,fill=20)"`.
-    pub method: String,
-    /// Why `kind = "auto"` chose `method` (`None` for an explicit kind).
-    pub choice: Option<String>,
-    /// Krylov iterations (BiCGSTAB, summed over restarts); 1 for LU.
-    pub iterations: usize,
-    /// True `‖b − A x‖₂ / ‖b‖₂` of the system actually solved: the
-    /// row-equilibrated `D A x = D b` when equilibration is on (row scaling does
-    /// not change `x`, and this measure does not depend on the units of each
-    /// equation), else the original one. Convergence and singularity checks use it.
-    pub relative_residual: f64,
-    /// The same on the original, unscaled system (for information: rows of very
-    /// different scales, e.g. Navier rows `~ E/h^2` next to displacement rows `~ 1`,
-    /// make it reflect the largest rows only).
-    pub original_relative_residual: f64,
-    /// Equilibration + factorisation / preconditioner construction, in seconds.
-    pub setup_seconds: f64,
-    /// Triangular solves or Krylov iterations, including the true-residual
-    /// checks, in seconds.
-    pub solve_seconds: f64,
-    /// Whether row equilibration was applied.
-    pub equilibrated: bool,
-    /// Stored entries of the preconditioner (L + U + diagonal); `None` for LU.
-    pub preconditioner_nonzeros: Option<usize>,
-    /// Number of BiCGSTAB restarts triggered because the true residual was
-    /// above the tolerance when the recursive one claimed convergence.
-    pub restarts: usize,
-    /// Unknowns whose value fell below the smallest normal double (2.2e-308) when
-    /// scaled back to the loads' units, while above 1e-12 of the largest: they keep
-    /// fewer than 15 digits.
-    pub subnormal_unknowns: usize,
-    /// Hager–Higham estimate of `κ₁` of the solved (equilibrated) matrix, LU only:
-    /// the solution keeps about `-log10(κ₁ ε)` correct digits.
-    pub condition_estimate: Option<f64>,
-    /// Rows, entries, halo and stage times of each MPI rank (PETSc runs only).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub ranks: Option<distributed::RankReport>,
-}
-
-/// Why [`solve`] or [`assemble`] failed. Messages are plain language and say
-/// what to try next.
-#[derive(Debug, thiserror::Error)]
-pub enum SolveError {
-    /// A matrix entry is NaN or infinite.
-    #[error(
-        "matrix entry ({row}, {col}) is not finite ({value}); \
-         check the node coordinates, support sizes and material constants that produced this row"
-    )]
-    NotFinite {
-        /// Row of the offending entry.
-        row: usize,
-        /// Column of the offending entry.
-        col: usize,
-        /// The NaN or ±inf found there.
-        value: f64,
-    },
-    /// The matrix (or the preconditioner built from it) is singular: LU
-    /// failure, zero pivot in an incomplete factorisation, all-zero row, or a
-    /// non-finite / inaccurate solution.
-    #[error("the system matrix is singular or numerically singular: {detail}")]
-    Singular {
-        /// What was detected, with numbers and what to check.
-        detail: String,
-    },
-    /// BiCGSTAB did not reach the tolerance; `relative_residual` is the TRUE
-    /// relative residual of the solved (equilibrated) system at the last iterate.
-    #[error(
-        "{method} did not converge in {iterations} iterations ({restarts} restarts), stopped by {limit}: \
-         true relative residual {relative_residual:.1e} (tolerance {tolerance:e}); {hint}"
-    )]
-    NoConvergence {
-        /// What to try next.
-        hint: &'static str,
-        /// Iterations performed (the budget, unless the restart limit was hit
-        /// first).
-        iterations: usize,
-        /// Verification restarts performed.
-        restarts: usize,
-        /// The limit that stopped it: the iteration budget or the restart cap.
-        limit: String,
-        /// True `‖b − A x‖₂/‖b‖₂` of the solved system at the last iterate.
-        relative_residual: f64,
-        /// e.g. `BiCGSTAB+ILU(0)`.
-        method: String,
-        /// The requested tolerance.
-        tolerance: f64,
-    },
-    /// PETSc or MPI failed (not a convergence failure: those are
-    /// [`SolveError::NoConvergence`] with PETSc's converged reason).
-    #[error("PETSc: {detail}")]
-    Petsc {
-        /// What failed.
-        detail: String,
-    },
-    /// The solution exceeds the double range (the loads are too large in these units).
-    #[error("overflow: {detail}")]
-    Overflow {
-        /// Which unknown overflowed and what to do.
-        detail: String,
-    },
-    /// Inconsistent sizes (non-square matrix, wrong right-hand-side length,
-    /// triplet index out of range), other invalid input (non-finite
-    /// right-hand side, non-positive tolerance) or a problem too large for the
-    /// solver (index overflow / out of memory in faer).
-    #[error("dimension error: {detail}")]
-    Dimension {
-        /// What was inconsistent or invalid.
-        detail: String,
-    },
-}
 
 /// True relative residual `‖b − A x‖₂ / ‖b‖₂` (plain 2-norms, computed by a
 /// CSC sweep). If `b = 0` the absolute residual `‖A x‖₂` is returned. NaN in

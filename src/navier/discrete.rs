@@ -184,7 +184,7 @@ impl Discretisation {
     /// excluded) from the global vector `x`; needs first-derivative shapes everywhere.
     ///
     /// Distributed: each rank computes its own nodes' and the sum over ranks fills in
-    /// the rest (MPI aborts the job itself if that sum fails).
+    /// the rest.
     pub fn gradients(&self, x: &[f64]) -> Vec<Gradient> {
         let mut g: Vec<Gradient> = (0..self.nodes.len())
             .into_par_iter()
@@ -206,10 +206,11 @@ impl Discretisation {
             .collect();
         if self.owner.is_some() {
             let mut flat: Vec<f64> = g.iter().flatten().flatten().copied().collect();
-            if crate::petsc::sum_over_ranks(&mut flat).is_ok() {
-                for (gi, v) in g.iter_mut().zip(flat.chunks_exact(4)) {
-                    *gi = [[v[0], v[1]], [v[2], v[3]]];
-                }
+            // MPI's default error handler aborts the job on a failed collective, so this
+            // cannot fail here; were it to, partial gradients must not pass as a result.
+            crate::petsc::sum_over_ranks(&mut flat).expect("MPI_Allreduce of the gradients over the ranks");
+            for (gi, v) in g.iter_mut().zip(flat.chunks_exact(4)) {
+                *gi = [[v[0], v[1]], [v[2], v[3]]];
             }
         }
         g
