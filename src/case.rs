@@ -90,7 +90,68 @@ pub struct Case {
     pub probes: Vec<Probe>,
 }
 
+/// The loads of a case at one instant: the body force and the boundary conditions
+/// with the time `t` of their formulas bound.
+#[derive(Debug, Clone)]
+pub struct Loads {
+    /// Body force.
+    pub body_force: Value,
+    /// Condition of each boundary part.
+    pub conditions: Vec<BoundaryCondition>,
+}
+
+impl Loads {
+    /// The first load formula that is not finite at `p`, as the error naming it,
+    /// its value, the point and the time `t`.
+    pub fn non_finite_at(&self, p: Point, t: f64) -> Option<RunError> {
+        let values = std::iter::once(&self.body_force).chain(self.conditions.iter().map(|c| &c.value));
+        values.filter_map(|v| if let Value::Expression(e) = v { Some(e) } else { None }).find_map(|e| {
+            e.non_finite_at(p).map(|(field, text, value)| RunError::BadFormula {
+                field,
+                text: text.to_string(),
+                value,
+                x: p[0],
+                y: p[1],
+                context: format!(" at t = {t:.6e}"),
+            })
+        })
+    }
+}
+
+impl Loads {
+    /// Whether a load is a formula in `t`.
+    pub fn depend_on_time(&self) -> bool {
+        self.body_force.depends_on_time() || self.conditions.iter().any(|c| c.value.depends_on_time())
+    }
+
+    /// The loads at the fixed time `t` ([`Value::at_time`]).
+    pub fn at_time(&self, t: f64) -> Loads {
+        Loads {
+            body_force: self.body_force.at_time(t),
+            conditions: self.conditions.iter().map(|c| BoundaryCondition { value: c.value.at_time(t), ..c.clone() }).collect(),
+        }
+    }
+
+    /// The time derivatives of the loads (still functions of `t`; zero where a load
+    /// does not depend on time), or the field of the formula that cannot be
+    /// differentiated and why.
+    pub fn time_derivative(&self) -> Result<Loads, (String, String)> {
+        let conditions = self.conditions.iter().map(|c| Ok(BoundaryCondition { value: c.value.time_derivative()?, ..c.clone() }));
+        Ok(Loads { body_force: self.body_force.time_derivative()?, conditions: conditions.collect::<Result<_, (String, String)>>()? })
+    }
+}
+
 impl Case {
+    /// The body force and boundary conditions.
+    pub fn loads(&self) -> Loads {
+        Loads { body_force: self.body_force.clone(), conditions: self.conditions.clone() }
+    }
+
+    /// The loads at time `t`.
+    pub fn loads_at(&self, t: f64) -> Loads {
+        self.loads().at_time(t)
+    }
+
     /// The exact solution the scene names, if any (its parameters were validated).
     pub fn exact_solution(&self) -> Option<Box<dyn ExactSolution>> {
         self.exact.as_ref().map(|e| e.build(self.material).expect("validated exact solution parameters"))
@@ -108,6 +169,7 @@ impl Case {
             value,
             x: p[0],
             y: p[1],
+            context: String::new(),
         };
         let mut everywhere: Vec<&VectorExpression> = Vec::new();
         let dynamics = self.dynamics.iter().flat_map(|d| [&d.initial_displacement, &d.initial_velocity]);

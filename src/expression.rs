@@ -13,8 +13,8 @@
 //! checks names and functions itself and rewords the syntax errors.
 //!
 //! Syntax: numbers (`2`, `1.5e-3`), `+ - * /`, `^` (power), parentheses, the
-//! variables `x`, `y`, `pi`, the scene's `[constants]`, and the
-//! functions listed in [`FUNCTIONS`].
+//! variables `x`, `y` (and the time `t` in the loads of a scene with `[dynamics]`),
+//! `pi`, the scene's `[constants]`, and the functions listed in [`FUNCTIONS`].
 
 use exmex::prelude::*;
 use exmex::{Differentiate, FloatOpsFactory, MatchLiteral};
@@ -89,6 +89,8 @@ impl Constants {
 pub enum Scope {
     /// `x` and `y` (static loads, exact solutions, initial states).
     Space,
+    /// `x`, `y` and the time `t` (the loads of a time-dependent run).
+    SpaceTime,
     /// Constants only (a constant defined by other constants).
     Constants,
 }
@@ -98,6 +100,7 @@ pub enum Scope {
 enum Slot {
     X,
     Y,
+    T,
     Fixed(f64),
 }
 
@@ -318,15 +321,19 @@ impl Expression {
         let mut slots = Vec::new();
         for name in flat.var_names() {
             let slot = match (name.as_str(), scope) {
-                ("x", Scope::Space) => Slot::X,
-                ("y", Scope::Space) => Slot::Y,
-                ("t", _) => return Err(fail("the time t is not available: loads are constant in time in this version".into())),
+                ("x", Scope::Space | Scope::SpaceTime) => Slot::X,
+                ("y", Scope::Space | Scope::SpaceTime) => Slot::Y,
+                ("t", Scope::SpaceTime) => Slot::T,
+                ("t", _) => {
+                    return Err(fail("the time t exists only in the loads (boundary values, body force) of a scene with [dynamics]".into()))
+                }
                 ("pi", _) => Slot::Fixed(std::f64::consts::PI),
                 (n, _) => match constants.get(n) {
                     Some(v) => Slot::Fixed(v),
                     None => {
                         let mut known: Vec<&str> = match scope {
                             Scope::Space => vec!["x", "y", "pi"],
+                            Scope::SpaceTime => vec!["x", "y", "t", "pi"],
                             Scope::Constants => vec!["pi"],
                         };
                         known.extend(constants.names());
@@ -354,24 +361,51 @@ impl Expression {
         &self.text
     }
 
-    /// Value at `p` (NaN or infinite where the formula is, e.g. `1/x` at `x = 0`:
-    /// callers check).
+    /// Value at `p` and time 0 (NaN or infinite where the formula is, e.g. `1/x` at
+    /// `x = 0`: callers check).
     pub fn eval(&self, p: [f64; 2]) -> f64 {
+        self.eval_at(p, 0.0)
+    }
+
+    /// Value at `p` and time `t`.
+    pub fn eval_at(&self, p: [f64; 2], t: f64) -> f64 {
         let mut values = [0.0; MAX_VARIABLES];
         for (v, s) in values.iter_mut().zip(&self.slots) {
             *v = match *s {
                 Slot::X => p[0],
                 Slot::Y => p[1],
+                Slot::T => t,
                 Slot::Fixed(c) => c,
             };
         }
         self.flat.eval(&values[..self.slots.len()]).unwrap_or(f64::NAN)
     }
 
+    /// Whether the expression uses the time `t`.
+    pub fn uses_time(&self) -> bool {
+        self.slots.contains(&Slot::T)
+    }
+
+    /// The expression at the fixed time `t` (a function of `x` and `y` only): the
+    /// same compiled formula with `t` bound, so this costs no parsing.
+    pub fn at_time(&self, t: f64) -> Expression {
+        let slots = self.slots.iter().map(|&s| if s == Slot::T { Slot::Fixed(t) } else { s }).collect();
+        Expression { text: self.text.clone(), flat: self.flat.clone(), slots }
+    }
+
     /// `d/dx` (`axis` 0) or `d/dy` (`axis` 1), symbolically; refused for functions
     /// without a derivative (`abs`, `floor`, ...).
     pub fn derivative(&self, axis: usize) -> Result<Expression, ExpressionError> {
-        let wanted = if axis == 0 { Slot::X } else { Slot::Y };
+        self.partial(if axis == 0 { Slot::X } else { Slot::Y })
+    }
+
+    /// `d/dt`, symbolically (zero for an expression without `t`).
+    pub fn time_derivative(&self) -> Result<Expression, ExpressionError> {
+        self.partial(Slot::T)
+    }
+
+    /// The partial derivative in the variable `wanted`.
+    fn partial(&self, wanted: Slot) -> Result<Expression, ExpressionError> {
         let Some(index) = self.slots.iter().position(|&s| s == wanted) else {
             return Ok(Expression::constant(0.0));
         };
@@ -397,9 +431,24 @@ pub struct VectorExpression {
 }
 
 impl VectorExpression {
-    /// Value at `p`.
+    /// Value at `p` (and time 0).
     pub fn at(&self, p: [f64; 2]) -> [f64; 2] {
         [self.x.eval(p), self.y.eval(p)]
+    }
+
+    /// Whether either component uses the time `t`.
+    pub fn uses_time(&self) -> bool {
+        self.x.uses_time() || self.y.uses_time()
+    }
+
+    /// Both components at the fixed time `t` ([`Expression::at_time`]).
+    pub fn at_time(&self, t: f64) -> VectorExpression {
+        VectorExpression { x: self.x.at_time(t), y: self.y.at_time(t), origin: self.origin.clone() }
+    }
+
+    /// `d/dt` of both components, symbolically.
+    pub fn time_derivative(&self) -> Result<VectorExpression, ExpressionError> {
+        Ok(VectorExpression { x: self.x.time_derivative()?, y: self.y.time_derivative()?, origin: format!("d/dt {}", self.origin) })
     }
 
     /// The first component that is not finite at `p`: its field (`origin[c]`), text
@@ -448,12 +497,31 @@ mod tests {
         assert!(a.derivative(0).is_err());
     }
 
+    /// `t` is bound by [`Expression::at_time`] and differentiated by
+    /// [`Expression::time_derivative`]: `d/dt (x sin(3 t)) = 3 x cos(3 t)`.
+    #[test]
+    fn time_is_a_variable_of_the_loads() {
+        let e = Expression::parse("x * sin(3 * t) + P", Scope::SpaceTime, &constants()).unwrap();
+        let (p, t) = ([0.5, 2.0], 0.4);
+        assert!(e.uses_time() && !e.at_time(t).uses_time());
+        assert!((e.eval_at(p, t) - (0.5 * (1.2f64).sin() + 1000.0)).abs() < 1e-12);
+        assert_eq!(e.at_time(t).eval(p), e.eval_at(p, t));
+        assert_eq!(e.eval(p), 1000.0);
+        let rate = e.time_derivative().unwrap();
+        assert!((rate.eval_at(p, t) - 1.5 * (1.2f64).cos()).abs() < 1e-12);
+        let still = Expression::parse("x * P", Scope::SpaceTime, &constants()).unwrap();
+        assert!(!still.uses_time());
+        assert_eq!(still.time_derivative().unwrap().eval_at(p, t), 0.0);
+    }
+
     #[test]
     fn errors_name_the_problem() {
         let c = constants();
         let reason = |text: &str, scope| Expression::parse(text, scope, &c).unwrap_err().reason;
         assert!(reason("x + z", Scope::Space).contains("unknown name \"z\""));
-        assert!(reason("x * t", Scope::Space).contains("constant in time"));
+        assert!(reason("x * t", Scope::Space).contains("[dynamics]"));
+        assert!(reason("x * t", Scope::Constants).contains("[dynamics]"));
+        assert!(reason("x * s", Scope::SpaceTime).contains("known: x, y, t, pi"));
         assert!(reason("sin(x", Scope::Space).contains("unbalanced parentheses"));
         assert!(reason("x +* y", Scope::Space).contains("two operators in a row"));
         assert!(reason("2x", Scope::Space).contains("write 2*x"));

@@ -255,11 +255,17 @@ pub enum RunError {
     )]
     NotFinite { node: usize, x: f64, y: f64 },
     /// A formula of the scene is not finite at a point where the run needs it.
+    /// `context`: where or when, if not at a node at t = 0 (" at t = ...", or a node
+    /// of the peridynamic collar).
     #[error(
-        "{field} = \"{text}\" is {value} at ({x:.6e}, {y:.6e}): a formula must give a finite number at every node where it \
-         is used (division by zero, sqrt or log of a negative number?)"
+        "{field} = \"{text}\" is {value} at ({x:.6e}, {y:.6e}){context}: a formula must give a finite number at every node \
+         where it is used (division by zero, sqrt or log of a negative number?)"
     )]
-    BadFormula { field: String, text: String, value: f64, x: f64, y: f64 },
+    BadFormula { field: String, text: String, value: f64, x: f64, y: f64, context: String },
+    /// A formula of the scene cannot be used by this run (e.g. not differentiable in
+    /// `t` where the run needs its rate).
+    #[error("{field}: {reason}")]
+    Formula { field: String, reason: String },
     /// Writing a snapshot during time integration failed.
     #[error(transparent)]
     Snapshot(OutputError),

@@ -283,3 +283,28 @@ fn negative_command_line_numbers_name_the_option() {
         assert!(err.contains(option) && err.contains("must be a positive number"), "{option} {value}: {err}");
     }
 }
+
+/// Formulas are checked where each model uses them: a displacement formula also in
+/// the peridynamic Dirichlet collar outside the solid (`sqrt(x)` on the left edge is
+/// NaN at x < 0), and a load in `t` of a Navier dynamic run must have a derivative in
+/// `t` (the velocity the boundary rows impose). Both exit 2 naming the field.
+#[test]
+fn collar_and_time_formulas_are_checked_where_used() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+    let pd = std::fs::read_to_string(root.join("pd_trig.toml")).unwrap().replacen("value = \"exact\"", "value = [\"sqrt(x)\", 0]", 1);
+    let (code, err) = run_scene(&pd, "collar.toml");
+    assert_eq!(code, 2, "{err}");
+    for w in ["collar.toml", "boundary[0].value[0]", "Dirichlet collar outside the solid", "sqrt(x)", "NaN", "at (-"] {
+        assert!(err.contains(w), "missing {w:?} in: {err}");
+    }
+    let plate = std::fs::read_to_string(root.join("steel_plate_dynamic.toml"))
+        .unwrap()
+        .replace("model = \"peridynamics\"", "model = \"navier\"")
+        .replace("spacing = 0.01", "spacing = 0.05")
+        .replacen("value = [0.0, 0.0]", "value = [\"abs(sin(1000 * t))\", 0]", 1);
+    let (code, err) = run_scene(&plate, "kink.toml");
+    assert_eq!(code, 2, "{err}");
+    for w in ["kink.toml", "boundary[0].value", "cannot be differentiated", "d/dt"] {
+        assert!(err.contains(w), "missing {w:?} in: {err}");
+    }
+}

@@ -50,6 +50,9 @@ impl AppError {
         let field = match &e {
             RunError::UnstableTimeStep { .. } => "dynamics.time_step".to_string(),
             RunError::BadFormula { field, .. } => field.clone(),
+            RunError::Formula { field, reason } => {
+                return AppError::Problem(ProblemError { file: p.source.clone(), field: field.clone(), reason: reason.clone() })
+            }
             _ => return e.into(),
         };
         AppError::Problem(ProblemError { file: p.source.clone(), field, reason: e.to_string() })
@@ -75,7 +78,8 @@ impl AppError {
             | AppError::Usage(_)
             | AppError::Run(RunError::UnstableTimeStep { .. })
             | AppError::Run(RunError::TooManySteps { .. })
-            | AppError::Run(RunError::BadFormula { .. }) => 2,
+            | AppError::Run(RunError::BadFormula { .. })
+            | AppError::Run(RunError::Formula { .. }) => 2,
             AppError::Run(RunError::Interrupted { .. }) => 130,
             AppError::Run(_) => 3,
             AppError::Output(_) => 1,

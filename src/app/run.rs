@@ -371,7 +371,7 @@ fn write_dynamic<M: Serialize>(
     req: &RunRequest,
     quiet: bool,
 ) -> Result<(), AppError> {
-    let mut checks = warnings::dynamic(d.energies, p.navier.estimate.threshold);
+    let mut checks = warnings::dynamic(d.energies, p.navier.estimate.threshold, p.case.loads().depend_on_time());
     checks.warnings.extend(warnings::memory(p));
     let dir = publish(staged, &DynamicSummary::new(p, &d, model, &checks, t0))?;
     if !quiet {

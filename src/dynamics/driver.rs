@@ -133,10 +133,11 @@ pub fn integrate(
                 return Err(RunError::Interrupted { step, t: state.t });
             }
             let ts = std::time::Instant::now();
+            let t0 = state.t;
             params.integrator.step(system, state, dt);
             looped += ts.elapsed().as_secs_f64();
-            if state.u.iter().any(|v| !v.is_finite()) {
-                return Err(RunError::Diverged { step, t: state.t });
+            if state.u.iter().chain(&state.a).any(|v| !v.is_finite()) {
+                return Err(system.explain(t0, state.t).unwrap_or(RunError::Diverged { step, t: state.t }));
             }
             if step % energy_every == 0 || step == steps {
                 record(state, &mut history);

@@ -27,6 +27,12 @@ pub trait SecondOrderSystem: Sync {
     }
     /// Write `a(t, u)` into `a`.
     fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]);
+    /// Why the step from `t0` to `t1` became non-finite, when the system knows (a load
+    /// formula that is not finite at some time in the step); `None`: the integration
+    /// itself diverged.
+    fn explain(&self, _t0: f64, _t1: f64) -> Option<crate::pipeline::RunError> {
+        None
+    }
 }
 
 /// Time, displacement, velocity and the last acceleration.

@@ -52,6 +52,31 @@ impl Value {
         }
     }
 
+    /// Whether the value changes in time (a formula in `t`).
+    pub fn depends_on_time(&self) -> bool {
+        matches!(self, Value::Expression(e) if e.uses_time())
+    }
+
+    /// The value at the fixed time `t` (unchanged unless it depends on time).
+    pub fn at_time(&self, t: f64) -> Value {
+        match self {
+            Value::Expression(e) if e.uses_time() => Value::Expression(Arc::new(e.at_time(t))),
+            other => other.clone(),
+        }
+    }
+
+    /// `d/dt` of the value: zero unless it depends on time (the exact solutions are
+    /// static), the symbolic derivative of a formula in `t`; else the field and why.
+    pub fn time_derivative(&self) -> Result<Value, (String, String)> {
+        match self {
+            Value::Expression(e) if e.uses_time() => match e.time_derivative() {
+                Ok(rate) => Ok(Value::Expression(Arc::new(rate))),
+                Err(why) => Err((e.origin.clone(), why.to_string())),
+            },
+            _ => Ok(Value::Constant([0.0, 0.0])),
+        }
+    }
+
     /// Whether the value is the zero vector everywhere.
     pub fn is_zero(&self) -> bool {
         *self == Value::Constant([0.0, 0.0])

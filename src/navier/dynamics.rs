@@ -11,7 +11,11 @@
 //! u_A = A_AA^-1 (r_A - A_AD u_D),     u_D'' = (A_DD u_D + A_DA u_A - r_D) / rho,
 //! ```
 //!
-//! with `A_AA` factorised once (sparse LU). The stable step of the central-difference
+//! with `A_AA` factorised once (sparse LU). Loads that depend on time make `r` a
+//! function of `t`, re-evaluated at every force evaluation; the velocities of the
+//! algebraic unknowns then follow from the constraints' time derivative,
+//! `v_A = A_AA^-1 (r_A' - A_AD v_D)` (`r'` from the symbolic `d/dt` of the formulas).
+//! The stable step of the central-difference
 //! schemes, `2 / sqrt(|mu_max|)`, uses the largest eigenvalue magnitude of the
 //! condensed operator, estimated by 60 power iterations (a lower bound, so the result
 //! is multiplied by a 0.9 margin; a collocation operator is not symmetric, and any
@@ -20,7 +24,7 @@
 use super::discrete::Discretisation;
 use super::system::System;
 use super::NavierParams;
-use crate::case::Case;
+use crate::case::{Case, Loads};
 use crate::domain::cells::{cells_inside, nodal_areas};
 use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
 use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
@@ -28,12 +32,13 @@ use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
 use crate::elasticity::material::Lame;
 use crate::elasticity::stress::strain;
-use crate::exact;
+use crate::exact::{self, ExactSolution};
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
+use std::borrow::Cow;
 
 /// The condensed MLSM system of one discretisation.
-pub struct NavierDynamics {
+pub struct NavierDynamics<'a> {
     /// Global unknown of each dynamic unknown (state order).
     pub dynamic: Vec<usize>,
     /// Global unknown of each algebraic unknown.
@@ -45,9 +50,34 @@ pub struct NavierDynamics {
     r_d: Vec<f64>,
     r_a: Vec<f64>,
     density: f64,
+    /// The right-hand side at any time, when a load depends on time.
+    varying: Option<VaryingLoads<'a>>,
 }
 
-impl NavierDynamics {
+/// Loads that depend on time: the right-hand side of the system and its time
+/// derivative at any instant.
+pub struct VaryingLoads<'a> {
+    /// The rows of the discretisation.
+    pub system: System<'a>,
+    /// The loads as functions of `t`.
+    pub loads: Loads,
+    /// Their time derivatives.
+    pub rates: Loads,
+}
+
+impl VaryingLoads<'_> {
+    /// The right-hand side of `loads` at time `t`, or the formula (else the node) that
+    /// is not finite.
+    fn at(&self, loads: &Loads, t: f64) -> Result<Vec<f64>, RunError> {
+        let instant = loads.at_time(t);
+        self.system.right_hand_side(&instant).map_err(|e| match e {
+            RunError::NotFinite { x, y, .. } => instant.non_finite_at([x, y], t).unwrap_or(e),
+            other => other,
+        })
+    }
+}
+
+impl<'a> NavierDynamics<'a> {
     /// Split `matrix`/`rhs` by `is_dynamic` (per global unknown) and factorise `A_AA`.
     pub fn new(matrix: &SparseMatrix, rhs: &[f64], is_dynamic: &[bool], density: f64) -> Result<Self, SolveError> {
         let n = rhs.len();
@@ -87,41 +117,67 @@ impl NavierDynamics {
             dynamic,
             algebraic,
             density,
+            varying: None,
         })
     }
 
-    /// `u_A = A_AA^-1 (r_A - A_AD u_D)`; with `homogeneous`, without `r_A`.
-    fn algebraic_part(&self, u_d: &[f64], homogeneous: bool) -> Vec<f64> {
-        let mut b: Vec<f64> = if homogeneous { vec![0.0; self.r_a.len()] } else { self.r_a.clone() };
+    /// The same system with loads that depend on time.
+    pub fn with_varying(self, varying: VaryingLoads<'a>) -> Self {
+        NavierDynamics { varying: Some(varying), ..self }
+    }
+
+    /// `(r_D, r_A)` of a full right-hand side.
+    fn split(&self, rhs: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        (self.dynamic.iter().map(|&g| rhs[g]).collect(), self.algebraic.iter().map(|&g| rhs[g]).collect())
+    }
+
+    /// `(r_D, r_A)` at time `t` (of the loads, or with `rate` of their time
+    /// derivatives; zero for fixed loads); NaN where a formula is not finite (the
+    /// driver stops and asks [`SecondOrderSystem::explain`]).
+    fn loads(&self, t: f64, rate: bool) -> (Cow<'_, [f64]>, Cow<'_, [f64]>) {
+        let n = self.dynamic.len() + self.algebraic.len();
+        match (&self.varying, rate) {
+            (None, false) => (Cow::Borrowed(&self.r_d), Cow::Borrowed(&self.r_a)),
+            (None, true) => (Cow::Owned(vec![0.0; self.dynamic.len()]), Cow::Owned(vec![0.0; self.algebraic.len()])),
+            (Some(v), _) => {
+                let rhs = v.at(if rate { &v.rates } else { &v.loads }, t).unwrap_or_else(|_| vec![f64::NAN; n]);
+                let (d, a) = self.split(&rhs);
+                (Cow::Owned(d), Cow::Owned(a))
+            }
+        }
+    }
+
+    /// `u_A = A_AA^-1 (r_A - A_AD u_D)`.
+    fn algebraic_part(&self, u_d: &[f64], r_a: &[f64]) -> Vec<f64> {
+        let mut b = r_a.to_vec();
         let mut t = vec![0.0; b.len()];
         mul_add(&self.a_ad, u_d, &mut t);
         b.iter_mut().zip(&t).for_each(|(b, t)| *b -= t);
         self.lu_aa.solve(&b)
     }
 
-    /// All unknowns (global order) from the dynamic ones; with `homogeneous` the
-    /// constraints without their right-hand side (for velocities: the prescribed
-    /// boundary values do not change in time).
-    pub fn expand(&self, u_d: &[f64], homogeneous: bool) -> Vec<f64> {
+    /// All unknowns (global order) at time `t` from the dynamic ones: displacements,
+    /// or with `rate` velocities (the constraints differentiated in time).
+    pub fn expand(&self, t: f64, u_d: &[f64], rate: bool) -> Vec<f64> {
         let mut u = vec![0.0; self.dynamic.len() + self.algebraic.len()];
         for (k, &g) in self.dynamic.iter().enumerate() {
             u[g] = u_d[k];
         }
-        for (k, v) in self.algebraic_part(u_d, homogeneous).into_iter().enumerate() {
+        let loads = self.loads(t, rate);
+        for (k, v) in self.algebraic_part(u_d, &loads.1).into_iter().enumerate() {
             u[self.algebraic[k]] = v;
         }
         u
     }
 
-    /// The condensed operator `M u_D = (A_DD u_D + A_DA u_A(u_D)) / rho` (no loads).
-    fn operator(&self, u_d: &[f64], out: &mut [f64], homogeneous: bool) {
+    /// The condensed operator `(A_DD u_D + A_DA u_A(u_D) - r_D) / rho` under the loads
+    /// `(r_D, r_A)` (zero: the homogeneous operator).
+    fn operator(&self, u_d: &[f64], out: &mut [f64], (r_d, r_a): (&[f64], &[f64])) {
         out.iter_mut().for_each(|v| *v = 0.0);
         mul_add(&self.a_dd, u_d, out);
-        let u_a = self.algebraic_part(u_d, homogeneous);
+        let u_a = self.algebraic_part(u_d, r_a);
         mul_add(&self.a_da, &u_a, out);
-        if !homogeneous {
-            out.iter_mut().zip(&self.r_d).for_each(|(o, r)| *o -= r);
-        }
+        out.iter_mut().zip(r_d).for_each(|(o, r)| *o -= r);
         out.iter_mut().for_each(|v| *v /= self.density);
     }
 
@@ -131,10 +187,11 @@ impl NavierDynamics {
         let mut x: Vec<f64> = (0..n).map(|i| 1.0 + ((i * 7919) % 101) as f64 / 101.0).collect();
         let mut y = vec![0.0; n];
         let mut lambda = 0.0;
+        let (zero_d, zero_a) = (vec![0.0; n], vec![0.0; self.algebraic.len()]);
         for _ in 0..60 {
             let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
             x.iter_mut().for_each(|v| *v /= norm);
-            self.operator(&x, &mut y, true);
+            self.operator(&x, &mut y, (&zero_d, &zero_a));
             lambda = y.iter().map(|v| v * v).sum::<f64>().sqrt();
             std::mem::swap(&mut x, &mut y);
         }
@@ -142,13 +199,19 @@ impl NavierDynamics {
     }
 }
 
-impl SecondOrderSystem for NavierDynamics {
+impl SecondOrderSystem for NavierDynamics<'_> {
     fn len(&self) -> usize {
         self.dynamic.len()
     }
 
-    fn acceleration(&self, _t: f64, u: &[f64], a: &mut [f64]) {
-        self.operator(u, a, false);
+    fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]) {
+        let loads = self.loads(t, false);
+        self.operator(u, a, (&loads.0, &loads.1));
+    }
+
+    fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
+        let v = self.varying.as_ref()?;
+        [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(&v.loads, t).err())
     }
 }
 
@@ -172,29 +235,46 @@ pub struct Simulation {
     pub timings: StageTimings,
 }
 
-/// The condensed system of `disc`: assembled, split and factorised (module docs).
-fn condensed(case: &Case, disc: &Discretisation, density: f64) -> Result<NavierDynamics, RunError> {
-    let exact = case.exact_solution();
-    let (triplets, rhs) = System { case, disc, exact: exact.as_deref() }.assemble()?;
+/// The condensed system of `disc`: assembled, split and factorised (module docs),
+/// with its loads re-evaluated in time when they depend on it.
+fn condensed<'a>(
+    case: &'a Case,
+    disc: &'a Discretisation,
+    exact: Option<&'a dyn ExactSolution>,
+    density: f64,
+) -> Result<NavierDynamics<'a>, RunError> {
+    let system = System { case, disc, exact };
+    let (triplets, rhs) = system.assemble()?;
     let matrix = crate::linalg::assemble(&triplets)?;
     let is_dynamic: Vec<bool> = (0..rhs.len()).map(|g| disc.has_navier_row(disc.dofs.location(g).0)).collect();
-    Ok(NavierDynamics::new(&matrix, &rhs, &is_dynamic, density)?)
+    let condensed = NavierDynamics::new(&matrix, &rhs, &is_dynamic, density)?;
+    let loads = case.loads();
+    if !loads.depend_on_time() {
+        return Ok(condensed);
+    }
+    let rates = loads.time_derivative().map_err(|(field, why)| RunError::Formula {
+        field,
+        reason: format!("{why}; the MLSM model needs d/dt of a load in t (the velocity the boundary rows impose)"),
+    })?;
+    Ok(condensed.with_varying(VaryingLoads { system, loads, rates }))
 }
 
-/// `(E_kin, E_el, E_ext)` of a state (see [`simulate`]).
+/// `(E_kin, E_el, E_ext)` of a state (see [`simulate`]), `E_ext` with the body force
+/// `body(t)`.
 fn energies(
     system: &NavierDynamics,
     disc: &Discretisation,
-    body: &[[f64; 2]],
+    body: &dyn Fn(f64, [f64; 2]) -> [f64; 2],
     areas: &[f64],
     lame: Lame,
     density: f64,
     s: &State,
 ) -> (f64, f64, f64) {
-    let (u, v) = (system.expand(&s.u, false), system.expand(&s.v, true));
+    let (u, v) = (system.expand(s.t, &s.u, false), system.expand(s.t, &s.v, true));
     let grads = disc.gradients(&u);
     let (mut kin, mut el, mut ext) = (0.0, 0.0, 0.0);
-    for (i, (area, body)) in areas.iter().zip(body).enumerate() {
+    for (i, area) in areas.iter().enumerate() {
+        let body = body(s.t, disc.nodes.positions[i]);
         let (ui, vi) = (disc.dofs.displacement(&u, i), disc.dofs.displacement(&v, i));
         kin += 0.5 * density * area * (vi[0].powi(2) + vi[1].powi(2));
         let (sg, e) = (lame.stress(grads[i]), strain(grads[i]));
@@ -223,7 +303,7 @@ pub fn simulate(
     let exact = case.exact_solution();
     let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
     let system = timer.run(stage::ASSEMBLY, || {
-        let system = condensed(case, &disc, dynamics.density)?;
+        let system = condensed(case, &disc, exact.as_deref(), dynamics.density)?;
         let note = format!("{} dynamic, {} algebraic unknowns", system.dynamic.len(), system.algebraic.len());
         Ok((system, note))
     })?;
@@ -244,16 +324,16 @@ pub fn simulate(
     let areas = nodal_areas(points, &cells_inside(&case.domain, points));
     let n = disc.nodes.len();
     let nodal = |x: &[f64]| dofs.displacements(x, n);
-    let body: Vec<[f64; 2]> = points.iter().map(|&p| exact::value(&case.body_force, p, exact.as_deref(), |e| e.body_force(p))).collect();
+    let body = |t: f64, p: [f64; 2]| exact::value(&case.body_force.at_time(t), p, exact.as_deref(), |e| e.body_force(p));
     let energy = |s: &State| energies(&system, &disc, &body, &areas, case.material.lame(), dynamics.density, s);
     let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
-        let (u, v) = (nodal(&system.expand(&s.u, false)), nodal(&system.expand(&s.v, true)));
+        let (u, v) = (nodal(&system.expand(s.t, &s.u, false)), nodal(&system.expand(s.t, &s.v, true)));
         snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })
     })?;
     Ok(Simulation {
         positions: points.clone(),
-        u: nodal(&system.expand(&state.u, false)),
-        v: nodal(&system.expand(&state.v, true)),
+        u: nodal(&system.expand(state.t, &state.u, false)),
+        v: nodal(&system.expand(state.t, &state.v, true)),
         report,
         energies,
         ghost_nodes: disc.ghost_count(),

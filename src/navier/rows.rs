@@ -54,9 +54,9 @@ impl RowWriter<'_> {
         }
     }
 
-    /// Navier rows (x and y) at node `i` with body force `f`, written in the rows of
-    /// node `row_node` (`i` itself, or its ghost); returns the right-hand sides.
-    pub fn navier(&self, i: usize, row_node: usize, f: [f64; 2], out: &mut Entries) -> [f64; 2] {
+    /// Navier rows (x and y) at node `i`, `(lambda + mu) grad div u + mu lap u`,
+    /// written in the rows of node `row_node` (`i` itself, or its ghost).
+    pub fn navier(&self, i: usize, row_node: usize, out: &mut Entries) {
         let Lame { lambda, mu } = self.displacement_lame();
         let pressure = self.has_pressure();
         let (xx, xy, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dxy), self.shapes.get(i, Op::Dyy));
@@ -76,12 +76,11 @@ impl RowWriter<'_> {
                 out.push((ry, pj, -mu * dy[k]));
             }
         }
-        [-f[0], -f[1]]
     }
 
-    /// Traction row of component `c` at node `i`, `(sigma(u) n)_c = t`, written in row `c`
-    /// of node `row_node` (`i` itself, or its ghost); returns the right-hand side.
-    pub fn traction(&self, i: usize, row_node: usize, c: usize, n: [f64; 2], t: f64, out: &mut Entries) -> f64 {
+    /// Traction row of component `c` at node `i`, `(sigma(u) n)_c`, written in row `c`
+    /// of node `row_node` (`i` itself, or its ghost).
+    pub fn traction(&self, i: usize, row_node: usize, c: usize, n: [f64; 2], out: &mut Entries) {
         let Lame { lambda, mu } = self.displacement_lame();
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
         let r = self.dofs.dof(row_node, c);
@@ -98,13 +97,11 @@ impl RowWriter<'_> {
         if self.has_pressure() {
             out.push((r, self.dofs.dof(i, PRESSURE), -mu * n[c]));
         }
-        t
     }
 
     /// Continuity row of the displacement-pressure form at node `i`,
-    /// `a mu div u + b p = 0` divided by `mu`, written in its own pressure row;
-    /// returns the right-hand side (0).
-    pub fn continuity(&self, i: usize, out: &mut Entries) -> f64 {
+    /// `a mu div u + b p = 0` divided by `mu`, written in its own pressure row.
+    pub fn continuity(&self, i: usize, out: &mut Entries) {
         let (a, b) = self.pressure_weights;
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
         let r = self.dofs.dof(i, PRESSURE);
@@ -113,13 +110,12 @@ impl RowWriter<'_> {
             out.push((r, self.dofs.dof(j as usize, 1), a * dy[k]));
         }
         out.push((r, r, b));
-        0.0
     }
 
     /// Normal derivative of the continuity row at boundary node `i` with outward
     /// normal `n`, `d/dn (a div u + b p / mu) = 0`, written in the pressure row of
-    /// `row_node` (its ghost); returns the right-hand side (0).
-    pub fn continuity_normal_derivative(&self, i: usize, row_node: usize, n: [f64; 2], out: &mut Entries) -> f64 {
+    /// `row_node` (its ghost).
+    pub fn continuity_normal_derivative(&self, i: usize, row_node: usize, n: [f64; 2], out: &mut Entries) {
         let (a, b) = self.pressure_weights;
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
         let (xx, xy, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dxy), self.shapes.get(i, Op::Dyy));
@@ -130,14 +126,12 @@ impl RowWriter<'_> {
             out.push((r, self.dofs.dof(j, 1), a * (n[0] * xy[k] + n[1] * yy[k])));
             out.push((r, self.dofs.dof(j, PRESSURE), b * (n[0] * dx[k] + n[1] * dy[k])));
         }
-        0.0
     }
 
-    /// Displacement row of component `c` at node `i`, `u_c = g`, written in row `c` of
-    /// node `row_node` (`i` itself, or its ghost); returns the right-hand side.
-    pub fn displacement(&self, i: usize, row_node: usize, c: usize, g: f64, out: &mut Entries) -> f64 {
+    /// Displacement row of component `c` at node `i`, `u_c`, written in row `c` of
+    /// node `row_node` (`i` itself, or its ghost).
+    pub fn displacement(&self, i: usize, row_node: usize, c: usize, out: &mut Entries) {
         out.push((self.dofs.dof(row_node, c), self.dofs.dof(i, c), 1.0));
-        g
     }
 }
 
@@ -188,13 +182,12 @@ mod tests {
         let (l, m) = (lame.lambda, lame.mu);
 
         let mut e = Entries::new();
-        let rhs = writer.navier(24, 24, [0.3, -0.1], &mut e);
+        writer.navier(24, 24, &mut e);
         let rows = apply(&e, &x);
         let navier = [(l + 2.0 * m) * uxx + m * uyy + (l + m) * vxy, (l + m) * uxy + m * vxx + (l + 2.0 * m) * vyy];
         for c in 0..2 {
             assert!((rows[&dofs.dof(24, c)] - navier[c]).abs() < 1e-9, "Navier row {c}: {} vs {}", rows[&dofs.dof(24, c)], navier[c]);
         }
-        assert_eq!(rhs, [-0.3, 0.1]);
 
         // Traction rows at node 23 with a unit normal, written into the rows of node 5.
         let n = [0.6, 0.8];
@@ -204,7 +197,7 @@ mod tests {
         let sn = [sigma[0] * n[0] + sigma[2] * n[1], sigma[2] * n[0] + sigma[1] * n[1]];
         for c in 0..2 {
             let mut e = Entries::new();
-            assert_eq!(writer.traction(23, 5, c, n, 7.0, &mut e), 7.0);
+            writer.traction(23, 5, c, n, &mut e);
             let rows = apply(&e, &x);
             assert_eq!(rows.keys().copied().collect::<Vec<_>>(), vec![dofs.dof(5, c)]);
             assert!((rows[&dofs.dof(5, c)] - sn[c]).abs() < 1e-9, "traction row {c}");
@@ -212,7 +205,7 @@ mod tests {
 
         // A displacement row is the identity row of its unknown.
         let mut e = Entries::new();
-        assert_eq!(writer.displacement(3, 3, 1, 0.25, &mut e), 0.25);
+        writer.displacement(3, 3, 1, &mut e);
         assert_eq!(e, vec![(dofs.dof(3, 1), dofs.dof(3, 1), 1.0)]);
     }
 }

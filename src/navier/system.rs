@@ -8,10 +8,10 @@
 //! ~0), which incomplete factorisations without pivoting need.
 
 use super::discrete::Discretisation;
-use super::equations::ComponentEquation;
+use super::equations::{resolve, ComponentEquation};
 use super::rows::{Entries, RowWriter};
-use crate::case::Case;
-use crate::elasticity::dofs::{Unknowns, PRESSURE};
+use crate::case::{Case, Loads};
+use crate::elasticity::dofs::Unknowns;
 use crate::exact::{self, ExactSolution};
 use crate::linalg::Triplets;
 use crate::pipeline::RunError;
@@ -28,42 +28,78 @@ pub struct System<'a> {
 }
 
 impl System<'_> {
-    /// Rows of node `i`: coefficients and `(row, right-hand side)` pairs (module docs).
-    fn node_rows(&self, writer: &RowWriter, i: usize) -> (Entries, Vec<(usize, f64)>) {
-        let (disc, dofs) = (self.disc, self.disc.dofs);
+    /// Coefficients of the rows of node `i` (module docs).
+    fn node_rows(&self, writer: &RowWriter, i: usize) -> Entries {
+        let disc = self.disc;
         let mut e = Entries::with_capacity(8 * disc.supports.of(i).len());
-        let mut rhs = Vec::with_capacity(4);
         if disc.nodes.is_boundary(i) {
             let bc_rows = disc.ghost[i].unwrap_or(i);
             for (c, eq) in disc.boundary_equations[i].iter().enumerate() {
-                let r = match *eq {
-                    ComponentEquation::Displacement { value } => writer.displacement(i, bc_rows, c, value, &mut e),
-                    ComponentEquation::Traction { normal, value } => writer.traction(i, bc_rows, c, normal, value, &mut e),
+                match *eq {
+                    ComponentEquation::Displacement { .. } => writer.displacement(i, bc_rows, c, &mut e),
+                    ComponentEquation::Traction { normal, .. } => writer.traction(i, bc_rows, c, normal, &mut e),
+                }
+            }
+        }
+        if disc.has_navier_row(i) {
+            writer.navier(i, i, &mut e);
+        }
+        if disc.dofs.unknowns() == Unknowns::DisplacementPressure {
+            writer.continuity(i, &mut e);
+            if let Some(g) = disc.ghost.get(i).copied().flatten() {
+                writer.continuity_normal_derivative(i, g, disc.nodes.normal(i), &mut e);
+            }
+        }
+        e
+    }
+
+    /// Right-hand sides `(row, value)` of node `i` under `loads`: the prescribed
+    /// value of each boundary row (in the rows of its ghost, if any), `-f` in the
+    /// Navier rows (`L u = -f`); the continuity rows have none (zero).
+    fn node_loads(&self, loads: &Loads, i: usize) -> Vec<(usize, f64)> {
+        let (disc, dofs) = (self.disc, self.disc.dofs);
+        let mut rhs = Vec::with_capacity(4);
+        if disc.nodes.is_boundary(i) {
+            let bc_rows = disc.ghost[i].unwrap_or(i);
+            for (c, eq) in resolve(&disc.nodes.boundary[i], &loads.conditions, self.exact).iter().enumerate() {
+                let value = match *eq {
+                    ComponentEquation::Displacement { value } | ComponentEquation::Traction { value, .. } => value,
                 };
-                rhs.push((dofs.dof(bc_rows, c), r));
+                rhs.push((dofs.dof(bc_rows, c), value));
             }
         }
         if disc.has_navier_row(i) {
             let p = disc.nodes.positions[i];
-            let f = exact::value(&self.case.body_force, p, self.exact, |e| e.body_force(p));
-            let r = writer.navier(i, i, f, &mut e);
-            rhs.extend([(dofs.dof(i, 0), r[0]), (dofs.dof(i, 1), r[1])]);
+            let f = exact::value(&loads.body_force, p, self.exact, |e| e.body_force(p));
+            rhs.extend([(dofs.dof(i, 0), -f[0]), (dofs.dof(i, 1), -f[1])]);
         }
-        if dofs.unknowns() == Unknowns::DisplacementPressure {
-            let r = writer.continuity(i, &mut e);
-            rhs.push((dofs.dof(i, PRESSURE), r));
-            if let Some(g) = disc.ghost.get(i).copied().flatten() {
-                let r = writer.continuity_normal_derivative(i, g, disc.nodes.normal(i), &mut e);
-                rhs.push((dofs.dof(g, PRESSURE), r));
+        rhs
+    }
+
+    /// The right-hand side of every row this rank owns under `loads` (the case's own,
+    /// or those of one instant of a time-dependent run), zero in the rows of other
+    /// ranks; or the first node whose loads are not finite.
+    pub fn right_hand_side(&self, loads: &Loads) -> Result<Vec<f64>, RunError> {
+        let disc = self.disc;
+        let per_node: Vec<Vec<(usize, f64)>> =
+            (0..disc.nodes.len()).into_par_iter().map(|i| if disc.owns(i) { self.node_loads(loads, i) } else { Vec::new() }).collect();
+        let mut rhs = vec![0.0; disc.dofs.len()];
+        for (i, r) in per_node.into_iter().enumerate() {
+            if r.iter().any(|v| !v.1.is_finite()) {
+                let p = disc.nodes.positions[i];
+                return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
+            }
+            for (row, v) in r {
+                rhs[row] = v;
             }
         }
-        (e, rhs)
+        Ok(rhs)
     }
 
     /// Rows of every node this rank owns ([`Discretisation::owns`]: all of them unless
     /// the solve is distributed), in parallel; returns the triplets and the right-hand
-    /// side (zero in the rows of other ranks), or the first node whose equations hold
-    /// a non-finite number.
+    /// side of the case's loads (zero in the rows of other ranks), or the first node
+    /// whose equations hold a non-finite number.
     pub fn assemble(&self) -> Result<(Triplets, Vec<f64>), RunError> {
         let (disc, dofs) = (self.disc, self.disc.dofs);
         let material = &self.case.material;
@@ -74,25 +110,22 @@ impl System<'_> {
             supports: &disc.supports,
             shapes: &disc.shapes,
         };
-        let per_node: Vec<(Entries, Vec<(usize, f64)>)> = (0..disc.nodes.len())
+        let per_node: Vec<Entries> = (0..disc.nodes.len())
             .into_par_iter()
             .map(|i| if disc.owns(i) { self.node_rows(&writer, i) } else { Default::default() })
             .collect();
-        let total: usize = per_node.iter().map(|(e, _)| e.len()).sum();
+        let total: usize = per_node.iter().map(|e| e.len()).sum();
         let mut triplets = Triplets::with_capacity(dofs.len(), total);
-        let mut rhs = vec![0.0; dofs.len()];
-        for (i, (entries, r)) in per_node.into_iter().enumerate() {
-            if entries.iter().any(|e| !e.2.is_finite()) || r.iter().any(|v| !v.1.is_finite()) {
+        for (i, entries) in per_node.into_iter().enumerate() {
+            if entries.iter().any(|e| !e.2.is_finite()) {
                 let p = disc.nodes.positions[i];
                 return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
             }
             for (row, col, v) in entries {
                 triplets.push(row, col, v);
             }
-            for (row, v) in r {
-                rhs[row] = v;
-            }
         }
+        let rhs = self.right_hand_side(&self.case.loads())?;
         Ok((triplets, rhs))
     }
 }

@@ -18,28 +18,75 @@
 //! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
 //! [`crate::dynamics::Integrator::stability_factor`].
 
+use super::loads::LoadLayer;
 use super::nodes::PdNodes;
 use super::operator::Bonds;
 use super::solve::Discretisation;
-use super::{loads, BondForce, PdParams};
+use super::{BondForce, PdParams};
 use crate::case::Case;
 use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
 use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
+use crate::exact::{self, ExactSolution};
 use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// The semi-discrete peridynamic system of one discretisation.
 pub struct PdDynamics<'a> {
     /// Bonds and their coefficients.
     pub bonds: Bonds<'a>,
-    /// Body force density at the free nodes (tractions included), constant in time.
+    /// Body force density at the free nodes (tractions included) at t = 0.
     pub body_force: &'a [[f64; 2]],
     /// Mass density.
     pub density: f64,
     /// Force law.
     pub force: BondForce,
+    /// The loads at any time, when a load depends on time.
+    pub varying: Option<VaryingLoads<'a>>,
+}
+
+/// Loads that depend on time: the body force densities of the free nodes and the
+/// prescribed displacements of the collar, evaluated at every force evaluation.
+pub struct VaryingLoads<'a> {
+    /// The case (body force, boundary conditions).
+    pub case: &'a Case,
+    /// Where the tractions act.
+    pub layer: &'a LoadLayer,
+    /// The exact solution, for `"exact"` values.
+    pub exact: Option<&'a dyn ExactSolution>,
+}
+
+/// The loads of one instant: body force density of the free nodes, displacement of
+/// the collar nodes (borrowed when the loads are fixed).
+struct Instant<'a> {
+    body_force: Cow<'a, [[f64; 2]]>,
+    prescribed: Cow<'a, [[f64; 2]]>,
+}
+
+impl VaryingLoads<'_> {
+    /// The loads at time `t`, or the first formula that is not finite where it is used.
+    fn at(&self, nodes: &PdNodes, t: f64) -> Result<Instant<'static>, RunError> {
+        let loads = self.case.loads_at(t);
+        // The formula that fails at the node; else (a traction read near the node, an
+        // exact value) the node itself.
+        let bad = |node: usize| {
+            let p = nodes.positions[node];
+            loads.non_finite_at(p, t).unwrap_or(RunError::NotFinite { node, x: p[0], y: p[1] })
+        };
+        let body_force = self.layer.forces(&loads.body_force, &loads.conditions, self.exact, nodes).map_err(bad)?;
+        let collar = &nodes.positions[nodes.free..];
+        let prescribed: Vec<[f64; 2]> = collar
+            .par_iter()
+            .zip(&nodes.collar_part)
+            .map(|(&p, &part)| exact::value(&loads.conditions[part].value, p, self.exact, |e| e.displacement(p)))
+            .collect();
+        match prescribed.iter().position(|u| !u[0].is_finite() || !u[1].is_finite()) {
+            Some(k) => Err(bad(nodes.free + k)),
+            None => Ok(Instant { body_force: Cow::Owned(body_force), prescribed: Cow::Owned(prescribed) }),
+        }
+    }
 }
 
 impl PdDynamics<'_> {
@@ -51,23 +98,37 @@ impl PdDynamics<'_> {
         self.nodes().dofs()
     }
 
-    /// Displacement of node `j` (free: from `u`, constrained: prescribed).
-    fn displacement(&self, u: &[f64], j: usize) -> [f64; 2] {
+    /// The loads at time `t`: the fixed ones, or those of [`VaryingLoads`] (NaN where a
+    /// formula is not finite: the driver stops and asks [`SecondOrderSystem::explain`]).
+    fn loads(&self, t: f64) -> Instant<'_> {
+        let nodes = self.nodes();
+        match &self.varying {
+            None => Instant { body_force: Cow::Borrowed(self.body_force), prescribed: Cow::Borrowed(&nodes.prescribed) },
+            Some(v) => v.at(nodes, t).unwrap_or_else(|_| Instant {
+                body_force: Cow::Owned(vec![[f64::NAN; 2]; nodes.free]),
+                prescribed: Cow::Owned(vec![[f64::NAN; 2]; nodes.constrained()]),
+            }),
+        }
+    }
+
+    /// Displacement of node `j` (free: from `u`, constrained: prescribed at the instant
+    /// of `loads`).
+    fn displacement(&self, u: &[f64], loads: &Instant, j: usize) -> [f64; 2] {
         let free = self.nodes().free;
         if j < free {
             self.dofs().displacement(u, j)
         } else {
-            self.nodes().prescribed[j - free]
+            loads.prescribed[j - free]
         }
     }
 
     /// Bond force density at free node `i` (the linear law is [`Bonds::force_at`]).
-    fn force(&self, u: &[f64], i: usize) -> [f64; 2] {
+    fn force(&self, u: &[f64], loads: &Instant, i: usize) -> [f64; 2] {
         match self.force {
-            BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, j)),
+            BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, loads, j)),
             BondForce::BondStretch => {
                 let mut f = [0.0, 0.0];
-                self.stretches(u, i, |c, r, s, y, ry| {
+                self.stretches(u, loads, i, |c, r, s, y, ry| {
                     let k = c * r * r * r * s / ry;
                     f[0] += k * y[0];
                     f[1] += k * y[1];
@@ -78,31 +139,31 @@ impl PdDynamics<'_> {
     }
 
     /// Sum of the micropotentials `w_ij` of the bonds of free node `i` (module docs).
-    fn micropotential(&self, u: &[f64], i: usize) -> f64 {
+    fn micropotential(&self, u: &[f64], loads: &Instant, i: usize) -> f64 {
         let mut w = 0.0;
         match self.force {
             BondForce::Linear => {
                 let x = &self.nodes().positions;
-                let ui = self.displacement(u, i);
+                let ui = self.displacement(u, loads, i);
                 for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
                     let j = j as usize;
-                    let uj = self.displacement(u, j);
+                    let uj = self.displacement(u, loads, j);
                     let p = (x[j][0] - x[i][0]) * (uj[0] - ui[0]) + (x[j][1] - x[i][1]) * (uj[1] - ui[1]);
                     w += 0.5 * self.bonds.coefficients[b] * p * p;
                 }
             }
-            BondForce::BondStretch => self.stretches(u, i, |c, r, s, _, _| w += 0.5 * c * r.powi(4) * s * s),
+            BondForce::BondStretch => self.stretches(u, loads, i, |c, r, s, _, _| w += 0.5 * c * r.powi(4) * s * s),
         }
         w
     }
 
     /// For every bond of free node `i`: `(c_ij, |xi|, stretch s, xi + eta, |xi + eta|)`.
-    fn stretches(&self, u: &[f64], i: usize, mut visit: impl FnMut(f64, f64, f64, [f64; 2], f64)) {
+    fn stretches(&self, u: &[f64], loads: &Instant, i: usize, mut visit: impl FnMut(f64, f64, f64, [f64; 2], f64)) {
         let x = &self.nodes().positions;
-        let ui = self.displacement(u, i);
+        let ui = self.displacement(u, loads, i);
         for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
             let j = j as usize;
-            let uj = self.displacement(u, j);
+            let uj = self.displacement(u, loads, j);
             let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
             let r = xi[0].hypot(xi[1]);
             let y = [xi[0] + uj[0] - ui[0], xi[1] + uj[1] - ui[1]];
@@ -131,17 +192,18 @@ impl PdDynamics<'_> {
         (2.0 * self.density / worst).sqrt()
     }
 
-    /// `(E_kin, E_el, E_ext)` of a state.
-    pub fn energies(&self, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
+    /// `(E_kin, E_el, E_ext)` of a state at time `t` (`E_ext` with the loads of `t`).
+    pub fn energies(&self, t: f64, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
         let (nodes, dofs) = (self.nodes(), self.dofs());
+        let loads = self.loads(t);
         (0..nodes.free)
             .into_par_iter()
             .map(|i| {
                 let vol = nodes.volumes[i];
                 let (ui, vi) = (dofs.displacement(u, i), dofs.displacement(v, i));
                 let kin = 0.5 * self.density * vol * (vi[0].powi(2) + vi[1].powi(2));
-                let w = self.micropotential(u, i);
-                let b = self.body_force[i];
+                let w = self.micropotential(u, &loads, i);
+                let b = loads.body_force[i];
                 (kin, 0.5 * vol * w, -vol * (b[0] * ui[0] + b[1] * ui[1]))
             })
             .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
@@ -153,13 +215,19 @@ impl SecondOrderSystem for PdDynamics<'_> {
         self.dofs().len()
     }
 
-    fn acceleration(&self, _t: f64, u: &[f64], a: &mut [f64]) {
+    fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]) {
+        let loads = self.loads(t);
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
-            let f = self.force(u, i);
-            let b = self.body_force[i];
+            let f = self.force(u, &loads, i);
+            let b = loads.body_force[i];
             a[0] = (f[0] + b[0]) / self.density;
             a[1] = (f[1] + b[1]) / self.density;
         });
+    }
+
+    fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
+        let v = self.varying.as_ref()?;
+        [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(self.nodes(), t).err())
     }
 }
 
@@ -193,8 +261,13 @@ pub fn simulate(
     let mut timer = StageTimer::new(progress);
     let exact = case.exact_solution();
     let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
-    let (body_force, _) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact.as_deref(), &disc.nodes);
-    let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force };
+    let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
+    let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes).map_err(|node| {
+        let p = disc.nodes.positions[node];
+        RunError::NotFinite { node, x: p[0], y: p[1] }
+    })?;
+    let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
+    let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force, varying };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let dofs = disc.nodes.dofs();
     let flat = |f: &Value| {
@@ -203,7 +276,7 @@ pub fn simulate(
     let grid = time_grid(system.stable_time_step(), dynamics)?;
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
     let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
-    let energy = |s: &State| system.energies(&s.u, &s.v);
+    let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
     let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
         snapshot(Snapshot { step, t: s.t, positions: free, u: &nodal(&s.u), v: &nodal(&s.v) })
     })?;

@@ -19,6 +19,7 @@ use super::nodes::PdNodes;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
 use crate::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
 use crate::exact::{self, ExactSolution};
+use crate::pipeline::RunError;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
@@ -42,28 +43,43 @@ fn layer_share(d: f64, d_normal: f64, h: f64) -> f64 {
     }
 }
 
-/// Body force density of every free node, and the number of nodes in a loaded layer.
-pub fn body_forces(
-    domain: &Domain,
-    conditions: &[BoundaryCondition],
-    body_force: &Value,
-    exact: Option<&dyn ExactSolution>,
-    nodes: &PdNodes,
-) -> (Vec<[f64; 2]>, usize) {
-    let h = nodes.spacing;
-    let loaded: Vec<bool> = conditions.iter().map(|bc| bc.is_all(ComponentCondition::Traction) && !bc.value.is_zero()).collect();
-    // Samples every h/16 locate the nearest point of a part to within h/32.
-    let samples = if loaded.iter().any(|&l| l) { discretise_boundary(domain, h / 16.0) } else { Vec::new() };
-    let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
-    let reach = REACH * h;
-    let tree = (!points.is_empty()).then(|| ImmutableKdTree::<f64, 2>::new_from_slice(&points).expect("finite samples"));
-    let forces: Vec<([f64; 2], bool)> = (0..nodes.free)
-        .into_par_iter()
-        .map(|i| {
-            let x = nodes.positions[i];
-            let mut b = exact::value(body_force, x, exact, |e| e.body_force(x));
-            let mut in_layer = false;
-            if let Some(tree) = &tree {
+/// One traction share of a free node: the part, the point of the part nearest to the
+/// node (where the traction is read), its outward normal and the node's layer share.
+#[derive(Debug, Clone, Copy)]
+struct Share {
+    node: usize,
+    part: usize,
+    point: Point,
+    normal: Point,
+    share: f64,
+}
+
+/// Where the loads act on the free nodes: the body force at every node and the
+/// traction shares of the nodes in a loaded layer (module docs). Built once; the load
+/// values are read by [`LoadLayer::forces`] at any time.
+pub struct LoadLayer {
+    shares: Vec<Share>,
+    spacing: f64,
+    layer_nodes: usize,
+}
+
+impl LoadLayer {
+    /// The traction shares of `nodes` for the traction parts of `conditions` that are
+    /// not zero (a part whose value depends on time counts as loaded).
+    pub fn new(domain: &Domain, conditions: &[BoundaryCondition], nodes: &PdNodes) -> LoadLayer {
+        let h = nodes.spacing;
+        let loaded: Vec<bool> = conditions.iter().map(|bc| bc.is_all(ComponentCondition::Traction) && !bc.value.is_zero()).collect();
+        // Samples every h/16 locate the nearest point of a part to within h/32.
+        let samples = if loaded.iter().any(|&l| l) { discretise_boundary(domain, h / 16.0) } else { Vec::new() };
+        let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
+        let reach = REACH * h;
+        let Some(tree) = (!points.is_empty()).then(|| ImmutableKdTree::<f64, 2>::new_from_slice(&points).expect("finite samples")) else {
+            return LoadLayer { shares: Vec::new(), spacing: h, layer_nodes: 0 };
+        };
+        let per_node: Vec<Vec<Share>> = (0..nodes.free)
+            .into_par_iter()
+            .map(|node| {
+                let x = nodes.positions[node];
                 // Nearest sample of each loaded part within h.
                 let mut nearest: Vec<(usize, f64, Point, Point)> = Vec::new();
                 for found in tree.query(&x).within::<SquaredEuclidean<f64>>(reach * reach).execute() {
@@ -79,23 +95,65 @@ pub fn body_forces(
                         }
                     }
                 }
-                for (part, d2, p, normal) in nearest {
-                    let d_normal = ((x[0] - p[0]) * normal[0] + (x[1] - p[1]) * normal[1]).abs();
-                    let share = layer_share(d2.sqrt(), d_normal, h);
-                    if share == 0.0 {
-                        continue;
-                    }
-                    let t = exact::value(&conditions[part].value, p, exact, |e| e.traction(p, normal));
-                    b[0] += share * t[0] / h;
-                    b[1] += share * t[1] / h;
-                    in_layer = true;
-                }
-            }
-            (b, in_layer)
-        })
-        .collect();
-    let layer = forces.iter().filter(|f| f.1).count();
-    (forces.into_iter().map(|f| f.0).collect(), layer)
+                nearest
+                    .into_iter()
+                    .filter_map(|(part, d2, point, normal)| {
+                        let d_normal = ((x[0] - point[0]) * normal[0] + (x[1] - point[1]) * normal[1]).abs();
+                        let share = layer_share(d2.sqrt(), d_normal, h);
+                        (share > 0.0).then_some(Share { node, part, point, normal, share })
+                    })
+                    .collect()
+            })
+            .collect();
+        let layer_nodes = per_node.iter().filter(|s| !s.is_empty()).count();
+        LoadLayer { shares: per_node.into_iter().flatten().collect(), spacing: h, layer_nodes }
+    }
+
+    /// Number of free nodes in a loaded layer.
+    pub fn layer_nodes(&self) -> usize {
+        self.layer_nodes
+    }
+
+    /// Body force density `b_i` of every free node (module docs) for the loads
+    /// `body_force` and `conditions` (of one instant: `case::Case::loads_at`), or the
+    /// first free node whose load is not finite.
+    pub fn forces(
+        &self,
+        body_force: &Value,
+        conditions: &[BoundaryCondition],
+        exact: Option<&dyn ExactSolution>,
+        nodes: &PdNodes,
+    ) -> Result<Vec<[f64; 2]>, usize> {
+        let free = &nodes.positions[..nodes.free];
+        let mut b: Vec<[f64; 2]> = free.par_iter().map(|&x| exact::value(body_force, x, exact, |e| e.body_force(x))).collect();
+        for s in &self.shares {
+            let t = exact::value(&conditions[s.part].value, s.point, exact, |e| e.traction(s.point, s.normal));
+            b[s.node][0] += s.share * t[0] / self.spacing;
+            b[s.node][1] += s.share * t[1] / self.spacing;
+        }
+        match b.par_iter().position_first(|v| !v[0].is_finite() || !v[1].is_finite()) {
+            Some(i) => Err(i),
+            None => Ok(b),
+        }
+    }
+}
+
+/// Body force density of every free node, and the number of nodes in a loaded layer;
+/// a load that is not finite (an overflow, or an exact solution's singular point) is
+/// an error at its node.
+pub fn body_forces(
+    domain: &Domain,
+    conditions: &[BoundaryCondition],
+    body_force: &Value,
+    exact: Option<&dyn ExactSolution>,
+    nodes: &PdNodes,
+) -> Result<(Vec<[f64; 2]>, usize), RunError> {
+    let layer = LoadLayer::new(domain, conditions, nodes);
+    let b = layer.forces(body_force, conditions, exact, nodes).map_err(|node| {
+        let p = nodes.positions[node];
+        RunError::NotFinite { node, x: p[0], y: p[1] }
+    })?;
+    Ok((b, layer.layer_nodes()))
 }
 
 #[cfg(test)]
@@ -114,7 +172,7 @@ mod tests {
         for rule in [Quadrature::FullArea, Quadrature::Gauss2x2, Quadrature::TriangleP2, Quadrature::TriangleP3] {
             let p = params(0.06, rule);
             let nodes = plate_nodes(&domain, &conditions, &p);
-            let (b, layer) = body_forces(&domain, &conditions, &Value::Constant(f), None, &nodes);
+            let (b, layer) = body_forces(&domain, &conditions, &Value::Constant(f), None, &nodes).unwrap();
             assert!(layer > 0);
             let h = nodes.spacing;
             let mut load = [0.0, 0.0];
@@ -129,6 +187,33 @@ mod tests {
             // The edge has length 0.5; the volumes are sums of h^2 shares (round-off 1e-14).
             for c in 0..2 {
                 assert!((load[c] - 0.5 * t[c]).abs() < 1e-12, "{rule:?}: layer load {load:?}, edge load {:?}", [0.5 * t[0], 0.5 * t[1]]);
+            }
+        }
+    }
+
+    /// A traction in `t` is read at the time of the loads handed to
+    /// [`LoadLayer::forces`]: the layer built once carries `|Gamma| t(t)` at every time
+    /// (round-off as above), and a part whose formula is zero at t = 0 still counts as
+    /// loaded.
+    #[test]
+    fn traction_layer_follows_a_load_in_time() {
+        use crate::expression::{Constants, Expression, Scope, VectorExpression};
+        let (domain, mut conditions) = plate([0.0, 0.0]);
+        let parse = |text: &str| Expression::parse(text, Scope::SpaceTime, &Constants::default()).unwrap();
+        let formula = VectorExpression { x: parse("3 * sin(2 * t)"), y: parse("-t"), origin: "boundary[1].value".into() };
+        conditions[1].value = Value::Expression(std::sync::Arc::new(formula));
+        let nodes = plate_nodes(&domain, &conditions, &params(0.06, Quadrature::Gauss2x2));
+        let layer = LoadLayer::new(&domain, &conditions, &nodes);
+        assert!(layer.layer_nodes() > 0);
+        let zero = Value::Constant([0.0, 0.0]);
+        for time in [0.0, 0.3, 1.7] {
+            let at: Vec<BoundaryCondition> =
+                conditions.iter().map(|c| BoundaryCondition { value: c.value.at_time(time), ..c.clone() }).collect();
+            let b = layer.forces(&zero, &at, None, &nodes).unwrap();
+            let load: Vec<f64> = (0..2).map(|c| b.iter().zip(&nodes.volumes).map(|(b, v)| v * b[c]).sum()).collect();
+            let want = [0.5 * 3.0 * (2.0 * time).sin(), -0.5 * time];
+            for c in 0..2 {
+                assert!((load[c] - want[c]).abs() < 1e-12, "t = {time}: layer load {load:?}, edge load {want:?}");
             }
         }
     }

@@ -61,6 +61,8 @@ pub struct PdNodes {
     pub free: usize,
     /// Prescribed displacement of constrained node `free + k`.
     pub prescribed: Vec<[f64; 2]>,
+    /// The boundary part whose displacement condition constrains node `free + k`.
+    pub collar_part: Vec<usize>,
     /// Index of the rule point each node is (its position within its cell).
     pub rule_point: Vec<u8>,
     /// Cell size h.
@@ -112,16 +114,17 @@ impl<'a> Body<'a> {
         Body { domain, conditions, exact, samples, tree, collar: params.horizon + 0.75 * h }
     }
 
-    /// Prescribed displacement of an outside point whose nearest boundary part has a
-    /// displacement condition (corner rule as for MLSM: a displacement part wins).
-    pub fn constraint(&self, p: Point) -> Option<[f64; 2]> {
+    /// The part and prescribed displacement of an outside point whose nearest
+    /// boundary part has a displacement condition (corner rule as for MLSM: a
+    /// displacement part wins).
+    pub fn constraint(&self, p: Point) -> Option<(usize, [f64; 2])> {
         let nearest = self.tree.query(&p).nearest_one::<SquaredEuclidean<f64>>().execute();
         let s = &self.samples[nearest.item as usize];
         s.touches
             .iter()
-            .map(|(part, _)| &self.conditions[*part])
-            .find(|bc| bc.is_all(ComponentCondition::Displacement))
-            .map(|bc| exact::value(&bc.value, p, self.exact, |e| e.displacement(p)))
+            .map(|&(part, _)| (part, &self.conditions[part]))
+            .find(|(_, bc)| bc.is_all(ComponentCondition::Displacement))
+            .map(|(part, bc)| (part, exact::value(&bc.value, p, self.exact, |e| e.displacement(p))))
     }
 
     /// Whether `p` carries material: inside the solid or in the constrained collar.
@@ -139,8 +142,8 @@ type Merged = (Point, u8, f64, f64);
 enum Role {
     /// A free node.
     Free,
-    /// A node of the Dirichlet collar with its prescribed displacement.
-    Constrained([f64; 2]),
+    /// A node of the Dirichlet collar with its part and prescribed displacement.
+    Constrained(usize, [f64; 2]),
     /// Not a node (outside the solid and its collar, or without material).
     Dropped,
 }
@@ -150,8 +153,15 @@ enum Role {
 pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
     let h = params.spacing();
     let classified: Vec<(Point, f64, u8, Role)> = merged_points(body, params).into_par_iter().map(|m| classify(body, h, m)).collect();
-    let mut nodes =
-        PdNodes { positions: Vec::new(), volumes: Vec::new(), free: 0, prescribed: Vec::new(), rule_point: Vec::new(), spacing: h };
+    let mut nodes = PdNodes {
+        positions: Vec::new(),
+        volumes: Vec::new(),
+        free: 0,
+        prescribed: Vec::new(),
+        collar_part: Vec::new(),
+        rule_point: Vec::new(),
+        spacing: h,
+    };
     for (p, w, r, role) in &classified {
         if let Role::Free = role {
             nodes.positions.push(*p);
@@ -161,11 +171,12 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
     }
     nodes.free = nodes.positions.len();
     for (p, w, r, role) in &classified {
-        if let Role::Constrained(u) = role {
+        if let Role::Constrained(part, u) = role {
             nodes.positions.push(*p);
             nodes.volumes.push(*w);
             nodes.rule_point.push(*r);
             nodes.prescribed.push(*u);
+            nodes.collar_part.push(*part);
         }
     }
     nodes
@@ -179,7 +190,7 @@ fn classify(body: &Body, h: f64, (p, r, w_in, w_out): Merged) -> (Point, f64, u8
     if d <= 1e-9 * h && w_in > 0.0 {
         (p, w_in, r, Role::Free)
     } else if d > 1e-9 * h && d <= body.collar {
-        (p, w_in + w_out, r, body.constraint(p).map_or(Role::Dropped, Role::Constrained))
+        (p, w_in + w_out, r, body.constraint(p).map_or(Role::Dropped, |(part, u)| Role::Constrained(part, u)))
     } else {
         (p, 0.0, r, Role::Dropped)
     }

@@ -101,6 +101,19 @@ impl Discretisation {
         let samples = discretise_boundary(&case.domain, nodes.spacing / 16.0);
         let on_parts: Vec<(Point, usize)> = samples.iter().flat_map(|b| b.touches.iter().map(|&(part, _)| (b.position, part))).collect();
         case.check_formulas(&nodes.positions[..nodes.free], &on_parts)?;
+        // The displacement formulas also hold in the collar, outside the solid.
+        let collar: Vec<(Point, usize)> = nodes.positions[nodes.free..].iter().copied().zip(nodes.collar_part.iter().copied()).collect();
+        case.check_formulas(&[], &collar).map_err(|e| match e {
+            RunError::BadFormula { field, text, value, x, y, .. } => RunError::BadFormula {
+                field,
+                text,
+                value,
+                x,
+                y,
+                context: ", a node of the Dirichlet collar outside the solid (peridynamics evaluates displacement formulas there)".into(),
+            },
+            other => other,
+        })?;
         let families = timer.run(FAMILIES, || {
             let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
             let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
@@ -166,7 +179,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
-        let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes);
+        let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
         let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| {
             let p = disc.nodes.positions[node];
             RunError::NotFinite { node, x: p[0], y: p[1] }

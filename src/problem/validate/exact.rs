@@ -8,6 +8,7 @@ use crate::choice::Choice;
 use crate::elasticity::conditions::Value;
 use crate::elasticity::material::Material;
 use crate::exact::{ExactKind, ExpressionSolution, NamedSolution, ParameterKind, ParameterValue, Parameters};
+use crate::expression::Scope;
 use crate::problem::spec::{ExactSpec, NumberOrFormula, VectorOrExact};
 use crate::problem::ProblemError;
 
@@ -40,7 +41,7 @@ pub(super) fn exact(c: &Ctx, s: &ExactSpec, material: Material) -> Result<NamedS
                     _ => return c.err(&field, format!("must be a formula in quotes or a number ({})", p.help)),
                 },
             };
-            parameters.set(p.name, ParameterValue::Expression(Box::new(formula_of(c, &field, &formula)?)));
+            parameters.set(p.name, ParameterValue::Expression(Box::new(formula_of(c, &field, &formula, Scope::Space)?)));
             continue;
         }
         let values = match (p.kind, given.is_array(), numbers(given)) {
@@ -86,12 +87,13 @@ pub(super) fn exact_word(c: &Ctx, field: &str, word: &str, has_exact: bool) -> R
     Ok(Value::Exact)
 }
 
-/// A boundary value or body force: a vector of numbers or formulas, or `"exact"`
-/// (default zero).
+/// A boundary value or body force: a vector of numbers or formulas (in `x`, `y`, and
+/// `t` when the scene has `[dynamics]`), or `"exact"` (default zero).
 pub(super) fn value(c: &Ctx, field: &str, v: Option<&VectorOrExact>, has_exact: bool) -> Result<Value, ProblemError> {
+    let scope = if c.dynamic { Scope::SpaceTime } else { Scope::Space };
     match v {
         None => Ok(Value::Constant([0.0, 0.0])),
-        Some(VectorOrExact::Vector(v)) => vector(c, field, v),
+        Some(VectorOrExact::Vector(v)) => vector(c, field, v, scope),
         Some(VectorOrExact::Word(w)) => exact_word(c, field, w, has_exact),
     }
 }

@@ -54,19 +54,20 @@ pub(super) fn constants(c: &Ctx, spec: Option<&BTreeMap<String, NumberOrFormula>
     Ok(out)
 }
 
-/// A formula or number as an expression of `x`, `y` and the constants.
-pub(super) fn formula_of(c: &Ctx, field: &str, v: &NumberOrFormula) -> Result<Expression, ProblemError> {
+/// A formula or number as an expression of the variables of `scope` and the constants.
+pub(super) fn formula_of(c: &Ctx, field: &str, v: &NumberOrFormula, scope: Scope) -> Result<Expression, ProblemError> {
     match v {
         NumberOrFormula::Number(x) => {
             c.finite(field, &[*x])?;
             Ok(Expression::constant(*x))
         }
-        NumberOrFormula::Formula(text) => Expression::parse(text, Scope::Space, &c.constants).map_err(|e| c.error(field, e.to_string())),
+        NumberOrFormula::Formula(text) => Expression::parse(text, scope, &c.constants).map_err(|e| c.error(field, e.to_string())),
     }
 }
 
-/// `[x, y]` of numbers or formulas: a constant when both are numbers.
-pub(super) fn vector(c: &Ctx, field: &str, v: &[NumberOrFormula]) -> Result<Value, ProblemError> {
+/// `[x, y]` of numbers or formulas in the variables of `scope`: a constant when both
+/// are numbers.
+pub(super) fn vector(c: &Ctx, field: &str, v: &[NumberOrFormula], scope: Scope) -> Result<Value, ProblemError> {
     if v.len() != 2 {
         return c.err(field, format!("needs exactly 2 components [x, y], got {}", v.len()));
     }
@@ -74,8 +75,8 @@ pub(super) fn vector(c: &Ctx, field: &str, v: &[NumberOrFormula]) -> Result<Valu
         c.finite(field, &[*x, *y])?;
         return Ok(Value::Constant([*x, *y]));
     }
-    let x = formula_of(c, &format!("{field}[0]"), &v[0])?;
-    let y = formula_of(c, &format!("{field}[1]"), &v[1])?;
+    let x = formula_of(c, &format!("{field}[0]"), &v[0], scope)?;
+    let y = formula_of(c, &format!("{field}[1]"), &v[1], scope)?;
     Ok(Value::Expression(Arc::new(VectorExpression { x, y, origin: field.to_string() })))
 }
 
@@ -83,13 +84,13 @@ pub(super) fn vector(c: &Ctx, field: &str, v: &[NumberOrFormula]) -> Result<Valu
 pub(super) fn initial(c: &Ctx, field: &str, v: Option<&InitialSpec>) -> Result<Value, ProblemError> {
     match v {
         None => Ok(Value::Constant([0.0, 0.0])),
-        Some(InitialSpec::Vector(v)) => vector(c, field, v),
+        Some(InitialSpec::Vector(v)) => vector(c, field, v, Scope::Space),
         Some(InitialSpec::Affine(a)) => {
             c.finite(&format!("{field}.x"), &a.x.0)?;
             c.finite(&format!("{field}.y"), &a.y.0)?;
             // `c0 + cx x + cy y`, written with round-trip exact numbers.
             let affine = |k: [f64; 3]| NumberOrFormula::Formula(format!("{:e} + {:e}*x + {:e}*y", k[0], k[1], k[2]));
-            vector(c, field, &[affine(a.x.0), affine(a.y.0)])
+            vector(c, field, &[affine(a.x.0), affine(a.y.0)], Scope::Space)
         }
     }
 }

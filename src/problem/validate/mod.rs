@@ -69,6 +69,8 @@ fn located(text: &str, e: &toml::de::Error) -> String {
 struct Ctx<'a> {
     path: &'a Path,
     constants: Constants,
+    /// Whether the scene has `[dynamics]` (its loads may use the time `t`).
+    dynamic: bool,
 }
 
 impl Ctx<'_> {
@@ -127,7 +129,7 @@ impl Ctx<'_> {
 
 /// Semantic validation: physics, geometry, consistency of names and options.
 pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Result<Problem, ProblemError> {
-    let c = Ctx { path, constants: Constants::default() };
+    let c = Ctx { path, constants: Constants::default(), dynamic: spec.dynamics.is_some() };
     let c = Ctx { constants: expressions::constants(&c, spec.constants.as_ref())?, ..c };
     let name = scene_name(&c, spec.name.as_deref(), path)?;
     let domain = domain::domain(&c, &spec.domain)?;
