@@ -63,17 +63,25 @@ pub struct VaryingLoads<'a> {
     pub loads: Loads,
     /// Their time derivatives.
     pub rates: Loads,
+    /// The nodes whose loads vary: the boundary nodes, or every node when the body
+    /// force depends on time.
+    pub nodes: Vec<usize>,
+    /// The right-hand side at t = 0 (the rows of the other nodes keep it).
+    pub initial: Vec<f64>,
 }
 
 impl VaryingLoads<'_> {
-    /// The right-hand side of `loads` at time `t`, or the formula (else the node) that
-    /// is not finite.
-    fn at(&self, loads: &Loads, t: f64) -> Result<Vec<f64>, RunError> {
-        let instant = loads.at_time(t);
-        self.system.right_hand_side(&instant).map_err(|e| match e {
+    /// The right-hand side of the loads at time `t` (with `rate`, of their time
+    /// derivatives: zero outside the varying nodes), or the formula (else the node)
+    /// that is not finite.
+    fn at(&self, t: f64, rate: bool) -> Result<Vec<f64>, RunError> {
+        let instant = if rate { &self.rates } else { &self.loads }.at_time(t);
+        let mut rhs = if rate { vec![0.0; self.initial.len()] } else { self.initial.clone() };
+        self.system.update_right_hand_side(&instant, &self.nodes, &mut rhs).map_err(|e| match e {
             RunError::NotFinite { x, y, .. } => instant.non_finite_at([x, y], t).unwrap_or(e),
             other => other,
-        })
+        })?;
+        Ok(rhs)
     }
 }
 
@@ -140,7 +148,7 @@ impl<'a> NavierDynamics<'a> {
             (None, false) => (Cow::Borrowed(&self.r_d), Cow::Borrowed(&self.r_a)),
             (None, true) => (Cow::Owned(vec![0.0; self.dynamic.len()]), Cow::Owned(vec![0.0; self.algebraic.len()])),
             (Some(v), _) => {
-                let rhs = v.at(if rate { &v.rates } else { &v.loads }, t).unwrap_or_else(|_| vec![f64::NAN; n]);
+                let rhs = v.at(t, rate).unwrap_or_else(|_| vec![f64::NAN; n]);
                 let (d, a) = self.split(&rhs);
                 (Cow::Owned(d), Cow::Owned(a))
             }
@@ -211,7 +219,7 @@ impl SecondOrderSystem for NavierDynamics<'_> {
 
     fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
         let v = self.varying.as_ref()?;
-        [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(&v.loads, t).err())
+        [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(t, false).err())
     }
 }
 
@@ -256,7 +264,9 @@ fn condensed<'a>(
         field,
         reason: format!("{why}; the MLSM model needs d/dt of a load in t (the velocity the boundary rows impose)"),
     })?;
-    Ok(condensed.with_varying(VaryingLoads { system, loads, rates }))
+    let nodes: Vec<usize> =
+        if loads.body_force.depends_on_time() { (0..disc.nodes.len()).collect() } else { (0..disc.nodes.boundary.len()).collect() };
+    Ok(condensed.with_varying(VaryingLoads { system, loads, rates, nodes, initial: rhs }))
 }
 
 /// `(E_kin, E_el, E_ext)` of a state (see [`simulate`]), `E_ext` with the body force

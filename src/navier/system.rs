@@ -80,20 +80,26 @@ impl System<'_> {
     /// or those of one instant of a time-dependent run), zero in the rows of other
     /// ranks; or the first node whose loads are not finite.
     pub fn right_hand_side(&self, loads: &Loads) -> Result<Vec<f64>, RunError> {
-        let disc = self.disc;
-        let per_node: Vec<Vec<(usize, f64)>> =
-            (0..disc.nodes.len()).into_par_iter().map(|i| if disc.owns(i) { self.node_loads(loads, i) } else { Vec::new() }).collect();
-        let mut rhs = vec![0.0; disc.dofs.len()];
-        for (i, r) in per_node.into_iter().enumerate() {
+        let mut rhs = vec![0.0; self.disc.dofs.len()];
+        let owned: Vec<usize> = (0..self.disc.nodes.len()).filter(|&i| self.disc.owns(i)).collect();
+        self.update_right_hand_side(loads, &owned, &mut rhs)?;
+        Ok(rhs)
+    }
+
+    /// Overwrite the right-hand sides of the rows of `nodes` in `rhs` with those of
+    /// `loads` (a time-dependent run rewrites only the nodes whose loads vary).
+    pub fn update_right_hand_side(&self, loads: &Loads, nodes: &[usize], rhs: &mut [f64]) -> Result<(), RunError> {
+        let per_node: Vec<Vec<(usize, f64)>> = nodes.par_iter().map(|&i| self.node_loads(loads, i)).collect();
+        for (&i, r) in nodes.iter().zip(per_node) {
             if r.iter().any(|v| !v.1.is_finite()) {
-                let p = disc.nodes.positions[i];
+                let p = self.disc.nodes.positions[i];
                 return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
             }
             for (row, v) in r {
                 rhs[row] = v;
             }
         }
-        Ok(rhs)
+        Ok(())
     }
 
     /// Rows of every node this rank owns ([`Discretisation::owns`]: all of them unless
