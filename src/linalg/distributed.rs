@@ -19,6 +19,7 @@
 //! error never leaves the others waiting.
 
 use super::scaling::row_scale;
+use super::triplets::Entry;
 use super::{SolveError, SolveReport, SolverKind, SolverParams, SparseMatrix};
 use crate::petsc::{self, KspDefaults, LocalRows, World};
 
@@ -74,6 +75,11 @@ impl Distribution {
     /// PETSc index of unknown `u`.
     fn petsc(&self, u: usize) -> usize {
         self.index[u / self.per_point] * self.per_point + u % self.per_point
+    }
+
+    /// Number of rows (unknowns) of the whole system.
+    fn rows(&self) -> usize {
+        self.owner.len() * self.per_point
     }
 
     /// First PETSc row of this rank.
@@ -132,6 +138,87 @@ fn max_over_ranks(v: f64) -> Result<f64, SolveError> {
     Ok(all.iter().fold(0.0f64, |m, x| m.max(*x)))
 }
 
+/// The rows this rank owns, in PETSc's numbering, compressed (CSR, columns sorted,
+/// duplicates summed), each multiplied by its scale.
+struct OwnedRows {
+    /// Original row of each local row.
+    original: Vec<usize>,
+    row_ptr: Vec<i64>,
+    cols: Vec<i64>,
+    vals: Vec<f64>,
+    /// Row scale (`scaling::row_scale`; 1 without equilibration).
+    scales: Vec<f64>,
+}
+
+/// Pack the owned rows of `entries` by a counting sort on the local row: two passes
+/// over the entries, no vector per row (module docs of `linalg::triplets`), and the
+/// checks of each row: the first non-finite entry, an all-zero row (returned beside
+/// the rows: every rank must reach [`agree`] before anything fails).
+fn own_rows(dist: &Distribution, entries: impl Iterator<Item = Entry> + Clone, equilibrate: bool) -> (OwnedRows, Result<(), SolveError>) {
+    let first = dist.first_row();
+    let local_n = dist.counts[dist.world.rank] * dist.per_point;
+    let mut original = vec![usize::MAX; local_n];
+    for u in (0..dist.rows()).filter(|&u| dist.owns_row(u)) {
+        original[dist.petsc(u) - first] = u;
+    }
+    let owned = || entries.clone().filter(|e| dist.owns_row(e.0));
+    let mut start = vec![0usize; local_n + 1];
+    for (r, _, _) in owned() {
+        start[dist.petsc(r) - first + 1] += 1;
+    }
+    for l in 0..local_n {
+        start[l + 1] += start[l];
+    }
+    let mut next = start.clone();
+    let (mut cols, mut vals) = (vec![0i64; start[local_n]], vec![0.0f64; start[local_n]]);
+    for (r, c, v) in owned() {
+        let slot = &mut next[dist.petsc(r) - first];
+        cols[*slot] = dist.petsc(c) as i64;
+        vals[*slot] = v;
+        *slot += 1;
+    }
+    drop(next);
+    let mut checked = Ok(());
+    let mut scales = vec![1.0; local_n];
+    let mut row_ptr = vec![0i64; local_n + 1];
+    let (mut row, mut kept) = (Vec::new(), 0usize);
+    for l in 0..local_n {
+        row.clear();
+        row.extend(cols[start[l]..start[l + 1]].iter().copied().zip(vals[start[l]..start[l + 1]].iter().copied()));
+        row.sort_by_key(|e: &(i64, f64)| e.0);
+        let from = kept;
+        for (k, &(c, v)) in row.iter().enumerate() {
+            if k > 0 && row[k - 1].0 == c {
+                vals[kept - 1] += v;
+            } else {
+                cols[kept] = c;
+                vals[kept] = v;
+                kept += 1;
+            }
+        }
+        row_ptr[l + 1] = kept as i64;
+        let merged = from..kept;
+        if let Some(j) = merged.clone().find(|&j| !vals[j].is_finite()) {
+            checked = checked.and(Err(SolveError::NotFinite { row: original[l], col: cols[j] as usize, value: vals[j] }));
+        }
+        let largest = vals[merged.clone()].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if largest == 0.0 {
+            checked = checked.and(Err(SolveError::Singular {
+                detail: format!("row {} of the matrix is entirely zero: its equation constrains nothing", original[l]),
+            }));
+        }
+        if equilibrate && largest > 0.0 {
+            let own = (first + l) as i64;
+            let diagonal = merged.clone().find(|&j| cols[j] == own).map_or(0.0, |j| vals[j]);
+            scales[l] = row_scale(largest, diagonal);
+            vals[merged].iter_mut().for_each(|v| *v *= scales[l]);
+        }
+    }
+    cols.truncate(kept);
+    vals.truncate(kept);
+    (OwnedRows { original, row_ptr, cols, vals, scales }, checked)
+}
+
 /// Solve with `params.kind = Petsc` (module docs). `entries` are `(row, column,
 /// value)` of the rows this rank owns (duplicates summed, other rows ignored), in the
 /// original numbering; `b` the right-hand side (only owned rows read); `points` the
@@ -139,7 +226,7 @@ fn max_over_ranks(v: f64) -> Result<f64, SolveError> {
 /// solution on every rank.
 pub fn solve(
     dist: &Distribution,
-    entries: impl Iterator<Item = (usize, usize, f64)>,
+    entries: impl Iterator<Item = Entry> + Clone,
     b: &[f64],
     points: &[[f64; 2]],
     params: &SolverParams,
@@ -151,44 +238,12 @@ pub fn solve(
     let n = b.len();
     let first = dist.first_row();
     let local_n = dist.counts[dist.world.rank] * k;
-    // Original row of each local row.
-    let mut original = vec![usize::MAX; local_n];
-    for u in (0..n).filter(|&u| dist.owns_row(u)) {
-        original[dist.petsc(u) - first] = u;
-    }
-    let mut rows: Vec<Vec<(i64, f64)>> = vec![Vec::new(); local_n];
-    for (r, c, v) in entries.filter(|e| dist.owns_row(e.0)) {
-        rows[dist.petsc(r) - first].push((dist.petsc(c) as i64, v));
-    }
-    let mut checked = Ok(());
-    let mut scales = vec![1.0; local_n];
-    for (l, row) in rows.iter_mut().enumerate() {
-        row.sort_unstable_by_key(|e| e.0);
-        row.dedup_by(|later, kept| {
-            let same = later.0 == kept.0;
-            if same {
-                kept.1 += later.1;
-            }
-            same
-        });
-        if let Some(&(c, v)) = row.iter().find(|e| !e.1.is_finite()) {
-            checked = checked.and(Err(SolveError::NotFinite { row: original[l], col: c as usize, value: v }));
-        }
-        let largest = row.iter().fold(0.0f64, |m, e| m.max(e.1.abs()));
-        if largest == 0.0 {
-            checked = checked.and(Err(SolveError::Singular {
-                detail: format!("row {} of the matrix is entirely zero: its equation constrains nothing", original[l]),
-            }));
-        }
-        if params.equilibrate && largest > 0.0 {
-            let own = (first + l) as i64;
-            let diagonal = row.iter().find(|e| e.0 == own).map_or(0.0, |e| e.1);
-            scales[l] = row_scale(largest, diagonal);
-        }
-    }
-    if let Some(u) = (0..local_n).map(|l| original[l]).find(|&u| !b[u].is_finite()) {
-        checked = checked.and(Err(SolveError::Dimension { detail: format!("right-hand side entry {u} is not finite ({})", b[u]) }));
-    }
+    let (owned, checked) = own_rows(dist, entries, params.equilibrate);
+    let OwnedRows { original, row_ptr, cols, vals, scales } = owned;
+    let checked = match (0..local_n).map(|l| original[l]).find(|&u| !b[u].is_finite()) {
+        Some(u) => checked.and(Err(SolveError::Dimension { detail: format!("right-hand side entry {u} is not finite ({})", b[u]) })),
+        None => checked,
+    };
     agree(checked)?;
 
     // Loads scaled by a power of two into [1, 2) (exact), as in `linalg::solve`.
@@ -196,17 +251,6 @@ pub fn solve(
     let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
     let power = |e: i32| 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
     let rhs: Vec<f64> = (0..local_n).map(|l| b[original[l]] * power(-exponent) * scales[l]).collect();
-    let mut row_ptr = Vec::with_capacity(local_n + 1);
-    row_ptr.push(0i64);
-    let (mut cols, mut vals) = (Vec::new(), Vec::new());
-    for (l, row) in rows.iter().enumerate() {
-        for &(c, v) in row {
-            cols.push(c);
-            vals.push(v * scales[l]);
-        }
-        row_ptr.push(cols.len() as i64);
-    }
-    drop(rows);
     let halo = {
         let own = first as i64..(first + local_n) as i64;
         let mut outside: Vec<i64> = cols.iter().copied().filter(|c| !own.contains(c)).collect();

@@ -76,8 +76,8 @@ pub(super) fn navier_like(m: usize, convection: f64) -> (Triplets, Vec<f64>, Vec
 /// CSC sweep in [`relative_residual`].
 pub(super) fn coo_matvec(t: &Triplets, x: &[f64]) -> Vec<f64> {
     let mut y = vec![0.0; t.dim()];
-    for e in t.entries() {
-        y[e.row] += e.val * x[e.col];
+    for (row, col, val) in t.entries() {
+        y[row] += val * x[col];
     }
     y
 }
@@ -99,8 +99,8 @@ fn max_rel_diff(x: &[f64], y: &[f64]) -> f64 {
 /// can differ by about this much.
 fn residual_floor(t: &Triplets, x: &[f64], b: &[f64]) -> f64 {
     let mut y = vec![0.0; t.dim()];
-    for e in t.entries() {
-        y[e.row] += (e.val * x[e.col]).abs();
+    for (row, col, val) in t.entries() {
+        y[row] += (val * x[col]).abs();
     }
     f64::EPSILON * norm2(&y) / norm2(b)
 }
@@ -189,8 +189,8 @@ fn badly_scaled() -> (Triplets, Vec<f64>, Vec<f64>) {
     let (t, x_exact, b) = navier_like(30, 20.0);
     let scale = |i: usize| 10f64.powf(24.0 * (i as f64 * 0.618_033_988_749_895).fract() - 12.0);
     let mut ts = Triplets::with_capacity(t.dim(), t.len());
-    for e in t.entries() {
-        ts.push(e.row, e.col, e.val * scale(e.row));
+    for (row, col, val) in t.entries() {
+        ts.push(row, col, val * scale(row));
     }
     let bs = b.iter().enumerate().map(|(i, v)| v * scale(i)).collect();
     (ts, x_exact, bs)
@@ -341,12 +341,12 @@ fn non_finite_matrix_entry_is_named() {
 /// (the equilibration of `scaling`, recomputed independently).
 fn row_scaled(t: &Triplets, b: &[f64]) -> (Triplets, Vec<f64>) {
     let mut row_max = vec![0.0f64; b.len()];
-    for e in t.entries() {
-        row_max[e.row] = row_max[e.row].max(e.val.abs());
+    for (row, _, val) in t.entries() {
+        row_max[row] = row_max[row].max(val.abs());
     }
     let mut ts = Triplets::new(b.len());
-    for e in t.entries() {
-        ts.push(e.row, e.col, e.val / row_max[e.row]);
+    for (row, col, val) in t.entries() {
+        ts.push(row, col, val / row_max[row]);
     }
     (ts, b.iter().zip(&row_max).map(|(v, m)| v / m).collect())
 }

@@ -223,8 +223,7 @@ fn assemble_and_solve_distributed(
     })?;
     let (x, report) = timer.run(stage::SOLVE, || {
         let dist = Distribution::new(owner.to_vec(), dofs.unknowns().per_node(), crate::petsc::world());
-        let entries = triplets.entries().iter().map(|t| (t.row, t.col, t.val));
-        let (x, report) = distributed::solve(&dist, entries, &rhs, positions, solver)?;
+        let (x, report) = distributed::solve(&dist, triplets.entries(), &rhs, positions, solver)?;
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report), note))
     })?;
