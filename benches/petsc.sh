@@ -4,11 +4,12 @@
 # several spacings, on each number of ranks, with PETSc options passed through.
 # Usage: bash benches/petsc.sh SCENE "H1 H2 ..." "RANKS..." "PETSC OPTIONS" [EDIT ...]
 # Example: bash benches/petsc.sh cantilever "0.0387 0.0194" "1 2" "-pc_type gamg" 'basis="tensor"' degree=2 'weight="gaussian"' sigma=1 support=13
+# MLSM_BIN=path runs another build (e.g. an earlier commit's, for before/after tables).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-petsc.sh > /dev/null
-cargo build --release --quiet --features petsc
-bin=target/release/mlsm
+if [ -z "${MLSM_BIN:-}" ]; then cargo build --release --quiet --features petsc; fi
+bin=${MLSM_BIN:-target/release/mlsm}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 scene=$1; spacings=$2; ranks=$3; options=$4; shift 4
