@@ -25,6 +25,7 @@
 
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
+use super::spgemm;
 use super::SparseMatrix;
 use nalgebra::DMatrix;
 use nalgebra_sparse::{CscMatrix, CsrMatrix};
@@ -217,23 +218,23 @@ impl Amg {
             // Intermediates are dropped as soon as they are used: at 8e5 unknowns each
             // is a few hundred MB.
             let p = {
-                let at = &current * &t;
-                let dat = &d * &at;
+                let at = spgemm::product(&current, &t);
+                let dat = spgemm::product(&d, &at);
                 drop(at);
                 &t - &(dat * omega)
             };
             let r = {
                 let tt = t.transpose();
                 drop(t);
-                let ta = &tt * &current;
-                let tad = &ta * &d;
+                let ta = spgemm::product(&tt, &current);
+                let tad = spgemm::product(&ta, &d);
                 drop(ta);
                 &tt - &(tad * omega)
             };
             drop(d);
             let coarse = {
-                let ra = &r * &current;
-                &ra * &p
+                let ra = spgemm::product(&r, &current);
+                spgemm::product(&ra, &p)
             };
             levels.push(Level { a: current, blocks, inv_diag, p, r });
             sizes.push(coarse.nrows());

@@ -32,6 +32,7 @@ pub mod report;
 pub mod rowmat;
 pub mod scaling;
 pub mod smoother;
+pub mod spgemm;
 pub mod triplets;
 
 #[cfg(test)]
