@@ -19,7 +19,7 @@
 //! error never leaves the others waiting.
 
 use super::scaling::row_scale;
-use super::triplets::Entry;
+use super::triplets::{compress, Entry};
 use super::{SolveError, SolveReport, SolverKind, SolverParams, SparseMatrix};
 use crate::petsc::{self, KspDefaults, LocalRows, World};
 
@@ -150,9 +150,9 @@ struct OwnedRows {
     scales: Vec<f64>,
 }
 
-/// Pack the owned rows of `entries` by a counting sort on the local row: two passes
-/// over the entries, no vector per row (module docs of `linalg::triplets`), and the
-/// checks of each row: the first non-finite entry, an all-zero row (returned beside
+/// Pack the owned rows of `entries` by a counting sort on the local row
+/// ([`compress`]: two passes over the entries, no vector per row), and the checks of
+/// each row: the first non-finite entry, an all-zero row (returned beside
 /// the rows: every rank must reach [`agree`] before anything fails).
 fn own_rows(dist: &Distribution, entries: impl Iterator<Item = Entry> + Clone, equilibrate: bool) -> (OwnedRows, Result<(), SolveError>) {
     let first = dist.first_row();
@@ -161,43 +161,12 @@ fn own_rows(dist: &Distribution, entries: impl Iterator<Item = Entry> + Clone, e
     for u in (0..dist.rows()).filter(|&u| dist.owns_row(u)) {
         original[dist.petsc(u) - first] = u;
     }
-    let owned = || entries.clone().filter(|e| dist.owns_row(e.0));
-    let mut start = vec![0usize; local_n + 1];
-    for (r, _, _) in owned() {
-        start[dist.petsc(r) - first + 1] += 1;
-    }
-    for l in 0..local_n {
-        start[l + 1] += start[l];
-    }
-    let mut next = start.clone();
-    let (mut cols, mut vals) = (vec![0i64; start[local_n]], vec![0.0f64; start[local_n]]);
-    for (r, c, v) in owned() {
-        let slot = &mut next[dist.petsc(r) - first];
-        cols[*slot] = dist.petsc(c) as i64;
-        vals[*slot] = v;
-        *slot += 1;
-    }
-    drop(next);
+    let owned = entries.filter(|e| dist.owns_row(e.0)).map(|(r, c, v)| (dist.petsc(r) - first, dist.petsc(c) as i64, v));
+    let (ptr, cols, mut vals) = compress(local_n, owned);
     let mut checked = Ok(());
     let mut scales = vec![1.0; local_n];
-    let mut row_ptr = vec![0i64; local_n + 1];
-    let (mut row, mut kept) = (Vec::new(), 0usize);
     for l in 0..local_n {
-        row.clear();
-        row.extend(cols[start[l]..start[l + 1]].iter().copied().zip(vals[start[l]..start[l + 1]].iter().copied()));
-        row.sort_by_key(|e: &(i64, f64)| e.0);
-        let from = kept;
-        for (k, &(c, v)) in row.iter().enumerate() {
-            if k > 0 && row[k - 1].0 == c {
-                vals[kept - 1] += v;
-            } else {
-                cols[kept] = c;
-                vals[kept] = v;
-                kept += 1;
-            }
-        }
-        row_ptr[l + 1] = kept as i64;
-        let merged = from..kept;
+        let merged = ptr[l]..ptr[l + 1];
         if let Some(j) = merged.clone().find(|&j| !vals[j].is_finite()) {
             checked = checked.and(Err(SolveError::NotFinite { row: original[l], col: cols[j] as usize, value: vals[j] }));
         }
@@ -214,8 +183,7 @@ fn own_rows(dist: &Distribution, entries: impl Iterator<Item = Entry> + Clone, e
             vals[merged].iter_mut().for_each(|v| *v *= scales[l]);
         }
     }
-    cols.truncate(kept);
-    vals.truncate(kept);
+    let row_ptr: Vec<i64> = ptr.into_iter().map(|p| p as i64).collect();
     (OwnedRows { original, row_ptr, cols, vals, scales }, checked)
 }
 

@@ -98,8 +98,6 @@ impl Triplets {
 /// row and column), [`SolveError::Dimension`] for an index `≥ n`.
 pub fn assemble(t: &Triplets) -> Result<SparseMatrix, SolveError> {
     let n = t.n;
-    // Range and finiteness, and the count of each column.
-    let mut start = vec![0usize; n + 1];
     for (row, col, val) in t.entries() {
         if row >= n || col >= n {
             return Err(SolveError::Dimension { detail: format!("triplet ({row}, {col}) is out of range for a {n}x{n} matrix") });
@@ -107,52 +105,63 @@ pub fn assemble(t: &Triplets) -> Result<SparseMatrix, SolveError> {
         if !val.is_finite() {
             return Err(SolveError::NotFinite { row, col, value: val });
         }
-        start[col + 1] += 1;
     }
-    for j in 0..n {
-        start[j + 1] += start[j];
+    let (col_ptr, rows, vals) = compress(n, t.entries().map(|(row, col, val)| (col, row, val)));
+    // Two finite values can still overflow to ±inf when summed.
+    if let Some(k) = vals.iter().position(|v| !v.is_finite()) {
+        let col = col_ptr.partition_point(|&p| p <= k) - 1;
+        return Err(SolveError::NotFinite { row: rows[k], col, value: vals[k] });
     }
-    // Scatter into the columns (insertion order within a column).
-    let nnz = start[n];
-    let (mut rows, mut vals) = (vec![0usize; nnz], vec![0.0f64; nnz]);
+    let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
+    Ok(SparseMatrix::new(symbolic, vals))
+}
+
+/// Entries `(segment, index, value)` compressed by a counting sort on the segment (a
+/// column of CSC, a row of CSR): two passes over `entries`, each segment then sorted
+/// by index (stable: duplicates summed in the order they were written) and compacted
+/// in place. Returns the segment pointers, indices and values; segments must be
+/// `< segments`.
+pub(super) fn compress<I: Ord + Copy + Default>(
+    segments: usize,
+    entries: impl Iterator<Item = (usize, I, f64)> + Clone,
+) -> (Vec<usize>, Vec<I>, Vec<f64>) {
+    let mut start = vec![0usize; segments + 1];
+    for (s, _, _) in entries.clone() {
+        start[s + 1] += 1;
+    }
+    for s in 0..segments {
+        start[s + 1] += start[s];
+    }
     let mut next = start.clone();
-    for (row, col, val) in t.entries() {
-        let k = next[col];
-        rows[k] = row;
-        vals[k] = val;
-        next[col] += 1;
+    let (mut idx, mut vals) = (vec![I::default(); start[segments]], vec![0.0f64; start[segments]]);
+    for (s, i, v) in entries {
+        idx[next[s]] = i;
+        vals[next[s]] = v;
+        next[s] += 1;
     }
     drop(next);
-    // Sort each column by row, sum duplicates, and compact.
-    let mut col_ptr = vec![0usize; n + 1];
-    let mut column: Vec<(usize, f64)> = Vec::new();
-    let mut kept = 0;
-    for j in 0..n {
-        column.clear();
-        column.extend(rows[start[j]..start[j + 1]].iter().copied().zip(vals[start[j]..start[j + 1]].iter().copied()));
-        // Stable: duplicates are summed in the order they were written.
-        column.sort_by_key(|e| e.0);
-        for (k, &(row, val)) in column.iter().enumerate() {
-            if k > 0 && column[k - 1].0 == row {
-                vals[kept - 1] += val;
+    let mut ptr = vec![0usize; segments + 1];
+    let (mut segment, mut kept): (Vec<(I, f64)>, usize) = (Vec::new(), 0);
+    for s in 0..segments {
+        segment.clear();
+        segment.extend(idx[start[s]..start[s + 1]].iter().copied().zip(vals[start[s]..start[s + 1]].iter().copied()));
+        segment.sort_by_key(|e| e.0);
+        for (k, &(i, v)) in segment.iter().enumerate() {
+            if k > 0 && segment[k - 1].0 == i {
+                vals[kept - 1] += v;
             } else {
-                rows[kept] = row;
-                vals[kept] = val;
+                idx[kept] = i;
+                vals[kept] = v;
                 kept += 1;
             }
         }
-        col_ptr[j + 1] = kept;
-        // Two finite values can still overflow to ±inf when summed.
-        if let Some(k) = (col_ptr[j]..kept).find(|&k| !vals[k].is_finite()) {
-            return Err(SolveError::NotFinite { row: rows[k], col: j, value: vals[k] });
-        }
+        ptr[s + 1] = kept;
     }
-    rows.truncate(kept);
+    idx.truncate(kept);
     vals.truncate(kept);
-    rows.shrink_to_fit();
+    idx.shrink_to_fit();
     vals.shrink_to_fit();
-    let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
-    Ok(SparseMatrix::new(symbolic, vals))
+    (ptr, idx, vals)
 }
 
 #[cfg(test)]
