@@ -116,9 +116,7 @@ impl Loads {
             })
         })
     }
-}
 
-impl Loads {
     /// Whether a load is a formula in `t`.
     pub fn depend_on_time(&self) -> bool {
         self.body_force.depends_on_time() || self.conditions.iter().any(|c| c.value.depends_on_time())

@@ -277,6 +277,13 @@ pub enum RunError {
     Interrupted { step: usize, t: f64 },
 }
 
+impl RunError {
+    /// [`RunError::NotFinite`] at node `node`, position `p`.
+    pub fn not_finite_at(node: usize, p: [f64; 2]) -> Self {
+        RunError::NotFinite { node, x: p[0], y: p[1] }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

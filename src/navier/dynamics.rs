@@ -270,11 +270,11 @@ fn condensed<'a>(
 }
 
 /// `(E_kin, E_el, E_ext)` of a state (see [`simulate`]), `E_ext` with the body force
-/// `body(t)`.
+/// `body_force` bound at the state's time once.
 fn energies(
     system: &NavierDynamics,
     disc: &Discretisation,
-    body: &dyn Fn(f64, [f64; 2]) -> [f64; 2],
+    (body_force, exact): (&Value, Option<&dyn ExactSolution>),
     areas: &[f64],
     lame: Lame,
     density: f64,
@@ -283,8 +283,10 @@ fn energies(
     let (u, v) = (system.expand(s.t, &s.u, false), system.expand(s.t, &s.v, true));
     let grads = disc.gradients(&u);
     let (mut kin, mut el, mut ext) = (0.0, 0.0, 0.0);
+    let force = body_force.at_time(s.t);
     for (i, area) in areas.iter().enumerate() {
-        let body = body(s.t, disc.nodes.positions[i]);
+        let p = disc.nodes.positions[i];
+        let body = exact::value(&force, p, exact, |e| e.body_force(p));
         let (ui, vi) = (disc.dofs.displacement(&u, i), disc.dofs.displacement(&v, i));
         kin += 0.5 * density * area * (vi[0].powi(2) + vi[1].powi(2));
         let (sg, e) = (lame.stress(grads[i]), strain(grads[i]));
@@ -334,8 +336,8 @@ pub fn simulate(
     let areas = nodal_areas(points, &cells_inside(&case.domain, points));
     let n = disc.nodes.len();
     let nodal = |x: &[f64]| dofs.displacements(x, n);
-    let body = |t: f64, p: [f64; 2]| exact::value(&case.body_force.at_time(t), p, exact.as_deref(), |e| e.body_force(p));
-    let energy = |s: &State| energies(&system, &disc, &body, &areas, case.material.lame(), dynamics.density, s);
+    let body = (&case.body_force, exact.as_deref());
+    let energy = |s: &State| energies(&system, &disc, body, &areas, case.material.lame(), dynamics.density, s);
     let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
         let (u, v) = (nodal(&system.expand(s.t, &s.u, false)), nodal(&system.expand(s.t, &s.v, true)));
         snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })

@@ -110,8 +110,7 @@ impl System<'_> {
         for (&i, r) in nodes.iter().zip(&per_node) {
             let r = &r.entries[..r.len];
             if r.iter().any(|v| !v.1.is_finite()) {
-                let p = self.disc.nodes.positions[i];
-                return Err(RunError::NotFinite { node: i, x: p[0], y: p[1] });
+                return Err(RunError::not_finite_at(i, self.disc.nodes.positions[i]));
             }
             for &(row, v) in r {
                 rhs[row] = v;
@@ -152,10 +151,8 @@ impl System<'_> {
                 Ok(block)
             })
             .collect();
-        let blocks = blocks.into_iter().collect::<Result<Vec<Entries>, usize>>().map_err(|i| {
-            let p = disc.nodes.positions[i];
-            RunError::NotFinite { node: i, x: p[0], y: p[1] }
-        })?;
+        let blocks =
+            blocks.into_iter().collect::<Result<Vec<Entries>, usize>>().map_err(|i| RunError::not_finite_at(i, disc.nodes.positions[i]))?;
         let rhs = self.right_hand_side(&self.case.loads())?;
         Ok((Triplets::from_blocks(dofs.len(), blocks), rhs))
     }

@@ -73,9 +73,12 @@ impl VaryingLoads<'_> {
         // exact value) the node itself.
         let bad = |node: usize| {
             let p = nodes.positions[node];
-            loads.non_finite_at(p, t).unwrap_or(RunError::NotFinite { node, x: p[0], y: p[1] })
+            loads.non_finite_at(p, t).unwrap_or(RunError::not_finite_at(node, p))
         };
-        let body_force = self.layer.forces(&loads.body_force, &loads.conditions, self.exact, nodes).map_err(bad)?;
+        let body_force = self.layer.forces(&loads.body_force, &loads.conditions, self.exact, nodes).map_err(|e| match e {
+            RunError::NotFinite { node, .. } => bad(node),
+            other => other,
+        })?;
         let collar = &nodes.positions[nodes.free..];
         let prescribed: Vec<[f64; 2]> = collar
             .par_iter()
@@ -262,10 +265,7 @@ pub fn simulate(
     let exact = case.exact_solution();
     let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
     let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
-    let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes).map_err(|node| {
-        let p = disc.nodes.positions[node];
-        RunError::NotFinite { node, x: p[0], y: p[1] }
-    })?;
+    let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes)?;
     let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
     let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force, varying };
     let free = &disc.nodes.positions[..disc.nodes.free];

@@ -115,15 +115,16 @@ impl LoadLayer {
     }
 
     /// Body force density `b_i` of every free node (module docs) for the loads
-    /// `body_force` and `conditions` (of one instant: `case::Case::loads_at`), or the
-    /// first free node whose load is not finite.
+    /// `body_force` and `conditions` (of one instant: `case::Case::loads_at`), or
+    /// [`RunError::NotFinite`] at the first free node whose load is not finite (an
+    /// overflow, or an exact solution's singular point).
     pub fn forces(
         &self,
         body_force: &Value,
         conditions: &[BoundaryCondition],
         exact: Option<&dyn ExactSolution>,
         nodes: &PdNodes,
-    ) -> Result<Vec<[f64; 2]>, usize> {
+    ) -> Result<Vec<[f64; 2]>, RunError> {
         let free = &nodes.positions[..nodes.free];
         let mut b: Vec<[f64; 2]> = free.par_iter().map(|&x| exact::value(body_force, x, exact, |e| e.body_force(x))).collect();
         for s in &self.shares {
@@ -132,15 +133,14 @@ impl LoadLayer {
             b[s.node][1] += s.share * t[1] / self.spacing;
         }
         match b.par_iter().position_first(|v| !v[0].is_finite() || !v[1].is_finite()) {
-            Some(i) => Err(i),
+            Some(i) => Err(RunError::not_finite_at(i, free[i])),
             None => Ok(b),
         }
     }
 }
 
-/// Body force density of every free node, and the number of nodes in a loaded layer;
-/// a load that is not finite (an overflow, or an exact solution's singular point) is
-/// an error at its node.
+/// Body force density of every free node ([`LoadLayer::forces`]), and the number of
+/// nodes in a loaded layer.
 pub fn body_forces(
     domain: &Domain,
     conditions: &[BoundaryCondition],
@@ -149,10 +149,7 @@ pub fn body_forces(
     nodes: &PdNodes,
 ) -> Result<(Vec<[f64; 2]>, usize), RunError> {
     let layer = LoadLayer::new(domain, conditions, nodes);
-    let b = layer.forces(body_force, conditions, exact, nodes).map_err(|node| {
-        let p = nodes.positions[node];
-        RunError::NotFinite { node, x: p[0], y: p[1] }
-    })?;
+    let b = layer.forces(body_force, conditions, exact, nodes)?;
     Ok((b, layer.layer_nodes()))
 }
 

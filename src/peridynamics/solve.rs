@@ -180,10 +180,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
-        let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| {
-            let p = disc.nodes.positions[node];
-            RunError::NotFinite { node, x: p[0], y: p[1] }
-        })?;
+        let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]))?;
         let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.compute_nnz());
         Ok(((m, rhs, b, layer), note))
     })?;
