@@ -1082,3 +1082,37 @@ fn auto_solver_switches_to_gmres_when_lu_does_not_fit_comfortably() {
     let (a, b) = (roomy["errors"]["e_inf_u"].as_f64().unwrap(), tight["errors"]["e_inf_u"].as_f64().unwrap());
     assert!((a - b).abs() <= 1e-6 * a.max(1e-12) + 1e-9, "LU {a:e} vs GMRES {b:e}");
 }
+
+/// When `auto` has gone iterative and GMRES + AMG stalls (the scattered Lame ring at
+/// its shipped spacing: the multigrid stalls near 4e-2), the matrix the solver was
+/// handed (and freed) is rebuilt in columns from the multigrid's equilibrated rows and
+/// BiCGSTAB + ILU(0) solves it; the choice says so and the errors are LU's (measured
+/// 1.2e-6 apart relative, the 1e-10 tolerance on a system of condition ~1e5; the bound
+/// 1e-4 allows a hundredfold).
+#[test]
+fn auto_falls_back_from_a_stalled_multigrid_to_ilu0() {
+    let tmp = TempDir::new().unwrap();
+    let lame = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/lame.toml");
+    let run = |limit: Option<&str>, out: &str| {
+        let res = tmp.path().join(out);
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_mlsm"));
+        cmd.args(["--quiet", "run", lame.to_str().unwrap(), "--out", res.to_str().unwrap()]);
+        match limit {
+            Some(l) => cmd.env("MLSM_MEMORY_LIMIT", l),
+            None => cmd.env_remove("MLSM_MEMORY_LIMIT"),
+        };
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{}", describe(&o));
+        read_json(&res.join("summary.json"))
+    };
+    let tight = run(Some("100e6"), "tight");
+    assert_eq!(tight["solver"]["method"], "bicgstab+ilu0", "{tight}");
+    let why = tight["solver"]["choice"].as_str().unwrap();
+    assert!(why.contains("GMRES(30)+AMG did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
+    let roomy = run(None, "roomy");
+    assert_eq!(roomy["solver"]["method"], "lu", "{roomy}");
+    for norm in ["e_inf_u", "e_inf_sigma"] {
+        let (a, b) = (roomy["errors"][norm].as_f64().unwrap(), tight["errors"][norm].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-4 * a, "{norm}: LU {a:e} vs fallback {b:e}");
+    }
+}

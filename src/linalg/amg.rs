@@ -82,6 +82,9 @@ struct Coarsest {
 pub struct Amg {
     levels: Vec<Level>,
     coarsest: Coarsest,
+    /// The operator itself when the hierarchy has one level (it was small enough to
+    /// factor directly), so that [`Amg::fine_operator`] always has it.
+    single: Option<CsrMatrix<f64>>,
     /// Unknowns per level, finest first (the coarsest included).
     sizes: Vec<usize>,
     /// Stored entries of all operators and transfers.
@@ -148,6 +151,33 @@ pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> CsrMatrix<f64> {
     CsrMatrix::try_from_csr_data(n, m, offsets, cols, vals).expect("a CSC matrix transposes to a valid CSR matrix")
 }
 
+/// `a` (CSR) in compressed columns, by a counting sort on the column (rows come out
+/// sorted); `a` is consumed, so that only the result and one index array are held
+/// together with it.
+pub fn columns_of(a: CsrMatrix<f64>) -> SparseMatrix {
+    let (n, m) = (a.nrows(), a.ncols());
+    let (offsets, cols, vals) = a.disassemble();
+    let mut col_ptr = vec![0usize; m + 1];
+    for &j in &cols {
+        col_ptr[j + 1] += 1;
+    }
+    for j in 0..m {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    let mut next = col_ptr[..m].to_vec();
+    let (mut rows, mut values) = (vec![0usize; cols.len()], vec![0.0f64; cols.len()]);
+    for i in 0..n {
+        for k in offsets[i]..offsets[i + 1] {
+            let j = cols[k];
+            rows[next[j]] = i;
+            values[next[j]] = vals[k];
+            next[j] += 1;
+        }
+    }
+    let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(n, m, col_ptr, None, rows);
+    SparseMatrix::new(symbolic, values)
+}
+
 /// The block-diagonal matrix of `inv_diag`.
 fn block_diagonal(inv_diag: &[f64], blocks: Blocks) -> CsrMatrix<f64> {
     let b = blocks.block;
@@ -204,12 +234,12 @@ impl Amg {
     /// The hierarchy of `a` (the system as solved, row-equilibrated) with the rigid-body
     /// modes of `layout` as near-null space.
     pub fn build(a: &SparseMatrix, layout: Option<NodeLayout>, params: AmgParams) -> Result<Self, super::SolveError> {
-        Self::build_from_rows(to_csr(a), layout, params)
+        Ok(Self::build_from_rows(to_csr(a), layout, params))
     }
 
     /// [`Amg::build`] from the operator in compressed rows, which the hierarchy keeps
     /// as its finest level.
-    pub fn build_from_rows(a: CsrMatrix<f64>, layout: Option<NodeLayout>, params: AmgParams) -> Result<Self, super::SolveError> {
+    pub fn build_from_rows(a: CsrMatrix<f64>, layout: Option<NodeLayout>, params: AmgParams) -> Self {
         let n = a.nrows();
         let (mut null, k) = rigid_body_modes(n, layout);
         let block = layout.map(|l| l.per_node).filter(|&b| b >= 2 && n.is_multiple_of(b)).unwrap_or(1);
@@ -231,7 +261,8 @@ impl Amg {
             let omega = 4.0 / (3.0 * rho);
             // P = T − ω D⁻¹ (A T);  R = Tᵀ − ω (Tᵀ A) D⁻¹.
             // Intermediates are dropped as soon as they are used: at 8e5 unknowns each
-            // is a few hundred MB.
+            // is a few hundred MB. (Forming D⁻¹ A T and Tᵀ A D⁻¹ by `triple_product`
+            // instead was slower and lowered no peak: the solve's peak is in GMRES.)
             let p = {
                 let at = spgemm::product(&current, &t);
                 let dat = spgemm::product(&d, &at);
@@ -247,21 +278,19 @@ impl Amg {
                 &tt - &(tad * omega)
             };
             drop(d);
-            let coarse = {
-                let ra = spgemm::product(&r, &current);
-                spgemm::product(&ra, &p)
-            };
+            let coarse = spgemm::triple_product(&r, &current, &p);
             levels.push(Level { a: current, blocks, inv_diag, p, r });
             sizes.push(coarse.nrows());
             current = coarse;
             null = coarse_null;
             blocks = Blocks { block: k, nodes: count };
         }
-        let coarsest = Coarsest::factor(&current)?;
+        let coarsest = Coarsest::factor(&current);
         let nonzeros = levels.iter().map(|l| l.a.nnz() + l.p.nnz() + l.r.nnz()).sum::<usize>() + current.nnz();
         let fine = levels.first().map_or(current.nnz(), |l| l.a.nnz()) as f64;
         let operator_complexity = (levels.iter().map(|l| l.a.nnz()).sum::<usize>() + current.nnz()) as f64 / fine;
-        Ok(Amg { levels, coarsest, sizes, nonzeros, operator_complexity })
+        let single = levels.is_empty().then_some(current);
+        Amg { levels, coarsest, single, sizes, nonzeros, operator_complexity }
     }
 
     /// Unknowns per level, finest first.
@@ -279,10 +308,18 @@ impl Amg {
         self.operator_complexity
     }
 
-    /// The finest operator in compressed rows (`None` when the system was small enough
-    /// to be solved directly on one level).
-    pub fn fine_operator(&self) -> Option<&CsrMatrix<f64>> {
-        self.levels.first().map(|l| &l.a)
+    /// The finest operator (the system as solved) in compressed rows.
+    pub fn fine_operator(&self) -> &CsrMatrix<f64> {
+        self.levels.first().map_or_else(|| self.single.as_ref().expect("a one-level hierarchy keeps its operator"), |l| &l.a)
+    }
+
+    /// The finest operator, the rest of the hierarchy dropped (a solver that gives up
+    /// on the multigrid frees its memory before it tries another method).
+    pub fn into_fine_operator(self) -> CsrMatrix<f64> {
+        match self.levels.into_iter().next() {
+            Some(level) => level.a,
+            None => self.single.expect("a one-level hierarchy keeps its operator"),
+        }
     }
 
     /// Unknowns of the finest level.
@@ -328,7 +365,7 @@ impl Level {
 impl Coarsest {
     /// Dense LU of the coarsest operator; unknowns whose row and column are both empty
     /// (dependent near-null vectors) get a unit diagonal, which leaves them zero.
-    fn factor(a: &CsrMatrix<f64>) -> Result<Self, super::SolveError> {
+    fn factor(a: &CsrMatrix<f64>) -> Self {
         let n = a.nrows();
         let mut dense = faer::Mat::<f64>::zeros(n, n);
         let mut used = vec![false; n];
@@ -346,7 +383,7 @@ impl Coarsest {
                 dense[(i, i)] = 1.0;
             }
         }
-        Ok(Coarsest { lu: dense.partial_piv_lu(), n })
+        Coarsest { lu: dense.partial_piv_lu(), n }
     }
 
     fn solve(&self, f: &[f64], z: &mut [f64]) {
@@ -363,6 +400,24 @@ impl Coarsest {
 mod tests {
     use super::*;
     use crate::linalg::{assemble, gmres, scaling, Triplets};
+
+    /// Rows and back to columns gives the matrix bit for bit (pattern and values), and
+    /// with scales each row is multiplied by its own.
+    #[test]
+    fn rows_and_columns_convert_exactly() {
+        let (a, _) = vector_laplacian(9);
+        let back = columns_of(scaled_rows(&a, None));
+        assert_eq!(back.symbolic().col_ptr(), a.symbolic().col_ptr());
+        assert_eq!(back.symbolic().row_idx(), a.symbolic().row_idx());
+        assert_eq!(back.val(), a.val());
+        let scales: Vec<f64> = (0..a.nrows()).map(|i| 1.0 + i as f64).collect();
+        let scaled = columns_of(scaled_rows(&a, Some(&scales)));
+        for j in 0..a.ncols() {
+            for ((&i, &v), &w) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)).zip(scaled.val_of_col(j)) {
+                assert_eq!(w, v * scales[i]);
+            }
+        }
+    }
 
     /// The two-component 5-point Laplacian on an `m x m` grid of the unit square, the
     /// boundary nodes' rows identity (a Dirichlet problem), node `i + m j` at `(i, j) h`.
@@ -416,7 +471,7 @@ mod tests {
             // Five-node aggregates of a 5-point stencil carry 3 coarse unknowns for 10
             // fine ones, and the coarse stencils widen: measured 3.3.
             assert!(amg.operator_complexity() < 4.0, "{}", amg.operator_complexity());
-            let out = gmres::solve_gmres(amg.fine_operator().unwrap(), &b, |v| amg.solve_in_place(v), 1e-10, 200, 30);
+            let out = gmres::solve_gmres(amg.fine_operator(), &b, |v| amg.solve_in_place(v), 1e-10, 200, 30);
             assert_eq!(out.status, gmres::Status::Converged, "{m}: {:?}", out.history);
             counts.push(out.iterations);
         }

@@ -135,7 +135,7 @@ impl BuiltPreconditioner {
     /// finest level).
     pub fn fine_operator(&self) -> Option<&nalgebra_sparse::CsrMatrix<f64>> {
         match self {
-            BuiltPreconditioner::Amg(p) => p.fine_operator(),
+            BuiltPreconditioner::Amg(p) => Some(p.fine_operator()),
             _ => None,
         }
     }

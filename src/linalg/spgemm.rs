@@ -3,7 +3,7 @@
 //! `sum_k a_ik (row k of B)`, accumulated in a dense row with a marker per column.
 //!
 //! Why written here: the multigrid setup forms six products per level (`A T`,
-//! `D (A T)`, `Tᵀ A`, `(Tᵀ A) D`, `R A`, `(R A) P`); nalgebra-sparse's product is
+//! `D (A T)`, `Tᵀ A`, `(Tᵀ A) D`, and `R A P` fused); nalgebra-sparse's product is
 //! serial and was most of the 10 s setup at 1e6 nodes. sprs has a parallel product,
 //! but every operand would have to be copied into its format and back.
 
@@ -14,39 +14,66 @@ use rayon::prelude::*;
 /// balance two to a few dozen threads.
 const ROWS_PER_TASK: usize = 2048;
 
-/// `A B` (dimensions must agree: `a.ncols() == b.nrows()`, checked). Columns come out
-/// sorted within each row; products that cancel to zero are kept as stored zeros.
-/// Two passes over the rows: the pattern's row lengths, then the entries written in
+/// A row accumulator over `m` columns: a dense row with a marker per column (the
+/// row that last touched it) and the list of the columns touched.
+struct Accumulator {
+    mark: Vec<usize>,
+    dense: Vec<f64>,
+    touched: Vec<usize>,
+}
+
+impl Accumulator {
+    fn new(m: usize) -> Self {
+        Accumulator { mark: vec![usize::MAX; m], dense: vec![0.0; m], touched: Vec::new() }
+    }
+
+    /// Start row `i`.
+    fn start(&mut self) {
+        self.touched.clear();
+    }
+
+    /// Add `value` at column `j` of row `i`.
+    fn add(&mut self, i: usize, j: usize, value: f64) {
+        if self.mark[j] != i {
+            self.mark[j] = i;
+            self.dense[j] = value;
+            self.touched.push(j);
+        } else {
+            self.dense[j] += value;
+        }
+    }
+
+    /// Accumulate `sum_k x_k (row k of b)` for the entries `(k, x_k)` of `row` into row `i`.
+    fn add_rows(&mut self, i: usize, cols: &[usize], vals: &[f64], b: &CsrMatrix<f64>) {
+        for (&k, &x) in cols.iter().zip(vals) {
+            let brow = b.row(k);
+            for (&j, &bkj) in brow.col_indices().iter().zip(brow.values()) {
+                self.add(i, j, x * bkj);
+            }
+        }
+    }
+
+    /// The touched columns sorted, and their values.
+    fn sorted(&mut self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.touched.sort_unstable();
+        self.touched.iter().map(|&j| (j, self.dense[j]))
+    }
+}
+
+/// The `n x m` matrix whose row `i` the accumulators `row(i, scratch)` build, rows in
+/// parallel. Two passes over the rows: the row lengths, then the entries written in
 /// place, so that the result is held once (a single pass collecting per-task parts
 /// held it twice: +0.4 GB at 1e6 nodes).
-pub fn product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>) -> CsrMatrix<f64> {
-    assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
-    let (n, m) = (a.nrows(), b.ncols());
+fn rows_of_products<S: Send>(
+    n: usize,
+    m: usize,
+    scratch: impl Fn() -> S + Sync + Send,
+    row: impl Fn(usize, &mut S) -> &mut Accumulator + Sync + Send,
+) -> CsrMatrix<f64> {
     let tasks = n.div_ceil(ROWS_PER_TASK);
     let rows_of = |task: usize| task * ROWS_PER_TASK..n.min((task + 1) * ROWS_PER_TASK);
-    // Pass 1: the number of distinct columns of each row.
-    let lengths: Vec<Vec<usize>> = (0..tasks)
-        .into_par_iter()
-        .map_init(
-            || vec![usize::MAX; m],
-            |mark, task| {
-                rows_of(task)
-                    .map(|i| {
-                        let mut count = 0;
-                        for &k in a.row(i).col_indices() {
-                            for &j in b.row(k).col_indices() {
-                                if mark[j] != i {
-                                    mark[j] = i;
-                                    count += 1;
-                                }
-                            }
-                        }
-                        count
-                    })
-                    .collect()
-            },
-        )
-        .collect();
+    let lengths: Vec<Vec<usize>> =
+        (0..tasks).into_par_iter().map_init(&scratch, |s, task| rows_of(task).map(|i| row(i, s).touched.len()).collect()).collect();
     let mut offsets = Vec::with_capacity(n + 1);
     offsets.push(0usize);
     for len in lengths.iter().flatten() {
@@ -66,37 +93,62 @@ pub fn product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>) -> CsrMatrix<f64> {
         slices.push((rows, c, v));
         (rest_c, rest_v) = (rc, rv);
     }
-    // Pass 2: accumulate each row densely, write its sorted columns and values.
-    slices.into_par_iter().for_each_init(
-        || (vec![usize::MAX; m], vec![0.0f64; m]),
-        |(mark, dense), (rows, c, v)| {
-            let base = offsets[rows.start];
-            for i in rows {
-                let (start, end) = (offsets[i] - base, offsets[i + 1] - base);
-                let mut next = start;
-                let row = a.row(i);
-                for (&k, &aik) in row.col_indices().iter().zip(row.values()) {
-                    let brow = b.row(k);
-                    for (&j, &bkj) in brow.col_indices().iter().zip(brow.values()) {
-                        if mark[j] != i {
-                            mark[j] = i;
-                            dense[j] = aik * bkj;
-                            c[next] = j;
-                            next += 1;
-                        } else {
-                            dense[j] += aik * bkj;
-                        }
-                    }
-                }
-                debug_assert_eq!(next, end);
-                c[start..end].sort_unstable();
-                for k in start..end {
-                    v[k] = dense[c[k]];
-                }
+    slices.into_par_iter().for_each_init(&scratch, |s, (rows, c, v)| {
+        let base = offsets[rows.start];
+        for i in rows {
+            let start = offsets[i] - base;
+            for (k, (j, x)) in row(i, s).sorted().enumerate() {
+                c[start + k] = j;
+                v[start + k] = x;
             }
-        },
-    );
+        }
+    });
     CsrMatrix::try_from_csr_data(n, m, offsets, cols, vals).expect("rows built sorted and without duplicates")
+}
+
+/// `A B` (dimensions must agree: `a.ncols() == b.nrows()`, checked). Columns come out
+/// sorted within each row; products that cancel to zero are kept as stored zeros.
+pub fn product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>) -> CsrMatrix<f64> {
+    assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
+    rows_of_products(
+        a.nrows(),
+        b.ncols(),
+        || Accumulator::new(b.ncols()),
+        |i, acc| {
+            acc.start();
+            let row = a.row(i);
+            acc.add_rows(i, row.col_indices(), row.values(), b);
+            acc
+        },
+    )
+}
+
+/// `(A B) C` without holding `A B`: each row of `A B` is formed in one accumulator and
+/// at once multiplied into the next. The multigrid's coarse operator `R A P` this way
+/// never holds `R A`, whose rows reach two stencils around an aggregate: 1.5 GB at
+/// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md).
+pub fn triple_product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>, c: &CsrMatrix<f64>) -> CsrMatrix<f64> {
+    assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
+    assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
+    rows_of_products(
+        a.nrows(),
+        c.ncols(),
+        || (Accumulator::new(b.ncols()), Accumulator::new(c.ncols()), Vec::new(), Vec::new()),
+        |i, (ab, abc, cols, vals)| {
+            ab.start();
+            let row = a.row(i);
+            ab.add_rows(i, row.col_indices(), row.values(), b);
+            cols.clear();
+            vals.clear();
+            for (j, x) in ab.sorted() {
+                cols.push(j);
+                vals.push(x);
+            }
+            abc.start();
+            abc.add_rows(i, cols, vals, c);
+            abc
+        },
+    )
 }
 
 #[cfg(test)]
@@ -137,6 +189,20 @@ mod tests {
             assert_eq!(fast.col_indices(), slow.col_indices(), "{n}x{k}x{m}: columns");
             let worst = fast.values().iter().zip(slow.values()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
             assert!(worst <= 1e-14, "{n}x{k}x{m}: values differ by {worst:e}");
+        }
+    }
+
+    /// The fused triple product has the pattern of the two products in turn and their
+    /// values to round-off (the same sums in the same order: 1e-14 is generous).
+    #[test]
+    fn triple_product_matches_two_products() {
+        for (n, k, l, m) in [(3000, 5000, 2500, 400), (7, 5, 4, 3), (1, 1, 1, 1)] {
+            let (a, b, c) = (random(n, k, 6, 3 + n as u64), random(k, l, 5, 5 + l as u64), random(l, m, 4, 11 + m as u64));
+            let (fused, staged) = (triple_product(&a, &b, &c), product(&product(&a, &b), &c));
+            assert_eq!(fused.row_offsets(), staged.row_offsets(), "{n}x{k}x{l}x{m}: pattern");
+            assert_eq!(fused.col_indices(), staged.col_indices(), "{n}x{k}x{l}x{m}: columns");
+            let worst = fused.values().iter().zip(staged.values()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            assert!(worst <= 1e-14, "{n}x{k}x{l}x{m}: values differ by {worst:e}");
         }
     }
 }

@@ -112,6 +112,13 @@ impl std::ops::BitOrAssign for OpSet {
     }
 }
 
+impl std::ops::BitAnd for OpSet {
+    type Output = OpSet;
+    fn bitand(self, rhs: OpSet) -> OpSet {
+        OpSet(self.0 & rhs.0)
+    }
+}
+
 impl From<Op> for OpSet {
     fn from(op: Op) -> OpSet {
         OpSet(op.bit())

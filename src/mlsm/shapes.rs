@@ -68,6 +68,37 @@ impl Shapes {
     pub fn count(&self) -> usize {
         self.computed.iter().map(|s| s.len()).sum()
     }
+
+    /// Keep the operators in `keep` only and give the memory of the others back (the
+    /// second derivatives are needed for assembly, the gradients after the solve): at
+    /// 1e6 nodes with 13-node supports, 0.53 GB of shapes become 0.21 GB. Each node's
+    /// kept blocks move towards the front, in place.
+    pub fn retain(&mut self, keep: OpSet) {
+        let kept = self.stored & keep;
+        if kept == self.stored {
+            return;
+        }
+        let (old_k, new_k) = (self.stored.len(), kept.len());
+        let mut new_slot = [0; 6];
+        for (k, op) in kept.iter().enumerate() {
+            new_slot[op as usize] = k;
+        }
+        for i in 0..self.offsets.len() - 1 {
+            let (offset, len) = (self.offsets[i], self.offsets[i + 1] - self.offsets[i]);
+            for op in kept.iter() {
+                // The target never lies after the source, and the sources still to be
+                // read lie after every target written so far.
+                let from = old_k * offset + self.slot[op as usize] * len;
+                let to = new_k * offset + new_slot[op as usize] * len;
+                self.data.copy_within(from..from + len, to);
+            }
+        }
+        self.data.truncate(new_k * self.offsets[self.offsets.len() - 1]);
+        self.data.shrink_to_fit();
+        self.stored = kept;
+        self.slot = new_slot;
+        self.computed.iter_mut().for_each(|c| *c = *c & keep);
+    }
 }
 
 /// The nodes that need shapes (`needs[i]` not empty) and whose support cannot
@@ -150,4 +181,38 @@ pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approxi
         )?;
     }
     Ok(Shapes { offsets, stored, slot, computed: needs.to_vec(), data })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::domain::neighbors::Supports;
+    use crate::mlsm::{Basis, Weight};
+
+    /// Retaining the first derivatives keeps them bit for bit at every node (whatever
+    /// else each node had), drops the second derivatives, and shrinks the storage to
+    /// 2 of the 5 operators stored.
+    #[test]
+    fn retain_keeps_the_kept_operators_exactly() {
+        let positions: Vec<[f64; 2]> = (0..64).map(|k| [0.1 * (k % 8) as f64 + 0.01 * (k / 8) as f64, 0.1 * (k / 8) as f64]).collect();
+        let supports = Supports::nearest(&positions, 9);
+        let approx = Approximation {
+            basis: Basis::Monomials { degree: 2 },
+            weight: Weight::Gaussian { sigma: 1.0 },
+            support: 9,
+            ghost_nodes: false,
+        };
+        let needs: Vec<OpSet> = (0..64).map(|i| [OpSet::D1 | OpSet::D2, OpSet::D1, OpSet::D2, OpSet::EMPTY][i % 4]).collect();
+        let all = compute_shapes(&positions, &supports, &approx, &needs).unwrap();
+        let mut kept = all.clone();
+        kept.retain(OpSet::D1);
+        assert_eq!(kept.operators(), OpSet::D1);
+        assert_eq!(kept.data.len() * 5, all.data.len() * 2);
+        for (i, need) in needs.iter().enumerate() {
+            assert_eq!(kept.computed_at(i), *need & OpSet::D1);
+            for op in (*need & OpSet::D1).iter() {
+                assert_eq!(kept.get(i, op), all.get(i, op), "node {i}, {op:?}");
+            }
+        }
+    }
 }

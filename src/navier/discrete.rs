@@ -138,6 +138,13 @@ impl Discretisation {
         })
     }
 
+    /// Give back the memory of the shapes only the rows needed, once they are
+    /// assembled: the first derivatives stay when post-processing computes the gradient
+    /// (`gradient`), nothing otherwise.
+    pub fn release_row_shapes(&mut self, gradient: bool) {
+        self.shapes.retain(if gradient { OpSet::D1 } else { OpSet::EMPTY });
+    }
+
     /// Whether this rank computes node `i`'s shapes and rows (always, unless distributed).
     pub fn owns(&self, i: usize) -> bool {
         self.owner.as_ref().is_none_or(|o| o[i] as usize == crate::petsc::world().rank)

@@ -188,7 +188,7 @@ pub fn higher_degree(
     let reference_params = NavierParams { approximation, keep_system: false, ..params.clone() };
     let mut timer = StageTimer::new(&Silent);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
-        .and_then(|disc| assemble_and_solve(case, &disc, exact, &reference_params.solver, false, &mut timer).map(|s| (disc, s)));
+        .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params.solver, false, &mut timer).map(|s| (disc, s)));
     let (disc, solved) = match solved {
         Ok(s) => s,
         Err(e) => return Estimate::Unavailable(format!("the reference ({}) failed: {e}", approximation.basis.describe())),

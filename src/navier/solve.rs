@@ -2,6 +2,8 @@
 //! observer): nodes -> supports -> shapes -> assembly -> solve -> post-processing
 //! (gradients, strain, stress, von Mises, errors against the exact solution).
 
+use std::borrow::Cow;
+
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
@@ -84,8 +86,9 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let mut timer = StageTimer::new(progress);
     let exact = case.exact_solution();
     let exact = exact.as_deref();
-    let disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let Solved { x, nonzeros, report, system } = assemble_and_solve(case, &disc, exact, &params.solver, params.keep_system, &mut timer)?;
+    let mut disc = Discretisation::new(case, params, exact, &mut timer)?;
+    let Solved { x, nonzeros, report, system } =
+        assemble_and_solve(case, &mut disc, exact, &params.solver, params.keep_system, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
@@ -176,18 +179,19 @@ pub(super) struct Solved {
 }
 
 /// Assemble the rows of `disc` and solve them with `solver` (stages `assembly`, `solve`);
-/// `keep`: return the system too.
+/// `keep`: return the system too. The shapes only the rows needed are released before
+/// the solve ([`Discretisation::release_row_shapes`]).
 pub(super) fn assemble_and_solve(
     case: &Case,
-    disc: &Discretisation,
+    disc: &mut Discretisation,
     exact: Option<&dyn ExactSolution>,
     solver: &SolverParams,
     keep: bool,
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
     let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
-    if let Some(owner) = &disc.owner {
-        return assemble_and_solve_distributed(System { case, disc, exact }, owner, &positions, solver, timer);
+    if disc.owner.is_some() {
+        return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
     }
     let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
         let (triplets, rhs) = System { case, disc, exact }.assemble()?;
@@ -195,32 +199,41 @@ pub(super) fn assemble_and_solve(
         let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.compute_nnz());
         Ok(((m, rhs), note))
     })?;
+    disc.release_row_shapes(case.outputs.needs_gradient());
     let nonzeros = matrix.compute_nnz();
-    let (x, report) = timer.run(stage::SOLVE, || {
-        let layout = linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions };
-        let (x, report) = linalg::solve_nodal(&matrix, &rhs, solver, Some(layout))?;
+    let (x, report, kept) = timer.run(stage::SOLVE, || {
+        let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions });
+        // Handed over unless kept: the solver frees it once it holds its own form.
+        let ((x, report), kept) = if keep {
+            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout)?, Some(matrix))
+        } else {
+            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout)?, None)
+        };
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
-        Ok(((x, report), note))
+        Ok(((x, report, kept), note))
     })?;
-    Ok(Solved { x, nonzeros, report, system: keep.then_some((matrix, rhs)) })
+    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (matrix, rhs)) })
 }
 
 /// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
 /// owns and PETSc solves them together ([`distributed::solve`]); the system is not
 /// kept (no rank holds it whole).
 fn assemble_and_solve_distributed(
-    system: System,
-    owner: &[u32],
+    case: &Case,
+    disc: &mut Discretisation,
+    exact: Option<&dyn ExactSolution>,
     positions: &[[f64; 2]],
     solver: &SolverParams,
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
-    let dofs = system.disc.dofs;
+    let dofs = disc.dofs;
     let (triplets, rhs) = timer.run(stage::ASSEMBLY, || {
-        let (t, rhs) = agree(system.assemble())?;
+        let (t, rhs) = agree(System { case, disc, exact }.assemble())?;
         let note = format!("{} unknowns, {} entries in this rank's rows", dofs.len(), t.len());
         Ok(((t, rhs), note))
     })?;
+    disc.release_row_shapes(case.outputs.needs_gradient());
+    let owner = disc.owner.as_deref().expect("a distributed discretisation has owners");
     let (x, report) = timer.run(stage::SOLVE, || {
         let dist = Distribution::new(owner.to_vec(), dofs.unknowns().per_node(), crate::petsc::world());
         let (x, report) = distributed::solve(&dist, triplets.entries(), &rhs, positions, solver)?;

@@ -15,6 +15,7 @@ use crate::exact::ExactSolution;
 use crate::linalg::{self, SolveReport};
 use crate::pipeline::{stage, Progress, RunError, Stage, StageTimer, StageTimings};
 use crate::post::probe::{probe_values, NodalFields, ProbeValue};
+use std::borrow::Cow;
 
 /// Family search.
 pub const FAMILIES: Stage = Stage::new("families");
@@ -188,11 +189,10 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let (x, report) = timer.run(stage::SOLVE, || {
         // The unknowns are the free nodes' displacements, free nodes first.
         let layout = linalg::NodeLayout { per_node: 2, positions: &disc.nodes.positions[..rhs.len() / 2] };
-        let (x, report) = linalg::solve_nodal(&matrix, &rhs, &params.solver, Some(layout))?;
+        let (x, report) = linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout))?;
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;
-    drop(matrix);
     let post = timer.run(stage::POST, || {
         let post = post(case, params, &disc, exact, &x)?;
         let note = match &post.errors {
