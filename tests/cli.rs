@@ -1051,6 +1051,20 @@ fn export_system_writes_a_system_that_other_solvers_can_read() {
     assert!(stderr(&o).contains("--export-system"), "{}", describe(&o));
 }
 
+/// `summary.json` of `mlsm --quiet run SCENE ARGS --out OUT` under the memory limit
+/// `limit` (`MLSM_MEMORY_LIMIT`; none: the machine's), which must succeed.
+fn run_with_memory_limit(scene: &Path, args: &[&str], limit: Option<&str>, out: &Path) -> Value {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_mlsm"));
+    cmd.args(["--quiet", "run", scene.to_str().unwrap()]).args(args).args(["--out", out.to_str().unwrap()]);
+    match limit {
+        Some(l) => cmd.env("MLSM_MEMORY_LIMIT", l),
+        None => cmd.env_remove("MLSM_MEMORY_LIMIT"),
+    };
+    let o = cmd.output().unwrap();
+    assert!(o.status.success(), "{}", describe(&o));
+    read_json(&out.join("summary.json"))
+}
+
 /// `solver.kind = "auto"` (the default) runs LU while the estimated LU factors take at
 /// most half the available memory and GMRES + AMG above it, and says which and why in
 /// summary.json. manufactured_dirichlet at h = 0.0125 (6561 nodes): factors estimated at
@@ -1060,18 +1074,8 @@ fn export_system_writes_a_system_that_other_solvers_can_read() {
 fn auto_solver_switches_to_gmres_when_lu_does_not_fit_comfortably() {
     let tmp = TempDir::new().unwrap();
     write(tmp.path(), "scene.toml", &scene_plus("[estimate]\nmethod = \"none\"\n"));
-    let run = |limit: Option<&str>, out: &str| {
-        let res = tmp.path().join(out);
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_mlsm"));
-        cmd.current_dir(tmp.path()).args(["--quiet", "run", "scene.toml", "--spacing", "0.0125", "--out", res.to_str().unwrap()]);
-        match limit {
-            Some(l) => cmd.env("MLSM_MEMORY_LIMIT", l),
-            None => cmd.env_remove("MLSM_MEMORY_LIMIT"),
-        };
-        let o = cmd.output().unwrap();
-        assert!(o.status.success(), "{}", describe(&o));
-        read_json(&res.join("summary.json"))
-    };
+    let scene = tmp.path().join("scene.toml");
+    let run = |limit: Option<&str>, out: &str| run_with_memory_limit(&scene, &["--spacing", "0.0125"], limit, &tmp.path().join(out));
     let roomy = run(None, "roomy");
     assert_eq!(roomy["solver"]["kind"], "auto", "{roomy}");
     assert_eq!(roomy["solver"]["method"], "lu", "{roomy}");
@@ -1093,18 +1097,7 @@ fn auto_solver_switches_to_gmres_when_lu_does_not_fit_comfortably() {
 fn auto_falls_back_from_a_stalled_multigrid_to_ilu0() {
     let tmp = TempDir::new().unwrap();
     let lame = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/lame.toml");
-    let run = |limit: Option<&str>, out: &str| {
-        let res = tmp.path().join(out);
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_mlsm"));
-        cmd.args(["--quiet", "run", lame.to_str().unwrap(), "--out", res.to_str().unwrap()]);
-        match limit {
-            Some(l) => cmd.env("MLSM_MEMORY_LIMIT", l),
-            None => cmd.env_remove("MLSM_MEMORY_LIMIT"),
-        };
-        let o = cmd.output().unwrap();
-        assert!(o.status.success(), "{}", describe(&o));
-        read_json(&res.join("summary.json"))
-    };
+    let run = |limit: Option<&str>, out: &str| run_with_memory_limit(&lame, &[], limit, &tmp.path().join(out));
     let tight = run(Some("100e6"), "tight");
     assert_eq!(tight["solver"]["method"], "bicgstab+ilu0", "{tight}");
     let why = tight["solver"]["choice"].as_str().unwrap();

@@ -208,6 +208,15 @@ impl Start {
     }
 }
 
+impl Start {
+    /// The report of a converged Krylov solve with `pc`: its `(iterations, restarts,
+    /// relative residual, original relative residual)`.
+    fn converged(&self, pc: &precond::BuiltPreconditioner, seconds: (f64, f64), counts: (usize, usize, f64, f64)) -> SolveReport {
+        let (iterations, restarts, relative_residual, original_relative_residual) = counts;
+        SolveReport { iterations, restarts, relative_residual, original_relative_residual, ..self.report(Some(pc), seconds) }
+    }
+}
+
 /// What to try when an in-process Krylov solver does not converge.
 const IN_PROCESS_HINT: &str = "try lu, a stronger preconditioner (ilut with smaller drop / larger fill) or more iterations";
 
@@ -409,16 +418,10 @@ fn solve_krylov_bicgstab(
     let name = format!("BiCGSTAB+{}", preconditioner.display_name());
     let (_, original_relative_residual) = rhs.residuals(&residual(a, &out.x, &rhs.solved));
     match out.status {
-        bicgstab::Status::Converged => Ok((
-            out.x,
-            SolveReport {
-                iterations: out.iterations,
-                restarts: out.restarts,
-                relative_residual: out.relative_residual,
-                original_relative_residual,
-                ..start.report(Some(&pc), (setup_seconds, solve_seconds))
-            },
-        )),
+        bicgstab::Status::Converged => {
+            let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
+            Ok((out.x, start.converged(&pc, (setup_seconds, solve_seconds), counts)))
+        }
         bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
             hint: IN_PROCESS_HINT,
             limit: if out.iterations >= max_iterations {
@@ -503,16 +506,10 @@ fn run_gmres(
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
     let (_, original_relative_residual) = rhs.residuals(&row_residual(rows, &out.x, &rhs.solved));
     match out.status {
-        gmres::Status::Converged => Ok((
-            out.x,
-            SolveReport {
-                iterations: out.iterations,
-                restarts: out.restarts,
-                relative_residual: out.relative_residual,
-                original_relative_residual,
-                ..start.report(Some(pc), (setup_seconds, solve_seconds))
-            },
-        )),
+        gmres::Status::Converged => {
+            let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
+            Ok((out.x, start.converged(pc, (setup_seconds, solve_seconds), counts)))
+        }
         gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
             hint: IN_PROCESS_HINT,
             limit: if out.status == gmres::Status::IterationLimit {
