@@ -33,10 +33,13 @@
 //! [`SINGULAR_EQUILIBRIUM_FACTOR`] times the threshold and a warning above.
 
 use crate::case::Case;
+use crate::choice::Choice;
 use crate::domain::corner::corners;
 use crate::domain::{NodeSet, Point};
 use crate::dynamics::driver::EnergyRow;
+use crate::dynamics::integrators::Integrator;
 use crate::elasticity::conditions::ComponentCondition;
+use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::Unknowns;
 use crate::elasticity::material::{Material, PlaneModel};
 use crate::linalg::SolveReport;
@@ -346,7 +349,8 @@ pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool) -> Chec
     let mut checks = Checks::default();
     if loads_vary {
         checks.notes.push(
-            "no estimate of the discretisation error for dynamic runs, and no energy check: the loads depend on t, so their work \
+            "no estimate of the discretisation error for dynamic runs, and no energy check (only load-time-resolution): the loads \
+             depend on t, so their work \
              changes the total energy (energies.csv; its external part is -b(t).u)"
                 .into(),
         );
@@ -366,6 +370,66 @@ pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool) -> Chec
         "no estimate of the discretisation error for dynamic runs; the total energy is conserved to {drift:.1e} (energies.csv)"
     ));
     checks
+}
+
+/// Instants at which [`load_time_resolution`] samples the loads over the run (at the
+/// points of a 5 x 5 lattice over the solid's bounding box).
+const LOAD_SAMPLE_TIMES: usize = 2000;
+
+/// The time scale of one load formula in `t`: `tau = max |g| / max |dg/dt|` over the
+/// sampled `times` and `points` (both maxima over the components; `1 / omega` for
+/// `g = A sin(omega t)`, `T / pi` for the pulse `A sin(pi t / T)^2`). `None` for a load
+/// that does not vary in time or that is zero or non-finite at every sample.
+fn time_scale(value: &Value, points: &[Point], times: &[f64]) -> Option<f64> {
+    let rate = value.time_derivative().ok()?;
+    if !value.depends_on_time() {
+        return None;
+    }
+    let largest = |v: &Value, t: f64| {
+        let at = v.at_time(t);
+        points.iter().filter_map(|&p| at.explicit_at(p)).flatten().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()))
+    };
+    let (g, r) = times.iter().fold((0.0f64, 0.0f64), |(g, r), &t| (g.max(largest(value, t)), r.max(largest(&rate, t))));
+    (g > 0.0 && r > 0.0).then(|| g / r)
+}
+
+/// A load formula in `t` that the time step resolves poorly: its time scale `tau`
+/// ([`time_scale`], sampled over the run) against the step `dt`, judged by the
+/// integrator's error per radian for an oscillation on that time scale,
+/// [`Integrator::error_per_radian`] at `h = dt / tau`. Warned above `threshold` (the
+/// estimate's, default 1e-2: RK4 from 1.05 steps per time scale, Verlet from 2.0,
+/// `emu` from 50), naming the load, its time scale and a step that would do (half the
+/// threshold). Measured on plate_pulse with a 10x shorter pulse (tests/time_loads.rs).
+pub fn load_time_resolution(case: &Case, time_step: f64, end_time: f64, integrator: Integrator, threshold: f64) -> Option<Warning> {
+    let loads = case.loads();
+    let (lo, hi) = case.domain.bounding_box();
+    let points: Vec<Point> =
+        (0..25).map(|k| [lo[0] + (hi[0] - lo[0]) * (k % 5) as f64 / 4.0, lo[1] + (hi[1] - lo[1]) * (k / 5) as f64 / 4.0]).collect();
+    let times: Vec<f64> = (0..LOAD_SAMPLE_TIMES).map(|k| end_time * k as f64 / (LOAD_SAMPLE_TIMES - 1) as f64).collect();
+    let fields = std::iter::once(("body_force".to_string(), &loads.body_force))
+        .chain(loads.conditions.iter().enumerate().map(|(k, c)| (format!("boundary[{k}].value"), &c.value)));
+    let (field, tau) = fields
+        .filter_map(|(field, v)| {
+            let name = match v {
+                Value::Expression(e) if !e.origin.is_empty() => e.origin.clone(),
+                _ => field,
+            };
+            time_scale(v, &points, &times).map(|tau| (name, tau))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    let error = integrator.error_per_radian(time_step / tau);
+    exceeds(error, threshold).then(|| Warning {
+        check: "load-time-resolution",
+        message: format!(
+            "the load {field} varies on a time scale of {tau:.2e} s (max |g| / max |dg/dt| over the run), {:.2} steps of \
+             dt = {time_step:.2e} s: {} integrates an oscillation on that scale with an error of {error:.1e} per radian, \
+             above {threshold:.0e}; the response to this load is poorly resolved in time: try dynamics.time_step = {:.2e} \
+             or smaller",
+            tau / time_step,
+            integrator.name(),
+            tau * integrator.step_for_error(threshold / 2.0)
+        ),
+    })
 }
 
 /// A run whose memory estimate exceeds half the available memory (`resources`).

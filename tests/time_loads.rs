@@ -253,3 +253,41 @@ fn the_shipped_pulse_gives_the_plate_the_impulse_of_its_load() {
     assert!(pd_x < 1e-6 && pd_y < 1e-10, "PD {pd_x} {pd_y}");
     assert!(ml_x < 5e-3 && ml_y < 1e-4, "MLSM {ml_x} {ml_y}");
 }
+
+/// plate_pulse with a pulse ten times shorter (`T = 1e-5`: time scale `T / pi` =
+/// 3.2e-6 s) at the step the scene's stability rule picks for RK4 (7.1e-6 s, 0.45 steps
+/// per time scale, RK4's error per radian 0.21) is warned (`load-time-resolution`), and
+/// the warning is right: the final displacement is off the one at a 114x finer step
+/// by 9.5e-3 of max |u| (measured; bound 3e-3), about the threshold; at 2e-6 s (1.6
+/// steps per time scale, error per radian 1.3e-3) it is not warned and is off by
+/// 2.0e-5 (bound 1e-4). (PD: the cheaper model on this scene; the check looks only at
+/// the loads.)
+#[test]
+fn a_load_faster_than_the_step_resolves_is_warned() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/plate_pulse.toml");
+    let text = std::fs::read_to_string(&path).unwrap().replace("T = 1e-4", "T = 1e-5");
+    let run = |time_step: Option<f64>| {
+        let text = match time_step {
+            Some(dt) => text.replace("integrator = \"rk4\"", &format!("integrator = \"rk4\"\ntime_step = {dt:e}")),
+            None => text.clone(),
+        };
+        let p = Problem::from_str(&text, &path).unwrap();
+        let dynamics = p.case.dynamics.as_ref().unwrap();
+        let pd = mlsm::peridynamics::simulate(&p.case, p.peridynamics.as_ref().unwrap(), dynamics, &Silent, |_| Ok(())).unwrap();
+        let dt = pd.report.time_step;
+        let warning = mlsm::warnings::load_time_resolution(&p.case, dt, dynamics.end_time, dynamics.integrator, 1e-2);
+        (pd.u, dt, warning)
+    };
+    let (reference, _, _) = run(Some(6.25e-8));
+    let scale = reference.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+    let off =
+        |u: &[[f64; 2]]| u.iter().zip(&reference).flat_map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).fold(0.0f64, |m, x| m.max(x.abs())) / scale;
+    let (coarse, dt, warned) = run(None);
+    let warned = warned.expect("the stability step does not resolve the short pulse");
+    assert!(warned.message.contains("boundary[1].value") && warned.message.contains("dynamics.time_step"), "{}", warned.message);
+    let (fine, dt_fine, quiet) = run(Some(2e-6));
+    let (coarse_off, fine_off) = (off(&coarse), off(&fine));
+    eprintln!("dt {dt:.2e}: off by {coarse_off:.1e} (warned); dt {dt_fine:.2e}: off by {fine_off:.1e}");
+    assert!(quiet.is_none(), "{:?}", quiet.map(|w| w.message));
+    assert!(coarse_off > 3e-3 && fine_off < 1e-4, "{coarse_off:e} {fine_off:e}");
+}

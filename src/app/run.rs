@@ -370,7 +370,12 @@ fn write_dynamic<M: Serialize>(
     req: &RunRequest,
     quiet: bool,
 ) -> Result<(), AppError> {
-    let mut checks = warnings::dynamic(d.energies, p.navier.estimate.threshold, p.case.loads().depend_on_time());
+    let threshold = p.navier.estimate.threshold;
+    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time());
+    if let Some(dynamics) = &p.case.dynamics {
+        let resolution = warnings::load_time_resolution(&p.case, d.report.time_step, dynamics.end_time, dynamics.integrator, threshold);
+        checks.warnings.extend(resolution);
+    }
     checks.warnings.extend(warnings::memory(p));
     let dir = publish(staged, &DynamicSummary::new(p, &d, model, &checks, t0))?;
     if !quiet {
