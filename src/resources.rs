@@ -10,9 +10,9 @@
 //!                                          factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (24 + 48)           (the equilibrated matrix, which replaces the
 //!                                          assembled one, and an ILU of about three times its size)
-//! solve, GMRES = 40 Z + (restart + 6) 8 N  (triplets and matrix at assembly; then the
-//!                                          equilibrated rows replace the matrix, with the
-//!                                          AMG levels and the Krylov basis)
+//! solve, GMRES = 32 Z + (restart + 6) 8 N  (triplets and matrix at assembly, 16 B each;
+//!                                          then the equilibrated rows, 12 B, replace the
+//!                                          matrix, with the AMG levels and the Krylov basis)
 //! solve, auto  = LU or GMRES as `SolverKind::resolve` will choose
 //! peak         = max(run, error-estimate reference) + 16 MB
 //! ```
@@ -56,11 +56,11 @@ fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
     match kind.resolve(unknowns, nonzeros, available_memory_bytes()).0 {
         // The assembled matrix is freed once equilibrated (`linalg::solve_nodal`).
         SolverKind::Bicgstab { .. } => 72.0 * nonzeros,
-        // Triplets and matrix (24 + 16 B per entry) at assembly; then AMG's equilibrated
-        // rows of it (the matrix freed), the coarse levels and transfers (about 17 B per
-        // fine entry), and the Krylov basis. Measured at 1e6 nodes: 2.84 GB at assembly,
-        // 3.10 GB in the solve (BENCHMARKS.md).
-        SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 40.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
+        // Triplets and matrix (16 + 16 B per entry) at assembly; then AMG's equilibrated
+        // rows of it (12 B; the matrix freed), the coarse levels and transfers (about
+        // 13 B per fine entry), and the Krylov basis. Measured at 1e6 nodes: 2.41 GB at
+        // assembly, 2.54 GB in the solve (BENCHMARKS.md).
+        SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 32.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
         // The triplets are gone and the assembled matrix freed once equilibrated: the
         // equilibrated matrix (16 B per entry) and the factors, plus slack for the
         // solve's vectors.

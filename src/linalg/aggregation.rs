@@ -6,8 +6,8 @@
 //! fourth order elliptic problems", *Computing* 56 (1996) 179–196, §3; the three
 //! aggregation passes follow their Algorithm 1 (as in pyamg's `standard_aggregation`).
 
+use super::csr::Csr;
 use nalgebra::DMatrix;
-use nalgebra_sparse::CsrMatrix;
 use rayon::prelude::*;
 
 /// Unknowns of a level grouped by node: `block` consecutive unknowns per node.
@@ -70,10 +70,11 @@ const NODES_PER_TASK: usize = 4096;
 /// Nodes in parallel: the strong couplings out of each node (block norms summed in a
 /// dense row with a marker per node), then their union with the transpose, merged node
 /// by node.
-pub fn strength_graph(a: &CsrMatrix<f64>, blocks: Blocks, theta: f64) -> NodeGraph {
+pub fn strength_graph(a: &Csr, blocks: Blocks, theta: f64) -> NodeGraph {
     let (b, nodes) = (blocks.block, blocks.nodes);
     let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
-    let entries_of = |node: usize| (node * b..(node + 1) * b).flat_map(|row| ptr[row]..ptr[row + 1]).map(|k| (idx[k] / b, val[k] * val[k]));
+    let entries_of =
+        |node: usize| (node * b..(node + 1) * b).flat_map(|row| ptr[row]..ptr[row + 1]).map(|k| (idx[k] as usize / b, val[k] * val[k]));
     // ‖A_II‖² of every node.
     let diag: Vec<f64> = (0..nodes).into_par_iter().map(|node| entries_of(node).filter(|e| e.0 == node).map(|e| e.1).sum()).collect();
     let tasks = nodes.div_ceil(NODES_PER_TASK);
@@ -228,7 +229,7 @@ const DEPENDENT: f64 = 1e-10;
 /// (Vaněk et al. §3, "tentative prolongator"). Dependent columns are left zero in
 /// both; the coarse unknowns they leave without rows are handled by the smoother and
 /// the coarsest solve.
-pub fn tentative(null: &[f64], k: usize, blocks: Blocks, agg: &[u32], count: usize) -> (CsrMatrix<f64>, Vec<f64>) {
+pub fn tentative(null: &[f64], k: usize, blocks: Blocks, agg: &[u32], count: usize) -> (Csr, Vec<f64>) {
     let b = blocks.block;
     let n = blocks.nodes * b;
     // The nodes of each aggregate, by a counting sort (flat arrays: no small list per
@@ -291,14 +292,14 @@ pub fn tentative(null: &[f64], k: usize, blocks: Blocks, agg: &[u32], count: usi
         for c in 0..k {
             let v = q_of[u * k + c];
             if v != 0.0 {
-                cols.push(a * k + c);
+                cols.push((a * k + c) as u32);
                 vals.push(v);
             }
         }
         offsets.push(cols.len());
     }
-    let t = CsrMatrix::try_from_csr_data(n, count * k, offsets, cols, vals)
-        .expect("tentative prolongator: columns are sorted within each row by construction");
+    // Columns are sorted within each row by construction.
+    let t = Csr::from_parts(n, count * k, offsets, cols, vals);
     (t, coarse)
 }
 
@@ -333,12 +334,15 @@ mod tests {
                 coo.push(row, col, (next() % 1000) as f64 / 500.0 - 1.0);
             }
         }
-        let a = CsrMatrix::from(&coo);
+        let (offsets, cols, vals) = nalgebra_sparse::CsrMatrix::from(&coo).disassemble();
+        let a = Csr::from_parts(2 * nodes, 2 * nodes, offsets, cols.into_iter().map(|c| c as u32).collect(), vals);
         let blocks = Blocks { block: 2, nodes };
         for theta in [0.0, 0.3] {
             let mut norm = std::collections::BTreeMap::<(usize, usize), f64>::new();
-            for (i, j, v) in a.triplet_iter() {
-                *norm.entry((i / 2, j / 2)).or_default() += v * v;
+            for i in 0..a.nrows() {
+                for (&j, &v) in a.row(i).col_indices().iter().zip(a.row(i).values()) {
+                    *norm.entry((i / 2, j as usize / 2)).or_default() += v * v;
+                }
             }
             let diag = |i: usize| norm.get(&(i, i)).copied().unwrap_or(0.0);
             let mut lists = vec![std::collections::BTreeSet::new(); nodes];
@@ -387,7 +391,7 @@ mod tests {
         for row in 0..12 {
             for c in 0..3 {
                 let (cols, vals) = (t.row(row).col_indices().to_vec(), t.row(row).values().to_vec());
-                let tb: f64 = cols.iter().zip(&vals).map(|(&j, &v)| v * coarse[(j / 3) * 9 + (j % 3) * 3 + c]).sum();
+                let tb: f64 = cols.iter().zip(&vals).map(|(&j, &v)| v * coarse[(j as usize / 3) * 9 + (j as usize % 3) * 3 + c]).sum();
                 assert!((tb - null[row * 3 + c]).abs() < 1e-13, "row {row} column {c}: {tb} vs {}", null[row * 3 + c]);
             }
         }

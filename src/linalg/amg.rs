@@ -24,12 +24,12 @@
 //! size), and which alternatives fail.
 
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
+pub use super::csr::product;
+use super::csr::Csr;
 use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
 use super::spgemm;
 use super::SparseMatrix;
 use nalgebra::DMatrix;
-use nalgebra_sparse::CsrMatrix;
-use rayon::prelude::*;
 
 /// Where the unknowns of a system live, for the near-null space: `per_node`
 /// interleaved unknowns per node (`u, v[, p]`), node `i` at `positions[i]`.
@@ -62,12 +62,12 @@ impl Default for AmgParams {
 /// the next coarser level.
 #[derive(Debug)]
 struct Level {
-    a: CsrMatrix<f64>,
+    a: Csr,
     blocks: Blocks,
     /// Pseudo-inverse of each diagonal block, row-major, `block²` per node.
     inv_diag: Vec<f64>,
-    p: CsrMatrix<f64>,
-    r: CsrMatrix<f64>,
+    p: Csr,
+    r: Csr,
 }
 
 /// The coarsest level, factored.
@@ -84,7 +84,7 @@ pub struct Amg {
     coarsest: Coarsest,
     /// The operator itself when the hierarchy has one level (it was small enough to
     /// factor directly), so that [`Amg::fine_operator`] always has it.
-    single: Option<CsrMatrix<f64>>,
+    single: Option<Csr>,
     /// Unknowns per level, finest first (the coarsest included).
     sizes: Vec<usize>,
     /// Stored entries of all operators and transfers.
@@ -120,7 +120,7 @@ fn rigid_body_modes(n: usize, layout: Option<NodeLayout>) -> (Vec<f64>, usize) {
 }
 
 /// `a` (CSC, as assembled) as a CSR matrix.
-pub(super) fn to_csr(a: &SparseMatrix) -> CsrMatrix<f64> {
+pub(super) fn to_csr(a: &SparseMatrix) -> Csr {
     scaled_rows(a, None)
 }
 
@@ -128,7 +128,7 @@ pub(super) fn to_csr(a: &SparseMatrix) -> CsrMatrix<f64> {
 /// row-equilibrated system, transposed straight from faer's columns by a counting
 /// sort on the row (columns come out sorted), without the intermediate nalgebra CSC
 /// copy the conversion used to make (solve stage 1.4 s shorter at 1e6 nodes).
-pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> CsrMatrix<f64> {
+pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> Csr {
     let (n, m) = (a.nrows(), a.ncols());
     let mut offsets = vec![0usize; n + 1];
     for j in 0..m {
@@ -140,26 +140,26 @@ pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> CsrMatrix<f64> {
         offsets[i + 1] += offsets[i];
     }
     let mut next = offsets[..n].to_vec();
-    let (mut cols, mut vals) = (vec![0usize; offsets[n]], vec![0.0f64; offsets[n]]);
+    let (mut cols, mut vals) = (vec![0u32; offsets[n]], vec![0.0f64; offsets[n]]);
     for j in 0..m {
         for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
-            cols[next[i]] = j;
+            cols[next[i]] = j as u32;
             vals[next[i]] = scales.map_or(v, |d| v * d[i]);
             next[i] += 1;
         }
     }
-    CsrMatrix::try_from_csr_data(n, m, offsets, cols, vals).expect("a CSC matrix transposes to a valid CSR matrix")
+    Csr::from_parts(n, m, offsets, cols, vals)
 }
 
 /// `a` (CSR) in compressed columns, by a counting sort on the column (rows come out
 /// sorted); `a` is consumed, so that only the result and one index array are held
 /// together with it.
-pub fn columns_of(a: CsrMatrix<f64>) -> SparseMatrix {
+pub fn columns_of(a: Csr) -> SparseMatrix {
     let (n, m) = (a.nrows(), a.ncols());
     let (offsets, cols, vals) = a.disassemble();
     let mut col_ptr = vec![0usize; m + 1];
     for &j in &cols {
-        col_ptr[j + 1] += 1;
+        col_ptr[j as usize + 1] += 1;
     }
     for j in 0..m {
         col_ptr[j + 1] += col_ptr[j];
@@ -168,7 +168,7 @@ pub fn columns_of(a: CsrMatrix<f64>) -> SparseMatrix {
     let (mut rows, mut values) = (vec![0usize; cols.len()], vec![0.0f64; cols.len()]);
     for i in 0..n {
         for k in offsets[i]..offsets[i + 1] {
-            let j = cols[k];
+            let j = cols[k] as usize;
             rows[next[j]] = i;
             values[next[j]] = vals[k];
             next[j] += 1;
@@ -179,26 +179,18 @@ pub fn columns_of(a: CsrMatrix<f64>) -> SparseMatrix {
 }
 
 /// The block-diagonal matrix of `inv_diag`.
-fn block_diagonal(inv_diag: &[f64], blocks: Blocks) -> CsrMatrix<f64> {
+fn block_diagonal(inv_diag: &[f64], blocks: Blocks) -> Csr {
     let b = blocks.block;
     let n = blocks.nodes * b;
     let offsets: Vec<usize> = (0..=n).map(|r| r * b).collect();
-    let cols: Vec<usize> = (0..n).flat_map(|r| (0..b).map(move |c| (r / b) * b + c)).collect();
-    CsrMatrix::try_from_csr_data(n, n, offsets, cols, inv_diag.to_vec()).expect("block diagonal pattern is valid")
-}
-
-/// `y = A x`, rows in parallel.
-pub fn product(a: &CsrMatrix<f64>, x: &[f64], y: &mut [f64]) {
-    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
-    y.par_iter_mut().enumerate().with_min_len(256).for_each(|(r, y)| {
-        *y = (ptr[r]..ptr[r + 1]).map(|k| val[k] * x[idx[k]]).sum::<f64>();
-    });
+    let cols: Vec<u32> = (0..n).flat_map(|r| (0..b).map(move |c| ((r / b) * b + c) as u32)).collect();
+    Csr::from_parts(n, n, offsets, cols, inv_diag.to_vec())
 }
 
 /// Spectral radius of `M = D⁻¹ A` estimated from the Ritz values of a 20-step Arnoldi
 /// process (power iteration underestimates it on nonsymmetric `M`, and `ω` too large
 /// makes the smoothed prolongator amplify instead of smooth).
-fn spectral_radius(a: &CsrMatrix<f64>, inv_diag: &CsrMatrix<f64>) -> f64 {
+fn spectral_radius(a: &Csr, inv_diag: &Csr) -> f64 {
     let n = a.nrows();
     let steps = 20.min(n);
     // A fixed, non-smooth start vector: deterministic runs.
@@ -239,7 +231,7 @@ impl Amg {
 
     /// [`Amg::build`] from the operator in compressed rows, which the hierarchy keeps
     /// as its finest level.
-    pub fn build_from_rows(a: CsrMatrix<f64>, layout: Option<NodeLayout>, params: AmgParams) -> Self {
+    pub fn build_from_rows(a: Csr, layout: Option<NodeLayout>, params: AmgParams) -> Self {
         let n = a.nrows();
         let (mut null, k) = rigid_body_modes(n, layout);
         let block = layout.map(|l| l.per_node).filter(|&b| b >= 2 && n.is_multiple_of(b)).unwrap_or(1);
@@ -267,7 +259,7 @@ impl Amg {
                 let at = spgemm::product(&current, &t);
                 let dat = spgemm::product(&d, &at);
                 drop(at);
-                &t - &(dat * omega)
+                t.minus_scaled(omega, &dat)
             };
             let r = {
                 let tt = t.transpose();
@@ -275,7 +267,7 @@ impl Amg {
                 let ta = spgemm::product(&tt, &current);
                 let tad = spgemm::product(&ta, &d);
                 drop(ta);
-                &tt - &(tad * omega)
+                tt.minus_scaled(omega, &tad)
             };
             drop(d);
             let coarse = spgemm::triple_product(&r, &current, &p);
@@ -309,13 +301,13 @@ impl Amg {
     }
 
     /// The finest operator (the system as solved) in compressed rows.
-    pub fn fine_operator(&self) -> &CsrMatrix<f64> {
+    pub fn fine_operator(&self) -> &Csr {
         self.levels.first().map_or_else(|| self.single.as_ref().expect("a one-level hierarchy keeps its operator"), |l| &l.a)
     }
 
     /// The finest operator, the rest of the hierarchy dropped (a solver that gives up
     /// on the multigrid frees its memory before it tries another method).
-    pub fn into_fine_operator(self) -> CsrMatrix<f64> {
+    pub fn into_fine_operator(self) -> Csr {
         match self.levels.into_iter().next() {
             Some(level) => level.a,
             None => self.single.expect("a one-level hierarchy keeps its operator"),
@@ -365,12 +357,14 @@ impl Level {
 impl Coarsest {
     /// Dense LU of the coarsest operator; unknowns whose row and column are both empty
     /// (dependent near-null vectors) get a unit diagonal, which leaves them zero.
-    fn factor(a: &CsrMatrix<f64>) -> Self {
+    fn factor(a: &Csr) -> Self {
         let n = a.nrows();
         let mut dense = faer::Mat::<f64>::zeros(n, n);
         let mut used = vec![false; n];
-        for (r, row) in a.row_iter().enumerate() {
+        for r in 0..n {
+            let row = a.row(r);
             for (&c, &v) in row.col_indices().iter().zip(row.values()) {
+                let c = c as usize;
                 dense[(r, c)] += v;
                 if v != 0.0 {
                     used[r] = true;

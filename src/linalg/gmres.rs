@@ -14,7 +14,7 @@
 //! faer 0.24 has no GMRES; the method is short enough to keep here with its checks.
 
 use super::amg::product;
-use nalgebra_sparse::CsrMatrix;
+use super::csr::Csr;
 use rayon::prelude::*;
 
 /// How a GMRES run ended.
@@ -60,7 +60,7 @@ fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
 
-fn true_residual(a: &CsrMatrix<f64>, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
+fn true_residual(a: &Csr, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
     product(a, x, r);
     r.par_iter_mut().zip(b).with_min_len(4096).for_each(|(r, b)| *r = b - *r);
     norm(r)
@@ -70,7 +70,7 @@ fn true_residual(a: &CsrMatrix<f64>, x: &[f64], b: &[f64], r: &mut [f64]) -> f64
 /// `precondition` (`v ← M⁻¹ v`), until the true relative residual is `≤ tolerance`,
 /// `max_iterations` inner steps are spent, or a cycle stalls.
 pub fn solve_gmres(
-    a: &CsrMatrix<f64>,
+    a: &Csr,
     b: &[f64],
     precondition: impl Fn(&mut [f64]),
     tolerance: f64,
@@ -181,18 +181,18 @@ mod tests {
     use super::*;
 
     /// A nonsymmetric, diagonally dominant tridiagonal matrix (convection–diffusion).
-    fn convection(n: usize) -> CsrMatrix<f64> {
-        let mut coo = nalgebra_sparse::CooMatrix::new(n, n);
+    fn convection(n: usize) -> Csr {
+        let mut entries = Vec::new();
         for i in 0..n {
-            coo.push(i, i, 4.0);
+            entries.push((i, i, 4.0));
             if i > 0 {
-                coo.push(i, i - 1, -2.5);
+                entries.push((i, i - 1, -2.5));
             }
             if i + 1 < n {
-                coo.push(i, i + 1, -0.5);
+                entries.push((i, i + 1, -0.5));
             }
         }
-        CsrMatrix::from(&coo)
+        Csr::from_triplets(n, n, &entries)
     }
 
     #[test]
@@ -225,10 +225,7 @@ mod tests {
     #[test]
     fn a_stall_is_reported_with_its_residual() {
         // The 2x2 rotation [[0, 1], [-1, 0]]: GMRES(1) makes no progress on it.
-        let mut coo = nalgebra_sparse::CooMatrix::new(2, 2);
-        coo.push(0, 1, 1.0);
-        coo.push(1, 0, -1.0);
-        let a = CsrMatrix::from(&coo);
+        let a = Csr::from_triplets(2, 2, &[(0, 1, 1.0), (1, 0, -1.0)]);
         let out = solve_gmres(&a, &[1.0, 0.0], |_| {}, 1e-10, 100, 1);
         assert_eq!(out.status, Status::Stalled);
         assert!((out.relative_residual - 1.0).abs() < 1e-12);

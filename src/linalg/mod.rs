@@ -21,6 +21,7 @@
 pub mod aggregation;
 pub mod amg;
 pub mod bicgstab;
+pub mod csr;
 pub mod distributed;
 pub mod gmres;
 pub mod ilut;
@@ -41,9 +42,8 @@ mod tests;
 use std::borrow::Cow;
 use std::time::Instant;
 
-use nalgebra_sparse::CsrMatrix;
-
 pub use amg::NodeLayout;
+pub use csr::Csr;
 pub use params::{
     lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE, GMRES_RESTART,
 };
@@ -78,7 +78,7 @@ fn residual(a: &SparseMatrix, x: &[f64], b: &[f64]) -> Vec<f64> {
 }
 
 /// The residual `b − A x`, `A` in rows (in parallel).
-fn row_residual(a: &CsrMatrix<f64>, x: &[f64], b: &[f64]) -> Vec<f64> {
+fn row_residual(a: &Csr, x: &[f64], b: &[f64]) -> Vec<f64> {
     let mut r = vec![0.0; b.len()];
     amg::product(a, x, &mut r);
     r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r);
@@ -366,7 +366,7 @@ enum Leftover<'a> {
     /// In columns, as the other preconditioners needed it.
     Columns(Cow<'a, SparseMatrix>),
     /// In rows, as the multigrid held it.
-    Rows(CsrMatrix<f64>),
+    Rows(Csr),
 }
 
 impl<'a> Leftover<'a> {
@@ -463,7 +463,7 @@ struct GmresSettings {
 /// GMRES with the multigrid built on the solved operator in rows (`D A`, kept as its
 /// finest level); on failure the rows come back for `auto`'s fallback.
 fn solve_gmres_multigrid<'a>(
-    rows: CsrMatrix<f64>,
+    rows: Csr,
     rhs: &Rhs,
     start: &Start,
     settings: GmresSettings,
@@ -493,7 +493,7 @@ fn solve_krylov_gmres(
 
 /// GMRES(restart) on `rows` (the solved operator) with the preconditioner `pc`.
 fn run_gmres(
-    rows: &CsrMatrix<f64>,
+    rows: &Csr,
     pc: &precond::BuiltPreconditioner,
     rhs: &Rhs,
     start: &Start,

@@ -133,7 +133,7 @@ impl BuiltPreconditioner {
 
     /// The operator in compressed rows, when the preconditioner keeps one (AMG's
     /// finest level).
-    pub fn fine_operator(&self) -> Option<&nalgebra_sparse::CsrMatrix<f64>> {
+    pub fn fine_operator(&self) -> Option<&super::csr::Csr> {
         match self {
             BuiltPreconditioner::Amg(p) => Some(p.fine_operator()),
             _ => None,

@@ -2,15 +2,15 @@
 //! blocks of a level, with the (pseudo-)inverses of its diagonal blocks.
 
 use super::aggregation::Blocks;
+use super::csr::Csr;
 use nalgebra::DMatrix;
-use nalgebra_sparse::CsrMatrix;
 use rayon::prelude::*;
 
 /// Pseudo-inverses of the diagonal blocks of `a` (row-major, `block²` per node):
 /// a ghost's block can be singular, and a coarse node whose near-null vectors were
 /// dependent has zero rows; the pseudo-inverse leaves those directions to the other
 /// levels instead of dividing by zero.
-pub(super) fn inverse_diagonal_blocks(a: &CsrMatrix<f64>, blocks: Blocks) -> Vec<f64> {
+pub(super) fn inverse_diagonal_blocks(a: &Csr, blocks: Blocks) -> Vec<f64> {
     let b = blocks.block;
     let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
     let mut out = vec![0.0; blocks.nodes * b * b];
@@ -19,7 +19,7 @@ pub(super) fn inverse_diagonal_blocks(a: &CsrMatrix<f64>, blocks: Blocks) -> Vec
         for r in 0..b {
             let row = node * b + r;
             for k in ptr[row]..ptr[row + 1] {
-                let c = idx[k];
+                let c = idx[k] as usize;
                 if c / b == node {
                     d[(r, c % b)] = val[k];
                 }
@@ -78,7 +78,7 @@ fn pseudo_inverse(d: &DMatrix<f64>) -> DMatrix<f64> {
 /// Kolev & Yang, *SIAM J. Sci. Comput.* 33 (2011) 2864–2887): ranges of thousands of
 /// nodes couple only through their edges, so the sweep stays a Gauss–Seidel sweep
 /// almost everywhere.
-pub(super) fn gauss_seidel(a: &CsrMatrix<f64>, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], forward: bool) {
+pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], forward: bool) {
     let b = blocks.block;
     let nodes = blocks.nodes;
     let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
@@ -96,7 +96,7 @@ pub(super) fn gauss_seidel(a: &CsrMatrix<f64>, blocks: Blocks, inv_diag: &[f64],
                 let row = node * b + m;
                 let mut sum = 0.0;
                 for k in ptr[row]..ptr[row + 1] {
-                    let c = idx[k];
+                    let c = idx[k] as usize;
                     let zc = if (start..end).contains(&c) { own[c - start] } else { before.as_ref().map_or(0.0, |z| z[c]) };
                     sum += val[k] * zc;
                 }

@@ -7,7 +7,7 @@
 //! serial and was most of the 10 s setup at 1e6 nodes. sprs has a parallel product,
 //! but every operand would have to be copied into its format and back.
 
-use nalgebra_sparse::CsrMatrix;
+use super::csr::Csr;
 use rayon::prelude::*;
 
 /// Rows handed to one task: large enough to amortise the task, small enough to
@@ -44,11 +44,11 @@ impl Accumulator {
     }
 
     /// Accumulate `sum_k x_k (row k of b)` for the entries `(k, x_k)` of `row` into row `i`.
-    fn add_rows(&mut self, i: usize, cols: &[usize], vals: &[f64], b: &CsrMatrix<f64>) {
+    fn add_rows(&mut self, i: usize, cols: &[u32], vals: &[f64], b: &Csr) {
         for (&k, &x) in cols.iter().zip(vals) {
-            let brow = b.row(k);
+            let brow = b.row(k as usize);
             for (&j, &bkj) in brow.col_indices().iter().zip(brow.values()) {
-                self.add(i, j, x * bkj);
+                self.add(i, j as usize, x * bkj);
             }
         }
     }
@@ -69,7 +69,7 @@ fn rows_of_products<S: Send>(
     m: usize,
     scratch: impl Fn() -> S + Sync + Send,
     row: impl Fn(usize, &mut S) -> &mut Accumulator + Sync + Send,
-) -> CsrMatrix<f64> {
+) -> Csr {
     let tasks = n.div_ceil(ROWS_PER_TASK);
     let rows_of = |task: usize| task * ROWS_PER_TASK..n.min((task + 1) * ROWS_PER_TASK);
     let lengths: Vec<Vec<usize>> =
@@ -81,7 +81,7 @@ fn rows_of_products<S: Send>(
     }
     drop(lengths);
     let nnz = offsets[n];
-    let (mut cols, mut vals) = (vec![0usize; nnz], vec![0.0f64; nnz]);
+    let (mut cols, mut vals) = (vec![0u32; nnz], vec![0.0f64; nnz]);
     // Each task's slice of the result.
     let mut slices = Vec::with_capacity(tasks);
     let (mut rest_c, mut rest_v) = (cols.as_mut_slice(), vals.as_mut_slice());
@@ -98,17 +98,18 @@ fn rows_of_products<S: Send>(
         for i in rows {
             let start = offsets[i] - base;
             for (k, (j, x)) in row(i, s).sorted().enumerate() {
-                c[start + k] = j;
+                c[start + k] = j as u32;
                 v[start + k] = x;
             }
         }
     });
-    CsrMatrix::try_from_csr_data(n, m, offsets, cols, vals).expect("rows built sorted and without duplicates")
+    // Rows built sorted and without duplicates.
+    Csr::from_parts(n, m, offsets, cols, vals)
 }
 
 /// `A B` (dimensions must agree: `a.ncols() == b.nrows()`, checked). Columns come out
 /// sorted within each row; products that cancel to zero are kept as stored zeros.
-pub fn product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>) -> CsrMatrix<f64> {
+pub fn product(a: &Csr, b: &Csr) -> Csr {
     assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
     rows_of_products(
         a.nrows(),
@@ -127,7 +128,7 @@ pub fn product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>) -> CsrMatrix<f64> {
 /// at once multiplied into the next. The multigrid's coarse operator `R A P` this way
 /// never holds `R A`, whose rows reach two stencils around an aggregate: 1.5 GB at
 /// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md).
-pub fn triple_product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>, c: &CsrMatrix<f64>) -> CsrMatrix<f64> {
+pub fn triple_product(a: &Csr, b: &Csr, c: &Csr) -> Csr {
     assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
     assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
     rows_of_products(
@@ -141,7 +142,7 @@ pub fn triple_product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>, c: &CsrMatrix<f64>
             cols.clear();
             vals.clear();
             for (j, x) in ab.sorted() {
-                cols.push(j);
+                cols.push(j as u32);
                 vals.push(x);
             }
             abc.start();
@@ -154,11 +155,11 @@ pub fn triple_product(a: &CsrMatrix<f64>, b: &CsrMatrix<f64>, c: &CsrMatrix<f64>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra_sparse::CooMatrix;
+    use nalgebra_sparse::{CooMatrix, CsrMatrix};
 
     /// A pseudo-random `n x m` sparse matrix with about `per_row` entries per row
-    /// (duplicates summed, some rows empty).
-    fn random(n: usize, m: usize, per_row: usize, seed: u64) -> CsrMatrix<f64> {
+    /// (duplicates summed, some rows empty), as nalgebra's and as ours.
+    fn random(n: usize, m: usize, per_row: usize, seed: u64) -> (CsrMatrix<f64>, Csr) {
         let mut state = seed;
         let mut next = || {
             state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
@@ -173,7 +174,9 @@ mod tests {
                 coo.push(i, next() % m, (next() % 2000) as f64 / 1000.0 - 1.0);
             }
         }
-        CsrMatrix::from(&coo)
+        let theirs = CsrMatrix::from(&coo);
+        let (offsets, cols, vals) = theirs.clone().disassemble();
+        (theirs, Csr::from_parts(n, m, offsets, cols.into_iter().map(|c| c as u32).collect(), vals))
     }
 
     /// Against nalgebra-sparse's serial product, on shapes that span several tasks
@@ -183,10 +186,10 @@ mod tests {
     #[test]
     fn matches_the_serial_product() {
         for (n, k, m) in [(5000, 3000, 4000), (7, 5, 3), (1, 1, 1), (2100, 700, 40)] {
-            let (a, b) = (random(n, k, 6, 1 + n as u64), random(k, m, 5, 7 + m as u64));
-            let (fast, slow) = (product(&a, &b), &a * &b);
+            let ((na, a), (nb, b)) = (random(n, k, 6, 1 + n as u64), random(k, m, 5, 7 + m as u64));
+            let (fast, slow) = (product(&a, &b), &na * &nb);
             assert_eq!(fast.row_offsets(), slow.row_offsets(), "{n}x{k}x{m}: pattern");
-            assert_eq!(fast.col_indices(), slow.col_indices(), "{n}x{k}x{m}: columns");
+            assert!(fast.col_indices().iter().zip(slow.col_indices()).all(|(&x, &y)| x as usize == y), "{n}x{k}x{m}: columns");
             let worst = fast.values().iter().zip(slow.values()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
             assert!(worst <= 1e-14, "{n}x{k}x{m}: values differ by {worst:e}");
         }
@@ -197,7 +200,7 @@ mod tests {
     #[test]
     fn triple_product_matches_two_products() {
         for (n, k, l, m) in [(3000, 5000, 2500, 400), (7, 5, 4, 3), (1, 1, 1, 1)] {
-            let (a, b, c) = (random(n, k, 6, 3 + n as u64), random(k, l, 5, 5 + l as u64), random(l, m, 4, 11 + m as u64));
+            let (a, b, c) = (random(n, k, 6, 3 + n as u64).1, random(k, l, 5, 5 + l as u64).1, random(l, m, 4, 11 + m as u64).1);
             let (fused, staged) = (triple_product(&a, &b, &c), product(&product(&a, &b), &c));
             assert_eq!(fused.row_offsets(), staged.row_offsets(), "{n}x{k}x{l}x{m}: pattern");
             assert_eq!(fused.col_indices(), staged.col_indices(), "{n}x{k}x{l}x{m}: columns");

@@ -19,10 +19,11 @@
 use crate::domain::neighbors::Supports;
 use crate::elasticity::dofs::{DofMap, Unknowns, PRESSURE};
 use crate::elasticity::material::Lame;
+use crate::linalg::triplets::{stored, StoredEntry};
 use crate::mlsm::{Op, Shapes};
 
 /// Coefficients `(row, column, value)` written for one node.
-pub type Entries = Vec<(usize, usize, f64)>;
+pub type Entries = Vec<StoredEntry>;
 
 /// Writes rows for nodes of one discretisation.
 pub struct RowWriter<'a> {
@@ -63,17 +64,17 @@ impl RowWriter<'_> {
         let (rx, ry) = (self.dofs.dof(row_node, 0), self.dofs.dof(row_node, 1));
         for (k, &j) in self.supports.of(i).iter().enumerate() {
             let (uj, vj) = (self.dofs.dof(j as usize, 0), self.dofs.dof(j as usize, 1));
-            out.push((rx, uj, (lambda + 2.0 * mu) * xx[k] + mu * yy[k]));
-            out.push((rx, vj, (lambda + mu) * xy[k]));
-            out.push((ry, uj, (lambda + mu) * xy[k]));
-            out.push((ry, vj, mu * xx[k] + (lambda + 2.0 * mu) * yy[k]));
+            out.push(stored(rx, uj, (lambda + 2.0 * mu) * xx[k] + mu * yy[k]));
+            out.push(stored(rx, vj, (lambda + mu) * xy[k]));
+            out.push(stored(ry, uj, (lambda + mu) * xy[k]));
+            out.push(stored(ry, vj, mu * xx[k] + (lambda + 2.0 * mu) * yy[k]));
         }
         if pressure {
             let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
             for (k, &j) in self.supports.of(i).iter().enumerate() {
                 let pj = self.dofs.dof(j as usize, PRESSURE);
-                out.push((rx, pj, -mu * dx[k]));
-                out.push((ry, pj, -mu * dy[k]));
+                out.push(stored(rx, pj, -mu * dx[k]));
+                out.push(stored(ry, pj, -mu * dy[k]));
             }
         }
     }
@@ -91,11 +92,11 @@ impl RowWriter<'_> {
             } else {
                 (mu * dy[k] * n[0] + lambda * dx[k] * n[1], mu * dx[k] * n[0] + (lambda + 2.0 * mu) * dy[k] * n[1])
             };
-            out.push((r, uj, cu));
-            out.push((r, vj, cv));
+            out.push(stored(r, uj, cu));
+            out.push(stored(r, vj, cv));
         }
         if self.has_pressure() {
-            out.push((r, self.dofs.dof(i, PRESSURE), -mu * n[c]));
+            out.push(stored(r, self.dofs.dof(i, PRESSURE), -mu * n[c]));
         }
     }
 
@@ -106,10 +107,10 @@ impl RowWriter<'_> {
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
         let r = self.dofs.dof(i, PRESSURE);
         for (k, &j) in self.supports.of(i).iter().enumerate() {
-            out.push((r, self.dofs.dof(j as usize, 0), a * dx[k]));
-            out.push((r, self.dofs.dof(j as usize, 1), a * dy[k]));
+            out.push(stored(r, self.dofs.dof(j as usize, 0), a * dx[k]));
+            out.push(stored(r, self.dofs.dof(j as usize, 1), a * dy[k]));
         }
-        out.push((r, r, b));
+        out.push(stored(r, r, b));
     }
 
     /// Normal derivative of the continuity row at boundary node `i` with outward
@@ -122,16 +123,16 @@ impl RowWriter<'_> {
         let r = self.dofs.dof(row_node, PRESSURE);
         for (k, &j) in self.supports.of(i).iter().enumerate() {
             let j = j as usize;
-            out.push((r, self.dofs.dof(j, 0), a * (n[0] * xx[k] + n[1] * xy[k])));
-            out.push((r, self.dofs.dof(j, 1), a * (n[0] * xy[k] + n[1] * yy[k])));
-            out.push((r, self.dofs.dof(j, PRESSURE), b * (n[0] * dx[k] + n[1] * dy[k])));
+            out.push(stored(r, self.dofs.dof(j, 0), a * (n[0] * xx[k] + n[1] * xy[k])));
+            out.push(stored(r, self.dofs.dof(j, 1), a * (n[0] * xy[k] + n[1] * yy[k])));
+            out.push(stored(r, self.dofs.dof(j, PRESSURE), b * (n[0] * dx[k] + n[1] * dy[k])));
         }
     }
 
     /// Displacement row of component `c` at node `i`, `u_c`, written in row `c` of
     /// node `row_node` (`i` itself, or its ghost).
     pub fn displacement(&self, i: usize, row_node: usize, c: usize, out: &mut Entries) {
-        out.push((self.dofs.dof(row_node, c), self.dofs.dof(i, c), 1.0));
+        out.push(stored(self.dofs.dof(row_node, c), self.dofs.dof(i, c), 1.0));
     }
 }
 
@@ -159,7 +160,7 @@ mod tests {
     fn apply(entries: &Entries, x: &[f64]) -> std::collections::BTreeMap<usize, f64> {
         let mut rows = std::collections::BTreeMap::new();
         for &(r, c, v) in entries {
-            *rows.entry(r).or_insert(0.0) += v * x[c];
+            *rows.entry(r as usize).or_insert(0.0) += v * x[c as usize];
         }
         rows
     }
@@ -206,6 +207,6 @@ mod tests {
         // A displacement row is the identity row of its unknown.
         let mut e = Entries::new();
         writer.displacement(3, 3, 1, &mut e);
-        assert_eq!(e, vec![(dofs.dof(3, 1), dofs.dof(3, 1), 1.0)]);
+        assert_eq!(e, vec![stored(dofs.dof(3, 1), dofs.dof(3, 1), 1.0)]);
     }
 }
