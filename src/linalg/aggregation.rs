@@ -115,22 +115,8 @@ pub fn strength_graph(a: &Csr, blocks: Blocks, theta: f64) -> NodeGraph {
         out_offsets.push(out_offsets[out_offsets.len() - 1] + len);
     }
     let out: Vec<u32> = parts.into_iter().flat_map(|p| p.1).collect();
-    let mut in_offsets = vec![0usize; nodes + 1];
-    for &o in &out {
-        in_offsets[o as usize + 1] += 1;
-    }
-    for i in 0..nodes {
-        in_offsets[i + 1] += in_offsets[i];
-    }
-    let mut next = in_offsets[..nodes].to_vec();
     let mut into = vec![0u32; out.len()];
-    for node in 0..nodes {
-        for &o in &out[out_offsets[node]..out_offsets[node + 1]] {
-            into[next[o as usize]] = node as u32;
-            next[o as usize] += 1;
-        }
-    }
-    drop(next);
+    let in_offsets = super::csr::transposed(nodes, &out_offsets, &out, |node, _, slot| into[slot] = node as u32);
     // Their union, node by node (both lists sorted).
     let mut offsets = Vec::with_capacity(nodes + 1);
     offsets.push(0usize);

@@ -151,29 +151,16 @@ pub fn scaled_rows(a: &SparseMatrix, scales: Option<&[f64]>) -> Csr {
     Csr::from_parts(n, m, offsets, cols, vals)
 }
 
-/// `a` (CSR) in compressed columns, by a counting sort on the column (rows come out
-/// sorted); `a` is consumed, so that only the result and one index array are held
-/// together with it.
+/// `a` (CSR) in compressed columns, by the counting sort of [`super::csr::transposed`]
+/// (rows come out sorted); `a` is consumed and freed once converted.
 pub fn columns_of(a: Csr) -> SparseMatrix {
     let (n, m) = (a.nrows(), a.ncols());
-    let (offsets, cols, vals) = a.disassemble();
-    let mut col_ptr = vec![0usize; m + 1];
-    for &j in &cols {
-        col_ptr[j as usize + 1] += 1;
-    }
-    for j in 0..m {
-        col_ptr[j + 1] += col_ptr[j];
-    }
-    let mut next = col_ptr[..m].to_vec();
-    let (mut rows, mut values) = (vec![0usize; cols.len()], vec![0.0f64; cols.len()]);
-    for i in 0..n {
-        for k in offsets[i]..offsets[i + 1] {
-            let j = cols[k] as usize;
-            rows[next[j]] = i;
-            values[next[j]] = vals[k];
-            next[j] += 1;
-        }
-    }
+    let (mut rows, mut values) = (vec![0usize; a.nnz()], vec![0.0f64; a.nnz()]);
+    let col_ptr = super::csr::transposed(m, a.row_offsets(), a.col_indices(), |i, k, slot| {
+        rows[slot] = i;
+        values[slot] = a.values()[k];
+    });
+    drop(a);
     let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(n, m, col_ptr, None, rows);
     SparseMatrix::new(symbolic, values)
 }

@@ -125,23 +125,11 @@ impl Csr {
 
     /// `Aᵀ`, by a counting sort on the column (the rows of the result come out sorted).
     pub fn transpose(&self) -> Csr {
-        let mut offsets = vec![0usize; self.ncols + 1];
-        for &c in &self.cols {
-            offsets[c as usize + 1] += 1;
-        }
-        for j in 0..self.ncols {
-            offsets[j + 1] += offsets[j];
-        }
-        let mut next = offsets[..self.ncols].to_vec();
         let (mut cols, mut vals) = (vec![0u32; self.nnz()], vec![0.0; self.nnz()]);
-        for i in 0..self.nrows {
-            for k in self.offsets[i]..self.offsets[i + 1] {
-                let j = self.cols[k] as usize;
-                cols[next[j]] = i as u32;
-                vals[next[j]] = self.vals[k];
-                next[j] += 1;
-            }
-        }
+        let offsets = transposed(self.ncols, &self.offsets, &self.cols, |i, k, slot| {
+            cols[slot] = i as u32;
+            vals[slot] = self.vals[k];
+        });
         Csr::from_parts(self.ncols, self.nrows, offsets, cols, vals)
     }
 
@@ -175,6 +163,30 @@ impl Csr {
         }
         Csr::from_parts(self.nrows, self.ncols, offsets, cols, vals)
     }
+}
+
+/// The counting sort behind every transpose of compressed rows: for the rows
+/// `offsets` (`nrows + 1`) with columns `cols` (below `ncols`), returns the offsets of
+/// the transposed rows (`ncols + 1`) and calls `place(i, k, slot)` for every entry `k`
+/// of row `i`, rows in increasing order, with its position `slot` in the transposed
+/// arrays (so each transposed row lists its entries by increasing `i`).
+pub fn transposed(ncols: usize, offsets: &[usize], cols: &[u32], mut place: impl FnMut(usize, usize, usize)) -> Vec<usize> {
+    let mut out = vec![0usize; ncols + 1];
+    for &c in cols {
+        out[c as usize + 1] += 1;
+    }
+    for j in 0..ncols {
+        out[j + 1] += out[j];
+    }
+    let mut next = out[..ncols].to_vec();
+    for i in 0..offsets.len() - 1 {
+        for (k, &c) in cols.iter().enumerate().take(offsets[i + 1]).skip(offsets[i]) {
+            let j = c as usize;
+            place(i, k, next[j]);
+            next[j] += 1;
+        }
+    }
+    out
 }
 
 /// `y = A x`, rows in parallel.
