@@ -102,11 +102,8 @@ impl Problem {
         if expected > validate::MAX_NODES {
             return Err(self.spacing_error(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES)));
         }
-        if expected < 2.0 * self.navier.approximation.support as f64 {
-            return Err(self.spacing_error(format!(
-                "spacing {spacing} gives about {expected:.0} nodes, too few for supports of {}",
-                self.navier.approximation.support
-            )));
+        if let Some(reason) = validate::too_few_nodes(spacing, expected, self.navier.approximation.support) {
+            return Err(self.spacing_error(reason));
         }
         let mut p = self.clone();
         p.navier.fill = fill;

@@ -10,7 +10,7 @@ mod report;
 
 use super::AppError;
 use crate::output::{self, StagedDir};
-use crate::problem::{Model, Problem, ProblemError};
+use crate::problem::{validate, Model, Problem, ProblemError};
 use crate::resources::{self, MemoryEstimate};
 use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
 use crate::tradeoff::variant::{Edits, Setting};
@@ -222,7 +222,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
                 let level = sweep.families[f].next_level;
                 match plan(&p, &text, setting.as_ref(), level) {
                     Ok(pl) => plans[f] = Some(pl),
-                    Err(e) if e.reason.contains("too few for supports") && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
+                    Err(e) if e.reason.contains(validate::TOO_FEW_NODES) && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
                     Err(e) => sweep.stop(f, format!("{}: {}", e.field, e.reason)),
                 }
             }

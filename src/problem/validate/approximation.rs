@@ -233,14 +233,8 @@ pub(super) fn check_node_count(
     area: f64,
 ) -> Result<(), ProblemError> {
     let expected_nodes = expected_nodes(domain, fill, area);
-    if expected_nodes < 2.0 * approximation.support as f64 {
-        return c.err(
-            "nodes.spacing",
-            format!(
-                "spacing {} gives about {expected_nodes:.0} nodes, too few for supports of {} nodes; use a smaller spacing",
-                fill.spacing, approximation.support
-            ),
-        );
+    if let Some(reason) = super::too_few_nodes(fill.spacing, expected_nodes, approximation.support) {
+        return c.err("nodes.spacing", reason);
     }
     if expected_nodes > MAX_NODES {
         return c.err(

@@ -32,6 +32,18 @@ use std::path::Path;
 /// Largest node count a run may ask for (a sparse LU of 1e8 unknowns does not fit in memory).
 pub const MAX_NODES: f64 = 5e7;
 
+/// What a spacing too coarse for the stencils is refused with (in `nodes.spacing`),
+/// shared by the validation, [`crate::problem::Problem::with_fill`] and the tradeoff
+/// sweep, which passes over such levels.
+pub const TOO_FEW_NODES: &str = "too few for supports";
+
+/// The refusal of a spacing that gives about `expected` nodes for supports of
+/// `support` nodes (fewer than two supports' worth).
+pub fn too_few_nodes(spacing: f64, expected: f64, support: usize) -> Option<String> {
+    (expected < 2.0 * support as f64)
+        .then(|| format!("spacing {spacing} gives about {expected:.0} nodes, {TOO_FEW_NODES} of {support} nodes; use a smaller spacing"))
+}
+
 /// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
 /// `nodes.count` into a spacing (the scattered fill packs about 1.1 nodes per h^2).
 pub(crate) fn packing(kind: FillKind) -> f64 {
