@@ -381,10 +381,10 @@ const LOAD_SAMPLE_TIMES: usize = 2000;
 /// `g = A sin(omega t)`, `T / pi` for the pulse `A sin(pi t / T)^2`). `None` for a load
 /// that does not vary in time or that is zero or non-finite at every sample.
 fn time_scale(value: &Value, points: &[Point], times: &[f64]) -> Option<f64> {
-    let rate = value.time_derivative().ok()?;
     if !value.depends_on_time() {
         return None;
     }
+    let rate = value.time_derivative().ok()?;
     let largest = |v: &Value, t: f64| {
         let at = v.at_time(t);
         points.iter().filter_map(|&p| at.explicit_at(p)).flatten().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()))

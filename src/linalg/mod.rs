@@ -26,6 +26,7 @@ pub mod distributed;
 pub mod gmres;
 pub mod ilut;
 pub mod lu;
+mod methods;
 pub mod params;
 pub mod partition;
 pub mod precond;
@@ -41,6 +42,8 @@ mod tests;
 
 use std::borrow::Cow;
 use std::time::Instant;
+
+use methods::{solve_gmres_multigrid, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, working, GmresSettings, Leftover, Rhs, Start};
 
 pub use amg::NodeLayout;
 pub use csr::Csr;
@@ -149,80 +152,6 @@ pub fn solve_nodal(
     let largest = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let subnormal_unknowns = x.iter().filter(|v| v.is_subnormal() && v.abs() > 1e-12 * largest).count();
     Ok((x, SolveReport { subnormal_unknowns, ..report }))
-}
-
-/// The right-hand side as solved, and how the residual of the original system
-/// `A x = b` is measured from that of the solved one `D A x = D b` (`D` the row
-/// scales of the equilibration, the identity without it): `b − A x = D⁻¹ (D b − D A x)`,
-/// so the original matrix need not be kept.
-struct Rhs<'a> {
-    /// `b`.
-    original: &'a [f64],
-    /// `D b`.
-    solved: Cow<'a, [f64]>,
-    /// `D`, when the rows are equilibrated.
-    scales: Option<Vec<f64>>,
-}
-
-impl Rhs<'_> {
-    /// Relative residuals `(‖D b − D A x‖ / ‖D b‖, ‖b − A x‖ / ‖b‖)` from the residual
-    /// `r = D b − D A x` of the solved system.
-    fn residuals(&self, r: &[f64]) -> (f64, f64) {
-        let unscaled = match &self.scales {
-            Some(d) => r.iter().zip(d).map(|(r, d)| (r / d) * (r / d)).sum::<f64>().sqrt(),
-            None => norm2(r),
-        };
-        (relative(norm2(r), norm2(&self.solved)), relative(unscaled, norm2(self.original)))
-    }
-}
-
-/// What every report of one solve shares: the method's label, `auto`'s reason, and
-/// when the setup started.
-struct Start {
-    method: String,
-    choice: Option<String>,
-    setup: Instant,
-    equilibrated: bool,
-}
-
-impl Start {
-    /// The report of a finished solve, before its iteration counts are filled in;
-    /// the method's name carries what the preconditioner says of itself (AMG: its
-    /// levels).
-    fn report(&self, pc: Option<&precond::BuiltPreconditioner>, (setup_seconds, solve_seconds): (f64, f64)) -> SolveReport {
-        SolveReport {
-            method: format!("{}{}", self.method, pc.map(|p| p.describe()).unwrap_or_default()),
-            choice: self.choice.clone(),
-            iterations: 0,
-            relative_residual: f64::NAN,
-            original_relative_residual: f64::NAN,
-            setup_seconds,
-            solve_seconds,
-            equilibrated: self.equilibrated,
-            preconditioner_nonzeros: pc.map(|p| p.nonzeros()),
-            restarts: 0,
-            subnormal_unknowns: 0,
-            condition_estimate: None,
-            ranks: None,
-        }
-    }
-}
-
-impl Start {
-    /// The report of a converged Krylov solve with `pc`: its `(iterations, restarts,
-    /// relative residual, original relative residual)`.
-    fn converged(&self, pc: &precond::BuiltPreconditioner, seconds: (f64, f64), counts: (usize, usize, f64, f64)) -> SolveReport {
-        let (iterations, restarts, relative_residual, original_relative_residual) = counts;
-        SolveReport { iterations, restarts, relative_residual, original_relative_residual, ..self.report(Some(pc), seconds) }
-    }
-}
-
-/// What to try when an in-process Krylov solver does not converge.
-const IN_PROCESS_HINT: &str = "try lu, a stronger preconditioner (ilut with smaller drop / larger fill) or more iterations";
-
-/// What stopped a Krylov method that ran out of iterations.
-fn iteration_limit(max_iterations: usize) -> String {
-    format!("the iteration limit (solver.max_iterations = {max_iterations})")
 }
 
 /// Solve `A x = b` (the loads already scaled, [`solve`]) with `available` bytes of
@@ -343,192 +272,5 @@ pub(crate) fn solve_with_memory(
                 (Err((e, _)), _) => Err(e),
             }
         }
-    }
-}
-
-/// The operator as solved, in columns (`D A` with the row maxima `row_max`); a matrix
-/// handed over is freed once scaled. (The multigrid makes its own copy in rows instead.)
-fn working<'a>(a: Cow<'a, SparseMatrix>, rhs: &Rhs, row_max: &[f64]) -> Cow<'a, SparseMatrix> {
-    match &rhs.scales {
-        Some(_) => Cow::Owned(scaling::equilibrate_rows_with(&a, row_max).0),
-        None => a,
-    }
-}
-
-/// A solution and its report.
-type Solved = (Vec<f64>, SolveReport);
-
-/// Why a GMRES attempt failed, and the operator it leaves for `auto`'s fallback.
-type Failed<'a> = (SolveError, Leftover<'a>);
-
-/// The solved operator a failed GMRES leaves for `auto`'s fallback.
-enum Leftover<'a> {
-    /// In columns, as the other preconditioners needed it.
-    Columns(Cow<'a, SparseMatrix>),
-    /// In rows, as the multigrid held it.
-    Rows(Csr),
-}
-
-impl<'a> Leftover<'a> {
-    fn into_columns(self) -> Cow<'a, SparseMatrix> {
-        match self {
-            Leftover::Columns(c) => c,
-            Leftover::Rows(r) => Cow::Owned(amg::columns_of(r)),
-        }
-    }
-}
-
-/// Sparse LU of the solved operator `a` (`D A`).
-fn solve_lu(a: &SparseMatrix, rhs: &Rhs, start: &Start) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let lu = lu::SparseLu::factor(a)?;
-    let setup_seconds = start.setup.elapsed().as_secs_f64();
-    let t_solve = Instant::now();
-    let x = lu.solve(&rhs.solved);
-    let (relres, original_relative_residual) = rhs.residuals(&residual(a, &x, &rhs.solved));
-    let kappa = lu::check_solution(&lu, a, &x, &rhs.solved, relres)?;
-    let solve_seconds = t_solve.elapsed().as_secs_f64();
-    let report = SolveReport {
-        iterations: 1,
-        relative_residual: relres,
-        original_relative_residual,
-        condition_estimate: Some(kappa),
-        ..start.report(None, (setup_seconds, solve_seconds))
-    };
-    Ok((x, report))
-}
-
-/// Right-preconditioned BiCGSTAB on the solved operator `a` (`D A`) with
-/// `(preconditioner, tolerance, max_iterations)`.
-fn solve_krylov_bicgstab(
-    a: &SparseMatrix,
-    rhs: &Rhs,
-    start: &Start,
-    (preconditioner, tolerance, max_iterations): (Preconditioner, f64, usize),
-    layout: Option<NodeLayout>,
-) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let pc = precond::BuiltPreconditioner::build(a, preconditioner, layout)?;
-    let setup_seconds = start.setup.elapsed().as_secs_f64();
-    let t_solve = Instant::now();
-    // Converged means the true residual of the solved (equilibrated) system is
-    // within the tolerance, the same measure LU's checks use: the original
-    // system's residual is dominated by its largest rows (LU's accepted
-    // solutions of the shipped scenes leave 3e-14 to 7e-9 there).
-    let out = bicgstab::solve_bicgstab(a, &rhs.solved, &pc, tolerance, max_iterations, |x| relative_residual(a, x, &rhs.solved));
-    let solve_seconds = t_solve.elapsed().as_secs_f64();
-    let name = format!("BiCGSTAB+{}", preconditioner.display_name());
-    let (_, original_relative_residual) = rhs.residuals(&residual(a, &out.x, &rhs.solved));
-    match out.status {
-        bicgstab::Status::Converged => {
-            let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
-            Ok((out.x, start.converged(&pc, (setup_seconds, solve_seconds), counts)))
-        }
-        bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
-            hint: IN_PROCESS_HINT,
-            limit: if out.iterations >= max_iterations {
-                iteration_limit(max_iterations)
-            } else {
-                format!(
-                    "the restart limit ({} verification restarts: the recursive residual claimed \
-                     convergence each time, the true residual did not follow)",
-                    bicgstab::MAX_RESTARTS
-                )
-            },
-            restarts: out.restarts,
-            iterations: out.iterations,
-            relative_residual: out.relative_residual,
-            method: name,
-            tolerance,
-        }),
-        bicgstab::Status::Breakdown => Err(SolveError::Singular {
-            detail: format!(
-                "{name} broke down after {} iterations (the iterate became NaN or \
-                 infinite); the matrix or the preconditioner is (nearly) singular. Try lu, \
-                 and check the boundary conditions (a pure-traction problem has \
-                 rigid-body modes)",
-                out.iterations
-            ),
-        }),
-    }
-}
-
-/// The settings of a GMRES solve.
-#[derive(Clone, Copy)]
-struct GmresSettings {
-    preconditioner: Preconditioner,
-    tolerance: f64,
-    max_iterations: usize,
-    restart: usize,
-}
-
-/// GMRES with the multigrid built on the solved operator in rows (`D A`, kept as its
-/// finest level); on failure the rows come back for `auto`'s fallback.
-fn solve_gmres_multigrid<'a>(
-    rows: Csr,
-    rhs: &Rhs,
-    start: &Start,
-    settings: GmresSettings,
-    layout: Option<NodeLayout>,
-) -> Result<Solved, Box<Failed<'a>>> {
-    let amg = amg::Amg::build_from_rows(rows, layout, amg::AmgParams::default());
-    let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
-    let rows = pc.fine_operator().expect("the multigrid keeps its finest operator");
-    run_gmres(rows, &pc, rhs, start, settings).map_err(|e| {
-        let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
-        Box::new((e, Leftover::Rows(amg.into_fine_operator())))
-    })
-}
-
-/// GMRES with a one-level preconditioner built on the solved operator `a` (`D A`).
-fn solve_krylov_gmres(
-    a: &SparseMatrix,
-    rhs: &Rhs,
-    start: &Start,
-    settings: GmresSettings,
-    layout: Option<NodeLayout>,
-) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let pc = precond::BuiltPreconditioner::build(a, settings.preconditioner, layout)?;
-    let rows = amg::to_csr(a);
-    run_gmres(&rows, &pc, rhs, start, settings)
-}
-
-/// GMRES(restart) on `rows` (the solved operator) with the preconditioner `pc`.
-fn run_gmres(
-    rows: &Csr,
-    pc: &precond::BuiltPreconditioner,
-    rhs: &Rhs,
-    start: &Start,
-    GmresSettings { preconditioner, tolerance, max_iterations, restart }: GmresSettings,
-) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let setup_seconds = start.setup.elapsed().as_secs_f64();
-    let t_solve = Instant::now();
-    let out = gmres::solve_gmres(rows, &rhs.solved, |v| pc.solve_in_place(v), tolerance, max_iterations, restart);
-    let solve_seconds = t_solve.elapsed().as_secs_f64();
-    let name = format!("GMRES({restart})+{}", preconditioner.display_name());
-    let (_, original_relative_residual) = rhs.residuals(&row_residual(rows, &out.x, &rhs.solved));
-    match out.status {
-        gmres::Status::Converged => {
-            let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
-            Ok((out.x, start.converged(pc, (setup_seconds, solve_seconds), counts)))
-        }
-        gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
-            hint: IN_PROCESS_HINT,
-            limit: if out.status == gmres::Status::IterationLimit {
-                iteration_limit(max_iterations)
-            } else {
-                format!("stagnation (a restart cycle reduced the residual by less than {:.0} %)", 100.0 * (1.0 - gmres::STAGNATION))
-            },
-            restarts: out.restarts,
-            iterations: out.iterations,
-            relative_residual: out.relative_residual,
-            method: name,
-            tolerance,
-        }),
-        gmres::Status::Breakdown => Err(SolveError::Singular {
-            detail: format!(
-                "{name}: the iterate became NaN or infinite after {} iterations; the matrix or the \
-                 preconditioner is (nearly) singular. Try lu, and check the boundary conditions",
-                out.iterations
-            ),
-        }),
     }
 }
