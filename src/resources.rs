@@ -26,7 +26,7 @@
 use crate::case::Case;
 use crate::linalg::{lu_factor_bytes, SolverKind};
 use crate::navier::estimate::reference_approximation;
-use crate::navier::{EstimateMethod, NavierParams};
+use crate::navier::NavierParams;
 use crate::output::available_memory_bytes;
 use crate::peridynamics::PdParams;
 use crate::problem::{validate, Problem, ProblemError};
@@ -75,18 +75,22 @@ const BASE_BYTES: f64 = 16e6;
 pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate {
     let k = params.formulation.unknowns(&case.material).per_node() as f64;
     let dynamic = case.dynamics.is_some();
-    let one = |support: usize| {
+    let one = |support: usize, nodes: f64| {
         let s = support as f64;
         // Navier rows couple k unknowns of s nodes (u-p: the continuity row only 2).
         let nonzeros = (k * k - (k - 2.0)) * nodes * s;
         let solve = if dynamic { 40.0 * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros) };
         (nonzeros, nodes * s * 44.0 + solve)
     };
-    let (nonzeros, mut bytes) = one(params.approximation.support);
-    if params.estimate.method == EstimateMethod::HigherDegree && !dynamic {
+    let (nonzeros, mut bytes) = one(params.approximation.support, nodes);
+    if params.estimate.method.navier_estimates() && !dynamic {
         if let Ok(reference) = reference_approximation(&params.approximation, params.fill.kind, nodes as usize) {
-            bytes = bytes.max(one(reference.support).1);
+            bytes = bytes.max(one(reference.support, nodes).1);
         }
+    }
+    if params.estimate.method.dynamic_navier_estimates() && dynamic {
+        // The refined reference: four times the nodes, after the run was freed.
+        bytes = bytes.max(one(params.approximation.support, 4.0 * nodes).1);
     }
     let driver = if params.approximation.support > 100 { "approximation.support" } else { "nodes.spacing" };
     MemoryEstimate { nodes, unknowns: k * nodes, nonzeros, bonds: None, peak_bytes: bytes + BASE_BYTES, driver }

@@ -18,7 +18,12 @@
 //!   condition estimate `κ₁ ε` above [`DIGITS_LIMIT`] (fewer than about 6 digits
 //!   certain), and unknowns that underflowed.
 //!
-//! Dynamic runs ([`dynamic`]): the drift of the total energy above the threshold.
+//! Dynamic runs ([`dynamic`]): the `refined` estimate at the end time (Navier) above
+//! the threshold, the drift of the total energy above the threshold.
+//!
+//! Peridynamic runs ([`peridynamics_static`], [`dynamic`]): `m < 3`; the `local-model`
+//! estimate above the threshold is a note (the model difference of the horizon), and a
+//! Navier reference too coarse to judge it is warned.
 //!
 //! Singular corners: where a clamped part (displacement on both components) meets a
 //! part with a traction component, and at re-entrant corners, the exact stress of a
@@ -46,7 +51,7 @@ use crate::linalg::SolveReport;
 use crate::mlsm::Basis;
 use crate::navier::equilibrium::Equilibrium;
 use crate::navier::formulation::AUTO_FROM_POISSON;
-use crate::navier::{Estimate, NavierParams, Solution};
+use crate::navier::{ErrorEstimate, Estimate, NavierParams, Solution};
 use crate::peridynamics::PdSolution;
 use crate::problem::Problem;
 use crate::resources;
@@ -267,7 +272,7 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
             }
             checks.warnings.extend(above_threshold("estimate", "estimated error", &over, threshold, params, material));
         }
-        Estimate::Unavailable(why) => checks
+        Estimate::Unavailable(_, why) => checks
             .warnings
             .push(Warning { check: "no-estimate", message: format!("no error estimate: {why}; the accuracy of this run is unknown") }),
         Estimate::Off => checks.notes.push("no error estimate (estimate.method = \"none\")".into()),
@@ -296,11 +301,11 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
 pub const PD_MIN_RATIO: f64 = 3.0;
 
 /// The checks of a static peridynamic run: `m < 3` is warned (a discretisation that
-/// cannot approximate the nonlocal integral). The difference to an exact *local*
-/// solution is a note, not a warning: at `m >= 3` it is mostly the model difference of
-/// the finite horizon, which the user chose. There is no estimate of the
-/// discretisation error of the nonlocal model (a note).
-pub fn peridynamics_static(sol: &PdSolution, threshold: f64) -> Checks {
+/// cannot approximate the nonlocal integral), and the `local-model` estimate is read by
+/// [`estimate_of_peridynamics`]. The difference to an exact *local* solution is a
+/// note, not a warning: at `m >= 3` it is mostly the model difference of the finite
+/// horizon, which the user chose.
+pub fn peridynamics_static(sol: &PdSolution, estimate: &Estimate, threshold: f64) -> Checks {
     let mut checks = Checks { warnings: linear_solve(&sol.solver), ..Checks::default() };
     let m = sol.params.ratio;
     if m < PD_MIN_RATIO {
@@ -313,16 +318,64 @@ pub fn peridynamics_static(sol: &PdSolution, threshold: f64) -> Checks {
             ),
         });
     }
-    match sol.errors.map(|e| e.0) {
-        Some(e) if exceeds(e.e_inf_u, threshold) => checks.notes.push(format!(
+    if let Some(e) = sol.errors.map(|e| e.0).filter(|e| exceeds(e.e_inf_u, threshold)) {
+        checks.notes.push(format!(
             "the nonlocal solution differs from the exact local one by e_inf(u) = {:.2e} (above {threshold:.0e}); \
              at m >= 3 this is mostly the model difference of the horizon {:.3e}, which shrinks with it",
             e.e_inf_u, sol.params.horizon
-        )),
-        Some(_) => {}
-        None => checks.notes.push("no error estimate for peridynamic runs (compare with the local model: mlsm compare)".into()),
+        ));
     }
+    estimate_of_peridynamics(estimate, threshold, sol.params.horizon, &mut checks);
     checks
+}
+
+/// How much closer to the local solution than the peridynamic run the Navier reference
+/// of a `local-model` estimate must be (by its own estimate) for the estimate to be
+/// within a factor 1.5 of the difference it stands for.
+pub const LOCAL_REFERENCE_MARGIN: f64 = 3.0;
+
+/// The checks of a peridynamic run's `local-model` estimate: above `threshold` a note
+/// (the model difference of the horizon, like the exact error); a Navier reference
+/// whose own estimated error is not [`LOCAL_REFERENCE_MARGIN`] times below the
+/// estimate is warned (`estimate-reference`); no estimate is warned (`no-estimate`).
+fn estimate_of_peridynamics(estimate: &Estimate, threshold: f64, horizon: f64, checks: &mut Checks) {
+    let Some(e) = unestimated(estimate, checks) else { return };
+    let est = e.norms.e_inf_u;
+    if exceeds(est, threshold) {
+        checks.notes.push(format!(
+            "the nonlocal solution is estimated to differ from the local model by e_inf(u) ~ {est:.1e} (above {threshold:.0e}, \
+             largest at ({:.4e}, {:.4e})); at m >= 3 this is mostly the model difference of the horizon {horizon:.3e}, which shrinks with it",
+            e.largest_u_at[0], e.largest_u_at[1]
+        ));
+    }
+    if let Some(own) = e.reference_estimated_e_inf_u.filter(|own| exceeds(own * LOCAL_REFERENCE_MARGIN, est)) {
+        checks.warnings.push(Warning {
+            check: "estimate-reference",
+            message: format!(
+                "the local-model estimate e_inf(u) ~ {est:.1e} is uncertain: the Navier reference's own estimated error is {own:.1e}, \
+                 not {LOCAL_REFERENCE_MARGIN} times smaller; refine the Navier nodes (nodes.spacing) for a better reference"
+            ),
+        });
+    }
+}
+
+/// The estimate if it was computed; otherwise a `no-estimate` warning (unavailable) or a
+/// note (switched off) is added to `checks`.
+fn unestimated<'a>(estimate: &'a Estimate, checks: &mut Checks) -> Option<&'a ErrorEstimate> {
+    match estimate {
+        Estimate::Done(e) => Some(e),
+        Estimate::Unavailable(method, why) => {
+            checks.warnings.push(Warning {
+                check: "no-estimate",
+                message: format!("no error estimate ({method}): {why}; the accuracy of this run is unknown"),
+            });
+            None
+        }
+        Estimate::Off => {
+            checks.notes.push("no error estimate (estimate.method = \"none\")".into());
+            None
+        }
+    }
 }
 
 /// The largest change of the total energy (kinetic + elastic + external) over the
@@ -341,17 +394,34 @@ pub fn energy_drift(energies: &[EnergyRow]) -> f64 {
     }
 }
 
-/// The checks of a time-dependent run: the energy drift ([`energy_drift`]) above
-/// `threshold` is warned, unless `loads_vary` (loads that depend on time do work, so
-/// the total is not conserved: a note says the check was not made). There is no
-/// estimate of the discretisation error of a dynamic run (a note).
-pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool) -> Checks {
+/// The checks of a time-dependent run: the estimate at `end_time` (a Navier run's
+/// `higher-degree` estimate above `threshold` is warned; a peridynamic run's
+/// `local-model` one, with its `horizon`, is read by [`estimate_of_peridynamics`]),
+/// and the energy drift ([`energy_drift`]) above `threshold` is warned, unless
+/// `loads_vary` (loads that depend on time do work, so the total is not conserved: a
+/// note says the check was not made).
+pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool, estimate: &Estimate, horizon: Option<f64>) -> Checks {
     let mut checks = Checks::default();
+    match horizon {
+        Some(horizon) => estimate_of_peridynamics(estimate, threshold, horizon, &mut checks),
+        None => {
+            if let Some(e) = unestimated(estimate, &mut checks).filter(|e| exceeds(e.norms.e_inf_u, threshold)) {
+                checks.warnings.push(Warning {
+                    check: "estimate",
+                    message: format!(
+                        "estimated error at the end time above the threshold {threshold:.0e}: e_inf(u) ~ {:.1e} (largest at \
+                         ({:.4e}, {:.4e}); space and time, against {}); try a smaller nodes.spacing, a higher \
+                         approximation.degree or a smaller dynamics.time_step",
+                        e.norms.e_inf_u, e.largest_u_at[0], e.largest_u_at[1], e.reference
+                    ),
+                });
+            }
+        }
+    }
     if loads_vary {
         checks.notes.push(
-            "no estimate of the discretisation error for dynamic runs, and no energy check (only load-time-resolution): the loads \
-             depend on t, so their work \
-             changes the total energy (energies.csv; its external part is -b(t).u)"
+            "no energy check (only load-time-resolution): the loads depend on t, so their work changes the total energy \
+             (energies.csv; its external part is -b(t).u)"
                 .into(),
         );
         return checks;
@@ -366,9 +436,7 @@ pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool) -> Chec
             ),
         });
     }
-    checks.notes.push(format!(
-        "no estimate of the discretisation error for dynamic runs; the total energy is conserved to {drift:.1e} (energies.csv)"
-    ));
+    checks.notes.push(format!("the total energy is conserved to {drift:.1e} (energies.csv)"));
     checks
 }
 
@@ -460,12 +528,13 @@ mod tests {
         let conserved: Vec<EnergyRow> =
             (0..50).map(|k| (k as f64 * 0.1).sin()).map(|s| [0.0, 100.0 * s * s, 100.0 * (1.0 - s * s), 0.0]).collect();
         assert!(energy_drift(&conserved) < 1e-14);
-        assert!(dynamic(&conserved, 1e-2, false).warnings.is_empty());
+        let off = Estimate::Off;
+        assert!(dynamic(&conserved, 1e-2, false, &off, None).warnings.is_empty());
         let mut wandering = conserved.clone();
         wandering[20][1] += 3.0;
         assert!((energy_drift(&wandering) - 3.0 / 103.0).abs() < 1e-3 * 0.03, "{}", energy_drift(&wandering));
-        assert_eq!(dynamic(&wandering, 1e-2, false).warnings[0].check, "energy-drift");
-        let varying = dynamic(&wandering, 1e-2, true);
-        assert!(varying.warnings.is_empty() && varying.notes[0].contains("no energy check"), "{:?}", varying.notes);
+        assert_eq!(dynamic(&wandering, 1e-2, false, &off, None).warnings[0].check, "energy-drift");
+        let varying = dynamic(&wandering, 1e-2, true, &off, None);
+        assert!(varying.warnings.is_empty() && varying.notes.iter().any(|n| n.contains("no energy check")), "{:?}", varying.notes);
     }
 }

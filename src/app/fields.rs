@@ -7,7 +7,7 @@ use crate::domain::{cells::cells_inside, Domain};
 use crate::elasticity::material::PlaneModel;
 use crate::elasticity::stress::{strain, Gradient, StressField};
 use crate::navier::equations::ComponentEquation;
-use crate::navier::Solution;
+use crate::navier::{Estimate, Solution};
 use crate::output::{self, FieldValues, PointField};
 use crate::peridynamics::PdSolution;
 use crate::post::ExactFields;
@@ -94,7 +94,15 @@ pub(super) fn navier_fields(case: &Case, sol: &Solution) -> Vec<PointField> {
     f.push(integer("boundary_part", (0..n).map(|i| if i < nb { sol.nodes.boundary[i].touches[0].0 as i32 } else { -1 })));
     f.push(vector("normal", (0..n).map(|i| if i < nb { sol.nodes.normal(i) } else { [0.0, 0.0] })));
     f.extend(error_fields(case, &sol.displacement, &sol.stress, &sol.exact));
-    if let Some(e) = sol.estimate.done() {
+    f.extend(estimate_fields(&sol.estimate));
+    f
+}
+
+/// The per-node indicators of an estimate: `estimated_error` (displacement) and
+/// `estimated_error_stress`.
+fn estimate_fields(estimate: &Estimate) -> Vec<PointField> {
+    let mut f = Vec::new();
+    if let Some(e) = estimate.done() {
         f.push(scalar("estimated_error", e.per_node_u.iter().copied()));
         if let Some(s) = &e.per_node_sigma {
             f.push(scalar("estimated_error_stress", s.iter().copied()));
@@ -104,7 +112,7 @@ pub(super) fn navier_fields(case: &Case, sol: &Solution) -> Vec<PointField> {
 }
 
 /// Point-data arrays of a static peridynamic solution (free nodes only).
-pub(super) fn pd_fields(case: &Case, sol: &PdSolution) -> Vec<PointField> {
+pub(super) fn pd_fields(case: &Case, sol: &PdSolution, estimate: &Estimate) -> Vec<PointField> {
     let n = sol.nodes.free;
     let mut f = vec![vector("displacement", sol.displacement[..n].iter().copied())];
     f.extend(stress_fields(case, &sol.gradient, &sol.stress));
@@ -112,5 +120,6 @@ pub(super) fn pd_fields(case: &Case, sol: &PdSolution) -> Vec<PointField> {
     f.push(integer("interior", sol.interior.iter().map(|&b| b as i32)));
     f.push(scalar("volume", sol.nodes.volumes[..n].iter().copied()));
     f.extend(error_fields(case, &sol.displacement, &None, &sol.exact));
+    f.extend(estimate_fields(estimate));
     f
 }

@@ -10,6 +10,7 @@ use super::{default_out, export, AppError};
 use crate::choice::Choice;
 use crate::linalg::{Preconditioner, SolverKind, SolverParams, GMRES_RESTART};
 use crate::model::{self, Outcome};
+use crate::navier::estimate::ESTIMATE;
 use crate::navier::Estimate;
 use crate::output::{self, StagedDir};
 use crate::peridynamics::PdParams;
@@ -60,6 +61,9 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
     }
     if let Some(m) = req.model {
         p.model = m;
+        if let Some(why) = crate::problem::estimate_mismatch(m, p.case.dynamics.is_some(), p.navier.estimate.method) {
+            return Err(AppError::Usage(format!("--model {}: {}: estimate.method: {why}", m.name(), req.scene.display())));
+        }
     }
     match p.model {
         Model::Peridynamics => {
@@ -263,32 +267,53 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
     match outcome {
         Outcome::NavierStatic(sol) => write_navier_static(&p, sol, staged, t0, &req, None, term, quiet)?,
         Outcome::PdStatic(mut sol) => {
-            let mut checks = warnings::peridynamics_static(&sol, p.navier.estimate.threshold);
+            let n = sol.nodes.free;
+            let free = &sol.nodes.positions[..n];
+            let estimate = peridynamics_estimate(&p, free, &sol.displacement[..n], sol.stress.as_ref(), &mut sol.timings, term);
+            let t_out = Instant::now();
+            let seconds = || t_out.elapsed().as_secs_f64();
+            let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
             checks.warnings.extend(warnings::memory(&p));
-            let free = &sol.nodes.positions[..sol.nodes.free];
-            write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, &pd_fields(&p.case, &sol))?;
+            write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, &pd_fields(&p.case, &sol, &estimate))?;
             sol.timings.record(OUTPUT, seconds());
-            let target = publish(staged, &PdSummary::new(&p, &sol, &checks, t0))?;
+            let target = publish(staged, &PdSummary::new(&p, &sol, &estimate, &checks, t0))?;
             term.line(OUTPUT, seconds(), &target.display().to_string());
             if !quiet {
                 print_pd(&sol);
+                print_estimate(&estimate);
             }
             report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::NavierDynamic(mut sim) => {
             series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
             sim.timings.record(OUTPUT, seconds());
-            let dynamic = Dynamic { nodes: sim.positions.len(), report: &sim.report, energies: &sim.energies, timings: &sim.timings };
+            let dynamic = Dynamic {
+                nodes: sim.positions.len(),
+                report: &sim.report,
+                energies: &sim.energies,
+                timings: &sim.timings,
+                estimate: &sim.estimate,
+                horizon: None,
+            };
             write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
             series.finish(&sim.energies, &nodes.positions[..nodes.free], &sim.u, &sim.v)?;
             sim.timings.record(OUTPUT, seconds());
+            let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], &sim.u, None, &mut sim.timings, term);
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
-            let dynamic = Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings };
+            let horizon = p.peridynamics.map(|pd| pd.horizon);
+            let dynamic = Dynamic {
+                nodes: nodes.free,
+                report: &sim.report,
+                energies: &sim.energies,
+                timings: &sim.timings,
+                estimate: &estimate,
+                horizon,
+            };
             write_dynamic(&p, staged, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
     }
@@ -371,7 +396,7 @@ fn write_dynamic<M: Serialize>(
     quiet: bool,
 ) -> Result<(), AppError> {
     let threshold = p.navier.estimate.threshold;
-    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time());
+    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, d.horizon);
     if let Some(dynamics) = &p.case.dynamics {
         let resolution = warnings::load_time_resolution(&p.case, d.report.time_step, dynamics.end_time, dynamics.integrator, threshold);
         checks.warnings.extend(resolution);
@@ -393,6 +418,7 @@ fn write_dynamic<M: Serialize>(
         println!("energy at t = 0: kinetic {:.6e}; at t = {:.3e}: kinetic {:.6e}, elastic {:.6e}; {drift}", e0[1], e1[0], e1[1], e1[2]);
         let per = r.seconds / r.steps.max(1) as f64 / d.nodes.max(1) as f64;
         println!("{per:.2e} s per step per node; written: {}", dir.display());
+        print_estimate(d.estimate);
     }
     report_checks(&checks, req.strict, quiet)
 }
@@ -410,17 +436,7 @@ fn print_navier(sol: &crate::navier::Solution) {
         }
         println!();
     }
-    match &sol.estimate {
-        Estimate::Done(e) => {
-            print!("estimated: e_inf(u) ~ {:.2e}  rel_l2(u) ~ {:.2e}", e.norms.e_inf_u, e.norms.rel_l2_u);
-            if let Some(s) = e.norms.e_inf_sigma {
-                print!("  e_inf(sigma) ~ {s:.2e}");
-            }
-            println!("  ({}, degree {} reference, {:.2} s)", e.method, e.reference_degree, e.seconds);
-        }
-        Estimate::Unavailable(why) => println!("estimated: unavailable ({why})"),
-        Estimate::Off => println!("estimated: off (estimate.method = \"none\")"),
-    }
+    print_estimate(&sol.estimate);
     print_probes(&sol.probes);
     if let Some(q) = &sol.equilibrium {
         println!(
@@ -428,6 +444,43 @@ fn print_navier(sol: &crate::navier::Solution) {
             q.reactions[0], q.reactions[1], q.applied[0], q.applied[1], q.body[0], q.body[1], q.relative
         );
     }
+}
+
+/// The estimated errors, the method, its reference and cost (or why there are none).
+fn print_estimate(estimate: &Estimate) {
+    match estimate {
+        Estimate::Done(e) => {
+            print!("estimated: e_inf(u) ~ {:.2e}  rel_l2(u) ~ {:.2e}", e.norms.e_inf_u, e.norms.rel_l2_u);
+            if let Some(s) = e.norms.e_inf_sigma {
+                print!("  e_inf(sigma) ~ {s:.2e}");
+            }
+            println!("  ({}: {}; {:.2} s)", e.method, e.reference, e.seconds);
+        }
+        Estimate::Unavailable(method, why) => println!("estimated: unavailable ({method}: {why})"),
+        Estimate::Off => println!("estimated: off (estimate.method = \"none\")"),
+    }
+}
+
+/// The `local-model` estimate of a peridynamic run whose free nodes `positions` carry
+/// `displacement` (and `stress`), timed as the estimate stage; off for
+/// `estimate.method = "none"`.
+fn peridynamics_estimate(
+    p: &Problem,
+    positions: &[crate::domain::Point],
+    displacement: &[[f64; 2]],
+    stress: Option<&crate::elasticity::stress::StressField>,
+    timings: &mut crate::pipeline::StageTimings,
+    term: &Terminal,
+) -> Estimate {
+    if !p.navier.estimate.method.peridynamics_estimates() {
+        return Estimate::Off;
+    }
+    let t = Instant::now();
+    let estimate = crate::compare::estimate::local_model(p, positions, displacement, stress);
+    let seconds = t.elapsed().as_secs_f64();
+    timings.record(ESTIMATE, seconds);
+    term.line(ESTIMATE, seconds, &estimate.note());
+    estimate
 }
 
 fn print_pd(sol: &crate::peridynamics::PdSolution) {

@@ -169,6 +169,7 @@ pub(super) struct PdSummary<'a> {
     solver: &'a SolveReport,
     errors: Option<ErrorNorms>,
     errors_interior: Option<ErrorNorms>,
+    estimated_errors: &'a navier::Estimate,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     probes: &'a [ProbeValue],
     #[serde(flatten)]
@@ -177,7 +178,7 @@ pub(super) struct PdSummary<'a> {
 }
 
 impl<'a> PdSummary<'a> {
-    pub(super) fn new(p: &'a Problem, sol: &'a PdSolution, checks: &'a Checks, t0: Instant) -> Self {
+    pub(super) fn new(p: &'a Problem, sol: &'a PdSolution, estimate: &'a navier::Estimate, checks: &'a Checks, t0: Instant) -> Self {
         PdSummary {
             header: Header::new(p, &sol.timings, t0),
             model: "peridynamics",
@@ -196,6 +197,7 @@ impl<'a> PdSummary<'a> {
             solver: &sol.solver,
             errors: sol.errors.map(|e| e.0),
             errors_interior: sol.errors.and_then(|e| e.1),
+            estimated_errors: estimate,
             probes: &sol.probes,
             checks,
             outputs: p.case.outputs,
@@ -261,6 +263,10 @@ pub(super) struct Dynamic<'a> {
     pub report: &'a DynamicReport,
     pub energies: &'a [EnergyRow],
     pub timings: &'a StageTimings,
+    /// The error estimate at the end time.
+    pub estimate: &'a navier::Estimate,
+    /// The horizon of a peridynamic run (its estimate is a model difference).
+    pub horizon: Option<f64>,
 }
 
 /// `summary.json` of a time-dependent run.
@@ -275,6 +281,7 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
     energy_first: EnergyRow,
     energy_last: EnergyRow,
     material: MaterialSummary,
+    estimated_errors: &'a navier::Estimate,
     #[serde(flatten)]
     model: M,
     #[serde(flatten)]
@@ -283,7 +290,7 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
 
 impl<'a, M: Serialize> DynamicSummary<'a, M> {
     pub(super) fn new(p: &'a Problem, d: &Dynamic<'a>, model: M, checks: &'a Checks, t0: Instant) -> Self {
-        let Dynamic { nodes, report, energies, timings } = *d;
+        let Dynamic { nodes, report, energies, timings, estimate, .. } = *d;
         DynamicSummary {
             header: Header::new(p, timings, t0),
             nodes,
@@ -293,6 +300,7 @@ impl<'a, M: Serialize> DynamicSummary<'a, M> {
             energy_first: energies[0],
             energy_last: *energies.last().expect("initial energy recorded"),
             material: MaterialSummary::of(&p.case.material),
+            estimated_errors: estimate,
             model,
             checks,
         }

@@ -4,6 +4,8 @@
 //! on the interior region and the whole plate are [`crate::post::masked_errors`], and
 //! observed orders in delta are [`crate::post::observed_order`] (least-squares slope).
 
+pub mod estimate;
+
 use crate::domain::Point;
 use crate::exact::ExactSolution;
 use crate::model::{self, Outcome};

@@ -31,6 +31,15 @@ choice! {
 }
 
 impl Integrator {
+    /// Global order of accuracy in `dt` (of the displacement over a fixed time).
+    pub fn order(self) -> u32 {
+        match self {
+            Integrator::Emu => 1,
+            Integrator::Verlet => 2,
+            Integrator::Rk4 => 4,
+        }
+    }
+
     /// Largest stable `dt` relative to the central-difference limit `2 / omega_max`.
     pub fn stability_factor(self) -> f64 {
         match self {

@@ -22,6 +22,7 @@
 //! eigenvalue with a positive real part makes every explicit run grow).
 
 use super::discrete::Discretisation;
+use super::estimate::{self, Estimate};
 use super::system::System;
 use super::NavierParams;
 use crate::case::{Case, Loads};
@@ -239,6 +240,8 @@ pub struct Simulation {
     pub ghost_nodes: usize,
     /// Dynamic and algebraic unknowns.
     pub unknowns: (usize, usize),
+    /// Error estimate at `end_time` (`estimate.method`; module `estimate`).
+    pub estimate: Estimate,
     /// Stage timings (assembly includes the split and the boundary factorisation).
     pub timings: StageTimings,
 }
@@ -342,14 +345,20 @@ pub fn simulate(
         let (u, v) = (nodal(&system.expand(s.t, &s.u, false)), nodal(&system.expand(s.t, &s.v, true)));
         snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })
     })?;
+    let u = nodal(&system.expand(state.t, &state.u, false));
+    let method = params.estimate.method;
+    let estimate = estimate::stage(method, method.dynamic_navier_estimates(), &mut timer, || {
+        estimate::refined_dynamic(case, params, dynamics, report.time_step, points, &u)
+    })?;
     Ok(Simulation {
         positions: points.clone(),
-        u: nodal(&system.expand(state.t, &state.u, false)),
+        u,
         v: nodal(&system.expand(state.t, &state.v, true)),
         report,
         energies,
         ghost_nodes: disc.ghost_count(),
         unknowns: (system.dynamic.len(), system.algebraic.len()),
+        estimate,
         timings: timer.finish(),
     })
 }

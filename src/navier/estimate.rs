@@ -30,10 +30,12 @@ use super::NavierParams;
 use crate::case::Case;
 use crate::choice::{choice, Choice};
 use crate::domain::{FillKind, NodeSet, Point};
+use crate::dynamics::DynamicsParams;
 use crate::elasticity::stress::StressField;
 use crate::exact::ExactSolution;
+use crate::mlsm::interpolate::mls_values;
 use crate::mlsm::{default_rbf_fd_support, Approximation, Basis, Radial, Weight};
-use crate::pipeline::{Silent, Stage, StageTimer};
+use crate::pipeline::{RunError, Silent, Stage, StageTimer};
 use crate::post::{ErrorNorms, ExactFields};
 use serde::Serialize;
 use std::time::Instant;
@@ -46,9 +48,15 @@ pub const MAX_REFERENCE_DEGREE: u32 = 8;
 
 choice! {
     /// How a static Navier run estimates its error (`estimate.method`).
-    pub enum EstimateMethod("estimate.method", default Some(EstimateMethod::HigherDegree), serde "kebab-case") {
+    pub enum EstimateMethod("estimate.method", default Some(EstimateMethod::Auto), serde "kebab-case") {
+        /// `higher-degree` for a Navier run, `local-model` for a peridynamic one.
+        Auto = "auto" => "higher-degree for a static Navier run, refined for a dynamic one, local-model for a peridynamic run",
         /// Difference to a solution two degrees higher on the same nodes.
-        HigherDegree = "higher-degree" => "difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes; about 1-3x the cost of the run",
+        HigherDegree = "higher-degree" => "static Navier runs: difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes; about 1-3x the cost of the run",
+        /// Difference to a run on nodes at half the spacing with a finer time step.
+        Refined = "refined" => "dynamic Navier runs: difference to the run on nodes at half the spacing with the time step halved (quartered for emu); 8x the nodes x steps of the run (16x with emu), 3-4x its time on the shipped scenes",
+        /// Difference to the local (Navier) model's solution of the same scene.
+        LocalModel = "local-model" => "peridynamic runs: difference to the Navier model's solution of the same scene on its [nodes] (with its own estimate when static), interpolated to the peridynamic nodes by moving least squares; the peridynamic error as the exact-solution errors measure it, against the local model",
         /// No estimate.
         None = "none" => "no estimate (saves the second solve); the run is then reported as unestimated",
     }
@@ -69,19 +77,40 @@ pub struct EstimateParams {
 
 impl Default for EstimateParams {
     fn default() -> Self {
-        EstimateParams { method: EstimateMethod::HigherDegree, threshold: DEFAULT_THRESHOLD }
+        EstimateParams { method: EstimateMethod::Auto, threshold: DEFAULT_THRESHOLD }
+    }
+}
+
+impl EstimateMethod {
+    /// Whether a static Navier run estimates its error (`auto` or `higher-degree`).
+    pub fn navier_estimates(self) -> bool {
+        matches!(self, EstimateMethod::Auto | EstimateMethod::HigherDegree)
+    }
+
+    /// Whether a dynamic Navier run estimates its error (`auto` or `refined`).
+    pub fn dynamic_navier_estimates(self) -> bool {
+        matches!(self, EstimateMethod::Auto | EstimateMethod::Refined)
+    }
+
+    /// Whether a peridynamic run estimates its error (`auto` or `local-model`).
+    pub fn peridynamics_estimates(self) -> bool {
+        matches!(self, EstimateMethod::Auto | EstimateMethod::LocalModel)
     }
 }
 
 /// Estimated errors of one run, and where they are largest.
 #[derive(Debug, Clone, Serialize)]
 pub struct ErrorEstimate {
-    /// `"higher-degree"`.
+    /// `"higher-degree"` or `"local-model"`.
     pub method: &'static str,
-    /// The reference's basis and stencil.
+    /// The reference: its basis and stencil (and time step, model).
     pub reference: String,
     /// The reference's polynomial degree.
     pub reference_degree: u32,
+    /// The reference's own estimated e_inf(u), where it has one (`local-model` of a
+    /// static run): the estimate holds while this is well below it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_estimated_e_inf_u: Option<f64>,
     /// Estimated norms (same definitions as the errors against an exact solution).
     #[serde(flatten)]
     pub norms: ErrorNorms,
@@ -111,8 +140,8 @@ pub enum Estimate {
     Done(Box<ErrorEstimate>),
     /// `estimate.method = "none"`.
     Off,
-    /// No estimate could be computed, and why.
-    Unavailable(String),
+    /// No estimate could be computed by the method (its name), and why.
+    Unavailable(&'static str, String),
 }
 
 /// `summary.json`: the estimate's object, `{"method": ..., "unavailable": reason}`,
@@ -127,18 +156,51 @@ impl Serialize for Estimate {
         match self {
             Estimate::Done(e) => e.serialize(s),
             Estimate::Off => s.serialize_none(),
-            Estimate::Unavailable(why) => Unavailable { method: EstimateMethod::HigherDegree.name(), unavailable: why }.serialize(s),
+            Estimate::Unavailable(method, why) => Unavailable { method, unavailable: why }.serialize(s),
         }
     }
 }
 
 impl Estimate {
+    /// One line for the stage's timing: the estimated e_inf of u (and sigma), or why
+    /// there is none.
+    pub fn note(&self) -> String {
+        match self {
+            Estimate::Done(e) => match e.norms.e_inf_sigma {
+                Some(s) => format!("e_inf(u) ~ {:.1e}, e_inf(sigma) ~ {s:.1e}", e.norms.e_inf_u),
+                None => format!("e_inf(u) ~ {:.1e}", e.norms.e_inf_u),
+            },
+            Estimate::Unavailable(_, why) => format!("unavailable: {why}"),
+            Estimate::Off => "off".into(),
+        }
+    }
+
     /// The estimate, if computed.
     pub fn done(&self) -> Option<&ErrorEstimate> {
         match self {
             Estimate::Done(e) => Some(e),
             _ => None,
         }
+    }
+}
+
+/// The estimate stage of a Navier run: `compute` timed as [`ESTIMATE`] when
+/// `estimates` (the method fits the run), `Off` for `none`, and unavailable for a
+/// method that estimates another kind of run (refused by the validation before).
+pub fn stage(
+    method: EstimateMethod,
+    estimates: bool,
+    timer: &mut StageTimer,
+    compute: impl FnOnce() -> Estimate,
+) -> Result<Estimate, RunError> {
+    match method {
+        EstimateMethod::None => Ok(Estimate::Off),
+        _ if estimates => timer.run(ESTIMATE, || {
+            let e = compute();
+            let note = e.note();
+            Ok((e, note))
+        }),
+        other => Ok(Estimate::Unavailable(other.name(), "the method estimates another kind of run (estimate.method)".into())),
     }
 }
 
@@ -183,7 +245,7 @@ pub fn higher_degree(
     let t0 = Instant::now();
     let approximation = match reference_approximation(&params.approximation, params.fill.kind, nodes.len()) {
         Ok(a) => a,
-        Err(reason) => return Estimate::Unavailable(reason),
+        Err(reason) => return Estimate::Unavailable(EstimateMethod::HigherDegree.name(), reason),
     };
     let reference_params = NavierParams { approximation, keep_system: false, ..params.clone() };
     let mut timer = StageTimer::new(&Silent);
@@ -191,29 +253,122 @@ pub fn higher_degree(
         .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params.solver, false, &mut timer).map(|s| (disc, s)));
     let (disc, solved) = match solved {
         Ok(s) => s,
-        Err(e) => return Estimate::Unavailable(format!("the reference ({}) failed: {e}", approximation.basis.describe())),
+        Err(e) => {
+            return Estimate::Unavailable(
+                EstimateMethod::HigherDegree.name(),
+                format!("the reference ({}) failed: {e}", approximation.basis.describe()),
+            )
+        }
     };
     let n = nodes.len();
     let u_ref = disc.dofs.displacements(&solved.x, n);
     let sigma_ref = stress.map(|_| disc.stress(&case.material, &disc.gradients(&solved.x), &solved.x));
     let reference = ExactFields { displacement: u_ref, stress: sigma_ref.map(|s| s.sigma) };
-    let norms = ErrorNorms::against(displacement, stress, &reference);
-    let per_node_u = per_node(displacement, &reference.displacement);
-    let per_node_sigma = stress.zip(reference.stress.as_ref()).map(|(s, r)| per_node(&s.sigma, r));
-    let largest = |v: &[f64]| nodes.positions[argmax(v)];
     Estimate::Done(Box::new(ErrorEstimate {
-        method: EstimateMethod::HigherDegree.name(),
         reference_degree: approximation.basis.polynomial_degree(),
-        reference: format!("{}, {} nodes per stencil", approximation.basis.describe(), approximation.support),
-        norms,
-        largest_u_at: largest(&per_node_u),
-        largest_sigma_at: per_node_sigma.as_deref().map(largest),
-        seconds: t0.elapsed().as_secs_f64(),
         reference_unknowns: disc.dofs.len(),
         reference_nonzeros: solved.nonzeros,
-        per_node_u,
-        per_node_sigma,
+        ..ErrorEstimate::between(
+            EstimateMethod::HigherDegree,
+            format!("{}, {} nodes per stencil", approximation.basis.describe(), approximation.support),
+            &nodes.positions,
+            displacement,
+            stress,
+            &reference,
+            t0,
+        )
     }))
+}
+
+/// The `refined` estimate of a dynamic run at its end time: the scene integrated again
+/// with the run's approximation on nodes at half the spacing ([`crate::domain::FillParams::scaled`])
+/// and the run's `time_step` divided by `2^ceil(2 / order)` (halved for Verlet and RK4,
+/// quartered for the first-order emu; the reference's own stable step when the finer
+/// nodes need a smaller one), so that both the reference's spatial error (order >= 2
+/// in h) and its time error are at most a quarter of the run's. Its displacement,
+/// interpolated to the run's `positions` by moving least squares, differs from the
+/// run's by 0.75 to 1 times the run's error (space and time together).
+///
+/// Why not a higher degree on the same nodes as for static runs: the PHS stencils
+/// of the reference have growing modes in explicit elastodynamics (both shipped
+/// dynamic scenes diverged within 1500 steps), while the run's own basis on finer
+/// nodes keeps the stability the run had.
+pub fn refined_dynamic(
+    case: &Case,
+    params: &NavierParams,
+    dynamics: &DynamicsParams,
+    time_step: f64,
+    positions: &[Point],
+    displacement: &[[f64; 2]],
+) -> Estimate {
+    let t0 = Instant::now();
+    let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::Refined.name(), why);
+    let estimate = EstimateParams { method: EstimateMethod::None, ..params.estimate };
+    let reference_params = NavierParams { fill: params.fill.scaled(0.5), keep_system: false, estimate, ..params.clone() };
+    let divisor = f64::from(1u32 << 2u32.div_ceil(dynamics.integrator.order()));
+    let fine = DynamicsParams { time_step: Some(time_step / divisor), ..dynamics.clone() };
+    let run = |d: &DynamicsParams| super::dynamics::simulate(case, &reference_params, d, &Silent, |_| Ok(()));
+    let simulated = match run(&fine) {
+        Err(RunError::UnstableTimeStep { .. }) => run(&DynamicsParams { time_step: None, ..fine.clone() }),
+        other => other,
+    };
+    let sim = match simulated {
+        Ok(s) => s,
+        Err(e) => return unavailable(format!("the reference at half the spacing failed: {e}")),
+    };
+    let u_ref = match mls_values(&sim.positions, &sim.u, positions) {
+        Ok(u) => u,
+        Err(e) => return unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
+    };
+    let r = &sim.report;
+    let description = format!(
+        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({})",
+        sim.positions.len(),
+        reference_params.fill.spacing,
+        r.steps,
+        r.time_step,
+        dynamics.integrator.name()
+    );
+    let reference = ExactFields { displacement: u_ref, stress: None };
+    Estimate::Done(Box::new(ErrorEstimate {
+        reference_degree: params.approximation.basis.polynomial_degree(),
+        reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
+        ..ErrorEstimate::between(EstimateMethod::Refined, description, positions, displacement, None, &reference, t0)
+    }))
+}
+
+impl ErrorEstimate {
+    /// The estimate of the run `(displacement, stress)` at `positions` by its
+    /// difference to `reference` at the same points, computed by `method` since `t0`
+    /// (the reference's degree, unknowns and nonzeros left 0 for the caller).
+    pub fn between(
+        method: EstimateMethod,
+        reference_description: String,
+        positions: &[Point],
+        displacement: &[[f64; 2]],
+        stress: Option<&StressField>,
+        reference: &ExactFields,
+        t0: Instant,
+    ) -> ErrorEstimate {
+        let norms = ErrorNorms::against(displacement, stress, reference);
+        let per_node_u = per_node(displacement, &reference.displacement);
+        let per_node_sigma = stress.zip(reference.stress.as_ref()).map(|(s, r)| per_node(&s.sigma, r));
+        let largest = |v: &[f64]| positions[argmax(v)];
+        ErrorEstimate {
+            method: method.name(),
+            reference: reference_description,
+            reference_degree: 0,
+            reference_estimated_e_inf_u: None,
+            norms,
+            largest_u_at: largest(&per_node_u),
+            largest_sigma_at: per_node_sigma.as_deref().map(largest),
+            seconds: t0.elapsed().as_secs_f64(),
+            reference_unknowns: 0,
+            reference_nonzeros: 0,
+            per_node_u,
+            per_node_sigma,
+        }
+    }
 }
 
 /// `max_c |a_i - b_i| / max_{j,c} |b_j|` at every node.

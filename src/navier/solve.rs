@@ -7,7 +7,7 @@ use std::borrow::Cow;
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
-use super::estimate::{self, Estimate, EstimateMethod, ESTIMATE};
+use super::estimate::{self, Estimate};
 use super::system::System;
 use super::NavierParams;
 use crate::case::Case;
@@ -108,21 +108,10 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         Ok(((displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes), note))
     })?;
 
-    let estimate = match params.estimate.method {
-        EstimateMethod::None => Estimate::Off,
-        EstimateMethod::HigherDegree => timer.run(ESTIMATE, || {
-            let e = estimate::higher_degree(case, params, &disc.nodes, &displacement, stress.as_ref(), exact);
-            let note = match &e {
-                Estimate::Done(e) => match e.norms.e_inf_sigma {
-                    Some(s) => format!("e_inf(u) ~ {:.1e}, e_inf(sigma) ~ {s:.1e}", e.norms.e_inf_u),
-                    None => format!("e_inf(u) ~ {:.1e}", e.norms.e_inf_u),
-                },
-                Estimate::Unavailable(why) => format!("unavailable: {why}"),
-                Estimate::Off => String::new(),
-            };
-            Ok((e, note))
-        })?,
-    };
+    let method = params.estimate.method;
+    let estimate = estimate::stage(method, method.navier_estimates(), &mut timer, || {
+        estimate::higher_degree(case, params, &disc.nodes, &displacement, stress.as_ref(), exact)
+    })?;
 
     let system = system.map(|(matrix, rhs)| LinearSystem {
         matrix,

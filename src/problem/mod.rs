@@ -35,6 +35,28 @@ choice! {
     }
 }
 
+/// Why `method` cannot estimate a run of `model` (static, or `dynamic`), or `None`:
+/// `higher-degree` estimates static Navier runs, `refined` dynamic Navier runs,
+/// `local-model` peridynamic runs.
+pub fn estimate_mismatch(model: Model, dynamic: bool, method: crate::navier::EstimateMethod) -> Option<&'static str> {
+    use crate::navier::EstimateMethod as M;
+    let fits = match (model, dynamic) {
+        (Model::Peridynamics, _) => method.peridynamics_estimates(),
+        (Model::Navier, false) => method.navier_estimates(),
+        (Model::Navier, true) => method.dynamic_navier_estimates(),
+    };
+    if fits || method == M::None {
+        return None;
+    }
+    Some(match (model, dynamic) {
+        (Model::Peridynamics, _) => "a peridynamic run is estimated against the Navier model: \"local-model\" (or \"auto\", \"none\")",
+        (Model::Navier, false) => "a static Navier run takes \"higher-degree\" (or \"auto\", \"none\")",
+        (Model::Navier, true) => {
+            "a dynamic Navier run takes \"refined\" (or \"auto\", \"none\"); higher-degree PHS stencils have growing modes in explicit dynamics"
+        }
+    })
+}
+
 /// A validated scene: the physical case, the discretisation of each model, and the
 /// model `mlsm run` solves.
 #[derive(Debug, Clone)]

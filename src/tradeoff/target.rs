@@ -213,7 +213,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
     let t0 = Instant::now();
     let mut notes = Vec::new();
     let mut problem = p.clone();
-    if problem.navier.estimate.method != EstimateMethod::HigherDegree {
+    if !problem.navier.estimate.method.navier_estimates() {
         problem.navier.estimate.method = EstimateMethod::HigherDegree;
         notes.push("the error estimate is switched on (estimate.method = \"higher-degree\"): the target is set on it".into());
     }
@@ -231,7 +231,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         let step_seconds = t0.elapsed().as_secs_f64() - history.iter().map(|s| s.seconds).sum::<f64>();
         let Some(estimate) = solution.estimate.done() else {
             let reason = match &solution.estimate {
-                navier::Estimate::Unavailable(why) => why.clone(),
+                navier::Estimate::Unavailable(_, why) => why.clone(),
                 _ => "no estimate".into(),
             };
             match best {

@@ -189,11 +189,15 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
         return c.err("probe", "probes read static solutions (run, convergence); a [dynamics] run writes its fields over time instead");
     }
     let probes = probes::probes(&c, &spec.probe, &domain, &mut outputs)?;
+    let estimate = estimate(&c, &spec.estimate)?;
+    if let Some(why) = crate::problem::estimate_mismatch(model, dynamics.is_some(), estimate.method) {
+        return c.err("estimate.method", why);
+    }
     Ok(Problem {
         name,
         source: path.to_path_buf(),
         case: Case { domain, material, body_force, conditions, exact, outputs, dynamics, probes },
-        navier: NavierParams { fill, approximation, formulation, solver, estimate: estimate(&c, &spec.estimate)?, keep_system: false },
+        navier: NavierParams { fill, approximation, formulation, solver, estimate, keep_system: false },
         peridynamics,
         model,
         notes,
