@@ -779,12 +779,23 @@ fn peridynamic_run_writes_solution_and_summary() {
     }
     let e = num(&s["errors"], "e_inf_u");
     assert!(e > 0.0 && e < 1e-2, "manufactured solution, delta = 0.1: e_inf {e}");
+    // The local-model estimate: in the summary, timed, per node in the .vtu.
+    let est = &s["estimated_errors"];
+    assert_eq!(est["method"], "local-model", "{est}");
+    assert!((0.5..=2.0).contains(&(num(est, "e_inf_u") / e)), "effectivity {}", num(est, "e_inf_u") / e);
+    assert!(s["timings_s"]["estimate"].as_f64().is_some(), "{s}");
     let vtu = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
     assert_eq!(vtu.points.len(), 900);
     assert!(vtu.fields.contains_key("displacement") && vtu.fields.contains_key("interior"));
+    assert!(vtu.fields.contains_key("estimated_error"), "{:?}", vtu.fields.keys());
     // --spacing belongs to MLSM.
     let o = mlsm(tmp.path(), &["run", "pd.toml", "--model", "peridynamics", "--spacing", "0.1"]);
     assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    // A Navier estimator for a peridynamic run is refused, naming the field.
+    write(tmp.path(), "pd_hd.toml", &pd(&[]).replace("[exact]", "[estimate]\nmethod = \"higher-degree\"\n\n[exact]"));
+    let o = mlsm(tmp.path(), &["run", "pd_hd.toml", "--model", "peridynamics"]);
+    assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+    assert!(stderr(&o).contains("estimate.method"), "{}", describe(&o));
 }
 
 #[test]

@@ -13,7 +13,8 @@
 //! error. It holds while the Navier solution is much closer to the local solution
 //! than the peridynamic one (MLSM converges at order 2 to 4 in `h`, peridynamics at
 //! order 2 in `delta`); a static reference carries its own higher-degree estimate
-//! (`reference_estimated_e_inf_u`) so that this can be checked.
+//! (`reference_estimated_e_inf_u`) so that this can be checked, and is refined until
+//! it holds ([`local_model`]).
 
 use crate::choice::Choice;
 use crate::domain::Point;
@@ -24,10 +25,20 @@ use crate::navier::{ErrorEstimate, Estimate, EstimateMethod};
 use crate::pipeline::Silent;
 use crate::post::ExactFields;
 use crate::problem::{Model, Problem};
+use crate::warnings::LOCAL_REFERENCE_MARGIN;
 use std::time::Instant;
 
+/// Halvings of the Navier spacing a static `local-model` estimate takes at most to get
+/// a reference [`LOCAL_REFERENCE_MARGIN`] times more accurate (by its own estimate)
+/// than the difference it measures; each costs about four times the one before.
+pub const MAX_REFINEMENTS: usize = 2;
+
 /// The `local-model` estimate of the peridynamic run of `problem` whose free nodes
-/// `positions` carry `displacement` (and `stress`, when computed).
+/// `positions` carry `displacement` (and `stress`, when computed). The Navier nodes
+/// are the scene's, no coarser than the peridynamic spacing `delta / m`; a static
+/// reference whose own estimate is not [`LOCAL_REFERENCE_MARGIN`] times below the
+/// difference is refined up to [`MAX_REFINEMENTS`] times (then the check
+/// `estimate-reference` warns).
 pub fn local_model(problem: &Problem, positions: &[Point], displacement: &[[f64; 2]], stress: Option<&StressField>) -> Estimate {
     let t0 = Instant::now();
     let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::LocalModel.name(), why);
@@ -37,14 +48,43 @@ pub fn local_model(problem: &Problem, positions: &[Point], displacement: &[[f64;
     // A static reference estimates its own error; a dynamic one would need a second
     // integration of its own, which costs more than it tells here.
     navier.navier.estimate.method = if dynamic { EstimateMethod::None } else { EstimateMethod::HigherDegree };
-    if let Err(e) = crate::resources::check(&navier) {
-        return unavailable(format!("the Navier model's run does not fit: {}", e.reason));
+    let pd_spacing = problem.peridynamics.map(|pd| pd.horizon / pd.ratio);
+    if let Some(h) = pd_spacing.filter(|h| *h < navier.navier.fill.spacing) {
+        navier = match navier.with_spacing(h) {
+            Ok(n) => n,
+            Err(e) => return unavailable(format!("the Navier nodes at the peridynamic spacing: {}", e.reason)),
+        };
     }
-    let outcome = match model::solve(&navier, &Silent, |_| Ok(())) {
-        Ok(o) => o,
-        Err(e) => return unavailable(format!("the Navier model's run failed: {e}")),
-    };
-    let description = outcome.describe(&navier);
+    for refinement in 0.. {
+        let mut e = match against_navier(&navier, positions, displacement, stress) {
+            Ok(e) => e,
+            Err(why) => return unavailable(why),
+        };
+        let coarse = e.reference_estimated_e_inf_u.is_some_and(|own| own * LOCAL_REFERENCE_MARGIN >= e.norms.e_inf_u);
+        let finer = if coarse && refinement < MAX_REFINEMENTS { navier.with_spacing(navier.navier.fill.spacing / 2.0).ok() } else { None };
+        match finer {
+            Some(f) if crate::resources::check(&f).is_ok() => navier = f,
+            _ => {
+                e.seconds = t0.elapsed().as_secs_f64();
+                return Estimate::Done(e);
+            }
+        }
+    }
+    unreachable!("the loop returns")
+}
+
+/// The estimate of `(displacement, stress)` at `positions` against the run of the
+/// Navier problem `navier`, or why there is none.
+fn against_navier(
+    navier: &Problem,
+    positions: &[Point],
+    displacement: &[[f64; 2]],
+    stress: Option<&StressField>,
+) -> Result<Box<ErrorEstimate>, String> {
+    let t0 = Instant::now();
+    crate::resources::check(navier).map_err(|e| format!("the Navier model's run does not fit: {}", e.reason))?;
+    let outcome = model::solve(navier, &Silent, |_| Ok(())).map_err(|e| format!("the Navier model's run failed: {e}"))?;
+    let description = outcome.describe(navier);
     let (nodes, u, sigma, own, unknowns, nonzeros) = match outcome {
         Outcome::NavierStatic(s) => {
             let own = s.estimate.done().map(|e| e.norms.e_inf_u);
@@ -63,11 +103,8 @@ pub fn local_model(problem: &Problem, positions: &[Point], displacement: &[[f64;
         };
         Ok(ExactFields { displacement: u, stress: sigma })
     });
-    let reference = match interpolated {
-        Ok(r) => r,
-        Err(e) => return unavailable(format!("the Navier solution could not be interpolated to the peridynamic nodes: {e}")),
-    };
-    Estimate::Done(Box::new(ErrorEstimate {
+    let reference = interpolated.map_err(|e| format!("the Navier solution could not be interpolated to the peridynamic nodes: {e}"))?;
+    Ok(Box::new(ErrorEstimate {
         reference_degree: navier.navier.approximation.basis.polynomial_degree(),
         reference_estimated_e_inf_u: own,
         reference_unknowns: unknowns,
