@@ -110,7 +110,14 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
 /// The estimate for the model `p` runs.
 pub fn of(p: &Problem) -> MemoryEstimate {
     match (&p.model, &p.peridynamics) {
-        (crate::problem::Model::Peridynamics, Some(pd)) => peridynamics(&p.case, pd),
+        (crate::problem::Model::Peridynamics, Some(pd)) => {
+            let mut e = peridynamics(&p.case, pd);
+            // The local-model estimate's Navier run comes after the nonlocal one.
+            if p.navier.estimate.method.peridynamics_estimates() {
+                e.peak_bytes = e.peak_bytes.max(of(&p.local_reference()).peak_bytes);
+            }
+            e
+        }
         _ => {
             let nodes = validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
             navier(&p.case, &p.navier, nodes)

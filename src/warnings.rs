@@ -55,6 +55,7 @@ use crate::navier::{ErrorEstimate, Estimate, NavierParams, Solution};
 use crate::peridynamics::PdSolution;
 use crate::problem::Problem;
 use crate::resources;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Radius of the neighbourhood of a singular corner that the stress check skips, in
@@ -331,8 +332,11 @@ pub fn peridynamics_static(sol: &PdSolution, estimate: &Estimate, threshold: f64
 
 /// How much closer to the local solution than the peridynamic run the Navier reference
 /// of a `local-model` estimate must be (by its own estimate) for the estimate to be
-/// within a factor 1.5 of the difference it stands for.
-pub const LOCAL_REFERENCE_MARGIN: f64 = 3.0;
+/// trusted: its own estimate misses the interpolation to the peridynamic nodes and may
+/// itself be low on coarse nodes (pd_manufactured, Navier spacing 0.1, delta = 0.05:
+/// own estimate 3.8e-4, estimate 1.9e-3 against a true 9.3e-4; a margin of 3 let it
+/// pass).
+pub const LOCAL_REFERENCE_MARGIN: f64 = 10.0;
 
 /// The checks of a peridynamic run's `local-model` estimate: above `threshold` a note
 /// (the model difference of the horizon, like the exact error); a Navier reference
@@ -440,9 +444,45 @@ pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool, estimat
     checks
 }
 
-/// Instants at which [`load_time_resolution`] samples the loads over the run (at the
-/// points of a 5 x 5 lattice over the solid's bounding box).
+/// Instants at which [`load_time_resolution`] samples the loads over the run.
 const LOAD_SAMPLE_TIMES: usize = 2000;
+
+/// Boundary samples per part at most at which [`load_time_resolution`] reads a load
+/// (every k-th sample of the run's spacing beyond that).
+const LOAD_SAMPLE_POINTS: usize = 2000;
+
+/// Where [`load_time_resolution`] reads each load: the boundary sampled at the run's
+/// `spacing` (a boundary value on the samples of its part, where it acts; the body
+/// force on all of them), and a 5 x 5 lattice over the bounding box for the body force
+/// inside. A narrow load (a spot, a moving front) acts between the lattice's points,
+/// where its value may underflow to zero, but never between the nodes that carry it.
+struct LoadPoints {
+    lattice: Vec<Point>,
+    /// Boundary samples of each part (strided to [`LOAD_SAMPLE_POINTS`]).
+    parts: Vec<Vec<Point>>,
+}
+
+impl LoadPoints {
+    fn new(case: &Case, spacing: f64) -> Self {
+        let (lo, hi) = case.domain.bounding_box();
+        let lattice =
+            (0..25).map(|k| [lo[0] + (hi[0] - lo[0]) * (k % 5) as f64 / 4.0, lo[1] + (hi[1] - lo[1]) * (k / 5) as f64 / 4.0]).collect();
+        let samples = crate::domain::boundary::discretise_boundary(&case.domain, spacing);
+        let parts = (0..case.conditions.len())
+            .map(|part| {
+                let on: Vec<Point> = samples.iter().filter(|s| s.touches.iter().any(|(p, _)| *p == part)).map(|s| s.position).collect();
+                let stride = on.len().div_ceil(LOAD_SAMPLE_POINTS).max(1);
+                on.into_iter().step_by(stride).collect()
+            })
+            .collect();
+        LoadPoints { lattice, parts }
+    }
+
+    /// The points of the body force: the lattice and every part's samples.
+    fn body(&self) -> Vec<Point> {
+        self.lattice.iter().chain(self.parts.iter().flatten()).copied().collect()
+    }
+}
 
 /// The time scale of one load formula in `t`: `tau = max |g| / max |dg/dt|` over the
 /// sampled `times` and `points` (both maxima over the components; `1 / omega` for
@@ -457,7 +497,8 @@ fn time_scale(value: &Value, points: &[Point], times: &[f64]) -> Option<f64> {
         let at = v.at_time(t);
         points.iter().filter_map(|&p| at.explicit_at(p)).flatten().filter(|x| x.is_finite()).fold(0.0f64, |m, x| m.max(x.abs()))
     };
-    let (g, r) = times.iter().fold((0.0f64, 0.0f64), |(g, r), &t| (g.max(largest(value, t)), r.max(largest(&rate, t))));
+    let (g, r) =
+        times.par_iter().map(|&t| (largest(value, t), largest(&rate, t))).reduce(|| (0.0f64, 0.0f64), |a, b| (a.0.max(b.0), a.1.max(b.1)));
     (g > 0.0 && r > 0.0).then(|| g / r)
 }
 
@@ -468,21 +509,28 @@ fn time_scale(value: &Value, points: &[Point], times: &[f64]) -> Option<f64> {
 /// estimate's, default 1e-2: RK4 from 1.05 steps per time scale, Verlet from 2.0,
 /// `emu` from 50), naming the load, its time scale and a step that would do (half the
 /// threshold). Measured on plate_pulse with a 10x shorter pulse (tests/time_loads.rs).
-pub fn load_time_resolution(case: &Case, time_step: f64, end_time: f64, integrator: Integrator, threshold: f64) -> Option<Warning> {
+/// The loads are read at [`LoadPoints`] for the run's node `spacing`.
+pub fn load_time_resolution(
+    case: &Case,
+    spacing: f64,
+    time_step: f64,
+    end_time: f64,
+    integrator: Integrator,
+    threshold: f64,
+) -> Option<Warning> {
     let loads = case.loads();
-    let (lo, hi) = case.domain.bounding_box();
-    let points: Vec<Point> =
-        (0..25).map(|k| [lo[0] + (hi[0] - lo[0]) * (k % 5) as f64 / 4.0, lo[1] + (hi[1] - lo[1]) * (k / 5) as f64 / 4.0]).collect();
+    let at = LoadPoints::new(case, spacing);
+    let body = at.body();
     let times: Vec<f64> = (0..LOAD_SAMPLE_TIMES).map(|k| end_time * k as f64 / (LOAD_SAMPLE_TIMES - 1) as f64).collect();
-    let fields = std::iter::once(("body_force".to_string(), &loads.body_force))
-        .chain(loads.conditions.iter().enumerate().map(|(k, c)| (format!("boundary[{k}].value"), &c.value)));
+    let fields = std::iter::once(("body_force".to_string(), &loads.body_force, &body[..]))
+        .chain(loads.conditions.iter().enumerate().map(|(k, c)| (format!("boundary[{k}].value"), &c.value, &at.parts[k][..])));
     let (field, tau) = fields
-        .filter_map(|(field, v)| {
+        .filter_map(|(field, v, points)| {
             let name = match v {
                 Value::Expression(e) if !e.origin.is_empty() => e.origin.clone(),
                 _ => field,
             };
-            time_scale(v, &points, &times).map(|tau| (name, tau))
+            time_scale(v, points, &times).map(|tau| (name, tau))
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))?;
     let error = integrator.error_per_radian(time_step / tau);

@@ -275,7 +275,8 @@ fn a_load_faster_than_the_step_resolves_is_warned() {
         let dynamics = p.case.dynamics.as_ref().unwrap();
         let pd = mlsm::peridynamics::simulate(&p.case, p.peridynamics.as_ref().unwrap(), dynamics, &Silent, |_| Ok(())).unwrap();
         let dt = pd.report.time_step;
-        let warning = mlsm::warnings::load_time_resolution(&p.case, dt, dynamics.end_time, dynamics.integrator, 1e-2);
+        let pd_spacing = p.peridynamics.map(|pd| pd.horizon / pd.ratio).unwrap();
+        let warning = mlsm::warnings::load_time_resolution(&p.case, pd_spacing, dt, dynamics.end_time, dynamics.integrator, 1e-2);
         (pd.u, dt, warning)
     };
     let (reference, _, _) = run(Some(6.25e-8));
@@ -290,4 +291,33 @@ fn a_load_faster_than_the_step_resolves_is_warned() {
     eprintln!("dt {dt:.2e}: off by {coarse_off:.1e} (warned); dt {dt_fine:.2e}: off by {fine_off:.1e}");
     assert!(quiet.is_none(), "{:?}", quiet.map(|w| w.message));
     assert!(coarse_off > 3e-3 && fine_off < 1e-4, "{coarse_off:e} {fine_off:e}");
+}
+
+/// A narrow spot of pressure (width w = 5e-4 m) swaying on the right edge of plate_pulse
+/// between two points of the bounding-box lattice (y = 0 and 0.075): centred at
+/// `y = 0.04 + 0.01 sin(omega t)`, at least 50 w from the lattice, where its value
+/// underflows to zero, so that the lattice alone saw no load in t at all. Read at the
+/// boundary samples of the run's spacing (1.7e-2 m, which the spot sweeps across), a
+/// fast sway (omega = 6.3e4 /s: a sample is crossed in about w / (0.86 v) = 9e-7 s, an
+/// eighth of the 7.1e-6 s step) is warned; a slow one (omega = 100 /s, 2.6 steps per
+/// time scale at the nearest sample) is not.
+#[test]
+fn a_narrow_moving_load_is_read_where_it_acts() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/plate_pulse.toml");
+    let check = |omega: f64, spacing: Option<f64>| {
+        let load = format!("value = [\"p0 * exp(-(((y - 0.04 - 0.01 * sin({omega:e} * t)) / 5e-4)^2))\", 0.0]");
+        let text = std::fs::read_to_string(&path).unwrap().replace("value = [\"p0 * sin(pi * t / T)^2\", 0.0]", &load);
+        assert!(text.contains(&load), "the edit must hit the right edge's load");
+        let p = Problem::from_str(&text, &path).unwrap();
+        let d = p.case.dynamics.as_ref().unwrap();
+        let pd = p.peridynamics.unwrap();
+        let h = spacing.unwrap_or(pd.horizon / pd.ratio);
+        mlsm::warnings::load_time_resolution(&p.case, h, 7.1e-6, d.end_time, d.integrator, 1e-2)
+    };
+    let fast = check(6.3e4, None).expect("a spot crossing a sample in 9e-7 s is not resolved by 7.1e-6 s steps");
+    assert!(fast.message.contains("boundary[1].value"), "{}", fast.message);
+    assert!(check(100.0, None).is_none(), "a slow sway is resolved");
+    // Read only at the corners and the lattice (a spacing of the plate's length), the
+    // spot underflows everywhere and is missed: what the lattice alone did.
+    assert!(check(6.3e4, Some(1.0)).is_none(), "the corners and the lattice do not see the spot");
 }

@@ -398,7 +398,12 @@ fn write_dynamic<M: Serialize>(
     let threshold = p.navier.estimate.threshold;
     let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, d.horizon);
     if let Some(dynamics) = &p.case.dynamics {
-        let resolution = warnings::load_time_resolution(&p.case, d.report.time_step, dynamics.end_time, dynamics.integrator, threshold);
+        let spacing = match (p.model, p.peridynamics) {
+            (Model::Peridynamics, Some(pd)) => pd.horizon / pd.ratio,
+            _ => p.navier.fill.field(&p.case.domain).min(),
+        };
+        let resolution =
+            warnings::load_time_resolution(&p.case, spacing, d.report.time_step, dynamics.end_time, dynamics.integrator, threshold);
         checks.warnings.extend(resolution);
     }
     checks.warnings.extend(warnings::memory(p));

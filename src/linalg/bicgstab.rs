@@ -67,7 +67,8 @@ pub struct BicgstabOutcome {
 ///
 /// `a`, `b` are the system actually iterated on (possibly row-equilibrated);
 /// `accept(x)` returns a true relative residual (of this system, or of the
-/// original one), and convergence means `accept(x) ≤ tolerance`. The inner faer
+/// original one), and convergence means `accept(x) ≤ tolerance`; its last call is
+/// on the iterate returned (unless the iteration broke down). The inner faer
 /// tolerance starts at `tolerance` and, after a false convergence claim, is
 /// tightened to `½ · tolerance · (scaled residual / original residual)`
 /// (floored at machine ε) so that the target is met even when `accept`
@@ -78,7 +79,7 @@ pub fn solve_bicgstab(
     pc: &BuiltPreconditioner,
     tolerance: f64,
     max_iterations: usize,
-    accept: impl Fn(&[f64]) -> f64,
+    mut accept: impl FnMut(&[f64]) -> f64,
 ) -> BicgstabOutcome {
     let n = b.len();
     let mut x = Mat::<f64>::zeros(n, 1);

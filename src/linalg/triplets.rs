@@ -51,7 +51,9 @@ impl Triplets {
     }
 
     /// The entries of an `n × n` matrix as written, block by block (no copy). Panics
-    /// when `n` exceeds the 32-bit indices ([`StoredEntry`]).
+    /// when `n` exceeds the 32-bit indices ([`StoredEntry`]): unreachable from a scene,
+    /// whose node limit (`problem::validate::MAX_NODES`) is checked against them at
+    /// compile time.
     pub fn from_blocks(n: usize, blocks: Vec<Vec<StoredEntry>>) -> Self {
         assert!(n <= u32::MAX as usize, "a system of {n} unknowns exceeds the 32-bit indices of the triplets");
         Triplets { n, blocks }

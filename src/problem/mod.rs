@@ -78,7 +78,36 @@ pub struct Problem {
     pub notes: Vec<String>,
 }
 
+/// The polynomial degree of the local model's reference for a peridynamic estimate
+/// (`local-model`): a scene whose Navier basis has a lower degree is solved with PHS
+/// r^3 and monomials of this degree instead.
+pub const LOCAL_REFERENCE_DEGREE: u32 = 4;
+
 impl Problem {
+    /// The Navier problem the `local-model` estimate of this (peridynamic) problem
+    /// starts from: the scene's nodes; a static one with the scene's basis, or PHS r^3 with monomials of
+    /// degree [`LOCAL_REFERENCE_DEGREE`] when the scene's degree is lower (so that the
+    /// reference is far more accurate than the nonlocal solution it judges), and its own
+    /// error estimate (`higher-degree`); a dynamic one with the scene's basis (PHS
+    /// stencils grow in explicit dynamics) and no estimate of its own (a second
+    /// integration costs more than it tells).
+    pub fn local_reference(&self) -> Problem {
+        use crate::mlsm::{default_rbf_fd_support, Approximation, Basis, Radial, Weight};
+        use crate::navier::EstimateMethod;
+        let mut navier = Problem { model: Model::Navier, ..self.clone() };
+        navier.navier.keep_system = false;
+        let dynamic = navier.case.dynamics.is_some();
+        navier.navier.estimate.method = if dynamic { EstimateMethod::None } else { EstimateMethod::HigherDegree };
+        let approximation = &mut navier.navier.approximation;
+        // Explicit dynamics keeps the scene's basis: PHS stencils have growing modes there.
+        if !dynamic && approximation.basis.polynomial_degree() < LOCAL_REFERENCE_DEGREE {
+            let basis = Basis::RbfFd { radial: Radial::Phs { order: 3 }, degree: LOCAL_REFERENCE_DEGREE };
+            let support = default_rbf_fd_support(basis.size(), navier.navier.fill.kind);
+            *approximation = Approximation { basis, weight: Weight::None, support, ghost_nodes: approximation.ghost_nodes };
+        }
+        navier
+    }
+
     /// Read, parse and validate a scene file.
     pub fn from_file(path: &Path) -> Result<Problem, ProblemError> {
         Problem::from_file_with_preset(path, None)

@@ -32,6 +32,11 @@ use std::path::Path;
 /// Largest node count a run may ask for (a sparse LU of 1e8 unknowns does not fit in memory).
 pub const MAX_NODES: f64 = 5e7;
 
+// The solver's 32-bit indices (`linalg::triplets`, `linalg::Csr`) hold every system
+// the node limit admits: three unknowns per node (the u-p form), with ten times room
+// for a node count above its estimate.
+const _: () = assert!(MAX_NODES * 3.0 * 10.0 <= u32::MAX as f64);
+
 /// What a spacing too coarse for the stencils is refused with (in `nodes.spacing`),
 /// shared by the validation, [`crate::problem::Problem::with_fill`] and the tradeoff
 /// sweep, which passes over such levels.
