@@ -54,7 +54,7 @@ choice! {
         /// Difference to a solution two degrees higher on the same nodes.
         HigherDegree = "higher-degree" => "static Navier runs: difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes; about 1-3x the cost of the run",
         /// Difference to a run on nodes at half the spacing with a finer time step.
-        Refined = "refined" => "dynamic Navier runs: difference to the run on nodes at half the spacing with the time step halved (quartered for emu); 8x the nodes x steps of the run (16x with emu), 3-4x its time on the shipped scenes",
+        Refined = "refined" => "dynamic Navier runs: difference to the run on nodes at half the spacing with the time step halved (quartered for emu); 8x the nodes x steps of the run (16x with emu): 3-4x its time on the shipped scenes, 6x at 1.2e4 nodes",
         /// Difference to the local (Navier) model's solution of the same scene.
         LocalModel = "local-model" => "peridynamic runs: difference to the Navier model's solution of the same scene on its [nodes] (with its own estimate when static), interpolated to the peridynamic nodes by moving least squares; the peridynamic error as the exact-solution errors measure it, against the local model",
         /// No estimate.
