@@ -89,7 +89,7 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         (nonzeros, nodes * s * 44.0 + solve)
     };
     let (nonzeros, mut bytes) = one(params.approximation.support, nodes);
-    if params.estimate.method.navier_estimates() && !dynamic {
+    if params.estimate.method.static_navier_estimates() && !dynamic {
         if let Ok(reference) = reference_approximation(&params.approximation, params.fill.kind, nodes as usize) {
             bytes = bytes.max(one(reference.support, nodes).1);
         }

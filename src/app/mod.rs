@@ -8,6 +8,7 @@ mod compare;
 mod convergence;
 mod export;
 mod fields;
+mod ranks;
 mod run;
 mod series;
 mod summary;

@@ -8,7 +8,6 @@ use super::target::{self, TargetReport};
 use super::terminal::Terminal;
 use super::{default_out, export, AppError};
 use crate::choice::Choice;
-use crate::linalg::{Preconditioner, SolverKind, SolverParams, GMRES_RESTART};
 use crate::model::{self, Outcome};
 use crate::navier::estimate::ESTIMATE;
 use crate::navier::Estimate;
@@ -104,112 +103,9 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
             return Err(AppError::Usage(format!("{}: {why}", req.scene.display())));
         }
     }
-    start_petsc(&mut p, req)?;
+    super::ranks::start_petsc(&mut p, req)?;
     crate::resources::check(&p)?;
     Ok(p)
-}
-
-/// The solver of the model `p` runs.
-fn active_solver(p: &mut Problem) -> &mut SolverParams {
-    match (p.model, p.peridynamics.as_mut()) {
-        (Model::Peridynamics, Some(pd)) => &mut pd.solver,
-        _ => &mut p.navier.solver,
-    }
-}
-
-/// Start PETSc when the run needs it: `solver.kind = "petsc"`, options after `--`, or
-/// more than one MPI rank. Over several ranks `auto` becomes PETSc with its settings
-/// (a note says so), and what cannot be distributed is refused. Ranks other than 0
-/// print nothing (their stdout and stderr go to /dev/null).
-fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<(), AppError> {
-    let launched = petsc::launched_ranks();
-    let asks = matches!(active_solver(p).kind, SolverKind::Petsc { .. });
-    if launched == 1 && !asks && req.petsc_options.is_empty() {
-        return Ok(());
-    }
-    let why = if launched > 1 {
-        format!("mpirun started {launched} ranks")
-    } else if asks {
-        "solver.kind = \"petsc\"".to_string()
-    } else {
-        "PETSc options were given after `--`".to_string()
-    };
-    let world = petsc::start(&req.petsc_options).map_err(|e| AppError::Usage(format!("{why}: {e}")))?;
-    if world.size > 1 {
-        if p.case.dynamics.is_some() {
-            return Err(AppError::Usage(format!("{why}: a dynamic run is explicit and runs in one process; run it without mpirun")));
-        }
-        if req.target.is_some() || req.export_system.is_some() {
-            return Err(AppError::Usage(format!("{why}: --target-error and --export-system run in one process; run them without mpirun")));
-        }
-        if world.rank > 0 {
-            silence_this_rank();
-        }
-        let (kind, note) = match active_solver(p).kind {
-            SolverKind::Lu => {
-                let (tolerance, max_iterations) = (1e-10, 500);
-                let kind = SolverKind::Petsc {
-                    preconditioner: Preconditioner::Amg,
-                    tolerance,
-                    max_iterations,
-                    restart: GMRES_RESTART,
-                    direct: true,
-                };
-                (kind, "solver.kind = \"lu\": MUMPS's distributed sparse LU in PETSc".to_string())
-            }
-            SolverKind::Auto { preconditioner, tolerance, max_iterations } if preconditioner.petsc_name().is_some() => {
-                // The same rule as in one process: LU while its factors fit.
-                let estimate = crate::resources::of(p);
-                let available = crate::output::available_memory_bytes();
-                let direct = matches!(active_solver(p).kind.resolve(estimate.unknowns, estimate.nonzeros, available).0, SolverKind::Lu);
-                let kind = SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART, direct };
-                let what = if direct { "the LU factors fit: MUMPS's distributed sparse LU" } else { "the LU factors do not fit: GMRES" };
-                (kind, format!("auto: {what} ({})", kind.label()))
-            }
-            kind @ SolverKind::Petsc { .. } => (kind, String::new()),
-            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }
-            | SolverKind::Gmres { preconditioner, tolerance, max_iterations, .. }
-                if preconditioner.petsc_name().is_some() =>
-            {
-                let kind = SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART, direct: false };
-                (kind, format!("PETSc's KSP ({}) in place of the in-process Krylov solver", kind.label()))
-            }
-            other => {
-                return Err(AppError::Usage(format!(
-                    "{why}: solver {} has no PETSc counterpart (PETSc has no ILUT); over MPI ranks use \
-                     preconditioner amg, ilu0 or jacobi, or solver.kind = \"lu\"",
-                    other.label()
-                )))
-            }
-        };
-        active_solver(p).kind = kind;
-        if !note.is_empty() {
-            p.notes.push(format!("{} MPI ranks; {note}", world.size));
-        }
-    } else if req.export_system.is_some() {
-        return Err(AppError::Usage(format!("{why}: --export-system writes the system of an in-process solve; PETSc's is not kept")));
-    } else if !matches!(active_solver(p).kind, SolverKind::Petsc { .. }) {
-        return Err(AppError::Usage(format!(
-            "{why}, but the solver is \"{}\": set solver.kind = \"petsc\"",
-            active_solver(p).kind.method().name()
-        )));
-    }
-    Ok(())
-}
-
-/// Send this process's stdout and stderr to /dev/null (the ranks above 0 of an MPI
-/// run: rank 0 reports for all).
-fn silence_this_rank() {
-    #[cfg(unix)]
-    if let Ok(null) = std::fs::OpenOptions::new().write(true).open("/dev/null") {
-        use std::os::unix::io::AsRawFd;
-        // SAFETY: dup2 onto the standard descriptors of this process; `null` stays
-        // open until the duplicates exist.
-        unsafe {
-            libc::dup2(null.as_raw_fd(), 1);
-            libc::dup2(null.as_raw_fd(), 2);
-        }
-    }
 }
 
 /// The entries of a result folder that `run` writes: a re-run replaces those of the
@@ -293,7 +189,6 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
                 energies: &sim.energies,
                 timings: &sim.timings,
                 estimate: &sim.estimate,
-                horizon: None,
             };
             write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
@@ -305,15 +200,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
-            let horizon = p.peridynamics.map(|pd| pd.horizon);
-            let dynamic = Dynamic {
-                nodes: nodes.free,
-                report: &sim.report,
-                energies: &sim.energies,
-                timings: &sim.timings,
-                estimate: &estimate,
-                horizon,
-            };
+            let dynamic =
+                Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings, estimate: &estimate };
             write_dynamic(&p, staged, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
     }
@@ -396,11 +284,14 @@ fn write_dynamic<M: Serialize>(
     quiet: bool,
 ) -> Result<(), AppError> {
     let threshold = p.navier.estimate.threshold;
-    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, d.horizon);
+    // A peridynamic run's horizon (its estimate is a model difference) and node spacing.
+    let peridynamics = p.peridynamics.filter(|_| p.model == Model::Peridynamics);
+    let horizon = peridynamics.map(|pd| pd.horizon);
+    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, horizon);
     if let Some(dynamics) = &p.case.dynamics {
-        let spacing = match (p.model, p.peridynamics) {
-            (Model::Peridynamics, Some(pd)) => pd.horizon / pd.ratio,
-            _ => p.navier.fill.field(&p.case.domain).min(),
+        let spacing = match peridynamics {
+            Some(pd) => pd.horizon / pd.ratio,
+            None => p.navier.fill.field(&p.case.domain).min(),
         };
         let resolution =
             warnings::load_time_resolution(&p.case, spacing, d.report.time_step, dynamics.end_time, dynamics.integrator, threshold);

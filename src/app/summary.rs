@@ -265,8 +265,6 @@ pub(super) struct Dynamic<'a> {
     pub timings: &'a StageTimings,
     /// The error estimate at the end time.
     pub estimate: &'a navier::Estimate,
-    /// The horizon of a peridynamic run (its estimate is a model difference).
-    pub horizon: Option<f64>,
 }
 
 /// `summary.json` of a time-dependent run.
@@ -290,7 +288,7 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
 
 impl<'a, M: Serialize> DynamicSummary<'a, M> {
     pub(super) fn new(p: &'a Problem, d: &Dynamic<'a>, model: M, checks: &'a Checks, t0: Instant) -> Self {
-        let Dynamic { nodes, report, energies, timings, estimate, .. } = *d;
+        let Dynamic { nodes, report, energies, timings, estimate } = *d;
         DynamicSummary {
             header: Header::new(p, timings, t0),
             nodes,

@@ -76,24 +76,22 @@ fn against_navier(
     crate::resources::check(navier).map_err(|e| format!("the Navier model's run does not fit: {}", e.reason))?;
     let outcome = model::solve(navier, &Silent, |_| Ok(())).map_err(|e| format!("the Navier model's run failed: {e}"))?;
     let description = outcome.describe(navier);
-    let (nodes, u, sigma, own, unknowns, nonzeros) = match outcome {
+    let (nodes, u) = (outcome.positions(), outcome.displacement());
+    // What only a static run has: stress, its own estimate, its matrix.
+    let (sigma, own, unknowns, nonzeros) = match &outcome {
         Outcome::NavierStatic(s) => {
-            let own = s.estimate.done().map(|e| e.norms.e_inf_u);
-            (s.nodes.positions, s.displacement, s.stress.map(|s| s.sigma), own, s.unknowns, s.nonzeros)
+            (s.stress.as_ref().map(|s| &s.sigma), s.estimate.done().map(|e| e.norms.e_inf_u), s.unknowns, s.nonzeros)
         }
-        Outcome::NavierDynamic(s) => {
-            let unknowns = s.unknowns.0 + s.unknowns.1;
-            (s.positions, s.u, None, None, unknowns, 0)
-        }
+        Outcome::NavierDynamic(s) => (None, None, s.unknowns.0 + s.unknowns.1, 0),
         Outcome::PdStatic(_) | Outcome::PdDynamic(_) => unreachable!("the reference runs the Navier model"),
     };
     // Interpolated at the reference's degree: a degree-2 interpolation from a coarse
     // reference was five times the difference it measured (pd_manufactured, delta =
     // 0.0125: 2.8e-4 against 5.6e-5).
     let degree = navier.navier.approximation.basis.polynomial_degree().max(2);
-    let interpolated = mls_values_of_degree(&nodes, &u, positions, degree).and_then(|u| {
-        let sigma = match (stress, &sigma) {
-            (Some(_), Some(s)) => Some(mls_values_of_degree(&nodes, s, positions, degree)?),
+    let interpolated = mls_values_of_degree(nodes, u, positions, degree).and_then(|u| {
+        let sigma = match (stress, sigma) {
+            (Some(_), Some(s)) => Some(mls_values_of_degree(nodes, s, positions, degree)?),
             _ => None,
         };
         Ok(ExactFields { displacement: u, stress: sigma })

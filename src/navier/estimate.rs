@@ -83,7 +83,7 @@ impl Default for EstimateParams {
 
 impl EstimateMethod {
     /// Whether a static Navier run estimates its error (`auto` or `higher-degree`).
-    pub fn navier_estimates(self) -> bool {
+    pub fn static_navier_estimates(self) -> bool {
         matches!(self, EstimateMethod::Auto | EstimateMethod::HigherDegree)
     }
 

@@ -109,7 +109,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     })?;
 
     let method = params.estimate.method;
-    let estimate = estimate::stage(method, method.navier_estimates(), &mut timer, || {
+    let estimate = estimate::stage(method, method.static_navier_estimates(), &mut timer, || {
         estimate::higher_degree(case, params, &disc.nodes, &displacement, stress.as_ref(), exact)
     })?;
 

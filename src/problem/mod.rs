@@ -42,7 +42,7 @@ pub fn estimate_mismatch(model: Model, dynamic: bool, method: crate::navier::Est
     use crate::navier::EstimateMethod as M;
     let fits = match (model, dynamic) {
         (Model::Peridynamics, _) => method.peridynamics_estimates(),
-        (Model::Navier, false) => method.navier_estimates(),
+        (Model::Navier, false) => method.static_navier_estimates(),
         (Model::Navier, true) => method.dynamic_navier_estimates(),
     };
     if fits || method == M::None {

@@ -213,7 +213,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
     let t0 = Instant::now();
     let mut notes = Vec::new();
     let mut problem = p.clone();
-    if !problem.navier.estimate.method.navier_estimates() {
+    if !problem.navier.estimate.method.static_navier_estimates() {
         problem.navier.estimate.method = EstimateMethod::HigherDegree;
         notes.push("the error estimate is switched on (estimate.method = \"higher-degree\"): the target is set on it".into());
     }

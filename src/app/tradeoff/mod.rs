@@ -168,7 +168,7 @@ fn check_scene(p: &Problem) -> Result<(), AppError> {
             "{file}: tradeoff sweeps the Navier model; for peridynamics `mlsm compare` prints each horizon's cost next to its error"
         )));
     }
-    if p.case.exact.is_none() && !p.navier.estimate.method.navier_estimates() {
+    if p.case.exact.is_none() && !p.navier.estimate.method.static_navier_estimates() {
         return Err(AppError::Usage(format!(
             "{file}: the scene has no [exact] solution and estimate.method = \"none\": a sweep without any error measures nothing"
         )));
