@@ -6,13 +6,12 @@
 //! ```text
 //! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
 //! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32)
-//! solve, LU    = Z (40 + 34 N^0.26)       (triplets and matrix, 40 B per nonzero; the LU
-//!                                          factors of faer, fitted: see below)
+//! solve, LU    = Z (24 + 34 N^0.26)       (rows and columns of the matrix, 24 B per nonzero
+//!                                          with slack; the LU factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (24 + 48)           (the equilibrated matrix, which replaces the
 //!                                          assembled one, and an ILU of about three times its size)
-//! solve, GMRES = 32 Z + (restart + 6) 8 N  (triplets and matrix at assembly, 16 B each;
-//!                                          then the equilibrated rows, 12 B, replace the
-//!                                          matrix, with the AMG levels and the Krylov basis)
+//! solve, GMRES = 24 Z + (restart + 6) 8 N  (the rows as assembled, 12 B, equilibrated in
+//!                                          place, the AMG levels and the Krylov basis)
 //! solve, auto  = LU or GMRES as `SolverKind::resolve` will choose
 //! peak         = max(run, error-estimate reference) + 16 MB
 //! ```
@@ -56,14 +55,13 @@ fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
     match kind.resolve(unknowns, nonzeros, available_memory_bytes()).0 {
         // The assembled matrix is freed once equilibrated (`linalg::solve_nodal`).
         SolverKind::Bicgstab { .. } => 72.0 * nonzeros,
-        // Triplets and matrix (16 + 16 B per entry) at assembly; then AMG's equilibrated
-        // rows of it (12 B; the matrix freed), the coarse levels and transfers (about
-        // 13 B per fine entry), and the Krylov basis. Measured at 1e6 nodes: 2.41 GB at
-        // assembly, 2.54 GB in the solve (BENCHMARKS.md).
-        SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 32.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
-        // The triplets are gone and the assembled matrix freed once equilibrated: the
-        // equilibrated matrix (16 B per entry) and the factors, plus slack for the
-        // solve's vectors.
+        // The rows as assembled (12 B per entry), equilibrated in place and kept as the
+        // multigrid's finest level, the coarse levels and single-precision transfers
+        // (about 9 B per fine entry), slack, and the Krylov basis. Measured at 1e6 nodes:
+        // 1.49 GB at assembly, 2.34 GB in the solve, estimated 2.43 (BENCHMARKS.md).
+        SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 24.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
+        // The rows (12 B per entry) become the equilibrated columns (16 B) and are freed;
+        // then the columns and the factors, with slack for the solve's vectors.
         _ => 24.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
     }
 }

@@ -222,8 +222,11 @@ fn continuum_operator_of_calibrated_kernels_is_navier_on_cubics() {
 fn dense_stiffness(d: &Discretisation) -> Vec<Vec<f64>> {
     let n = 2 * d.nodes.free;
     let (m, _) = d.bonds().stiffness(&vec![[0.0, 0.0]; d.nodes.free]).unwrap();
-    let dense = m.to_dense();
-    (0..n).map(|r| (0..n).map(|c| dense[(r, c)]).collect()).collect()
+    let mut dense = vec![vec![0.0; n]; n];
+    for (r, c, v) in m.entries() {
+        dense[r][c] += v;
+    }
+    dense
 }
 
 /// The assembled stiffness equals the central finite-difference Jacobian of the

@@ -11,42 +11,61 @@
 
 use rayon::prelude::*;
 
+/// A value a [`Csr`] stores: `f64`, or `f32` where half the precision does (the
+/// multigrid's transfers, [`Csr::into_single`]); arithmetic is in `f64` either way.
+pub trait Value: Copy + Send + Sync + Default + std::fmt::Debug + PartialEq + 'static {
+    /// The value in double precision (exact).
+    fn to_f64(self) -> f64;
+}
+
+impl Value for f64 {
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Value for f32 {
+    fn to_f64(self) -> f64 {
+        f64::from(self)
+    }
+}
+
 /// A sparse matrix in compressed rows: row `i` holds the columns
 /// `col_indices[offsets[i]..offsets[i + 1]]` (sorted, no duplicates) and their values.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Csr {
+pub struct Csr<V: Value = f64> {
     nrows: usize,
     ncols: usize,
     offsets: Vec<usize>,
     cols: Vec<u32>,
-    vals: Vec<f64>,
+    vals: Vec<V>,
 }
 
 /// One row of a [`Csr`].
 #[derive(Clone, Copy, Debug)]
-pub struct Row<'a> {
+pub struct Row<'a, V = f64> {
     cols: &'a [u32],
-    vals: &'a [f64],
+    vals: &'a [V],
 }
 
-impl<'a> Row<'a> {
+impl<'a, V> Row<'a, V> {
     /// Columns of the stored entries, sorted.
     pub fn col_indices(&self) -> &'a [u32] {
         self.cols
     }
 
     /// Values of the stored entries.
-    pub fn values(&self) -> &'a [f64] {
+    pub fn values(&self) -> &'a [V] {
         self.vals
     }
 }
 
-impl Csr {
+impl<V: Value> Csr<V> {
     /// The matrix of the given compressed rows. Panics on inconsistent parts (the
     /// callers build them; a violation is a bug): `offsets` of length `nrows + 1`,
     /// non-decreasing, ending at the number of entries; columns below `ncols` (which
     /// must fit in 32 bits), sorted within each row.
-    pub fn from_parts(nrows: usize, ncols: usize, offsets: Vec<usize>, cols: Vec<u32>, vals: Vec<f64>) -> Self {
+    pub fn from_parts(nrows: usize, ncols: usize, offsets: Vec<usize>, cols: Vec<u32>, vals: Vec<V>) -> Self {
         assert!(ncols <= u32::MAX as usize + 1, "{ncols} columns do not fit 32-bit indices");
         assert_eq!(offsets.len(), nrows + 1, "row offsets");
         assert_eq!(offsets[nrows], cols.len(), "row offsets end at the number of entries");
@@ -55,31 +74,6 @@ impl Csr {
         debug_assert!((0..nrows).all(|i| cols[offsets[i]..offsets[i + 1]].windows(2).all(|w| w[0] < w[1])));
         debug_assert!(cols.iter().all(|&c| (c as usize) < ncols));
         Csr { nrows, ncols, offsets, cols, vals }
-    }
-
-    /// The `nrows x ncols` matrix of the entries `(row, column, value)`, duplicates
-    /// summed (tests and small matrices).
-    pub fn from_triplets(nrows: usize, ncols: usize, entries: &[(usize, usize, f64)]) -> Self {
-        let mut sorted = entries.to_vec();
-        sorted.sort_by_key(|e| (e.0, e.1));
-        let mut offsets = vec![0usize; nrows + 1];
-        let (mut cols, mut vals): (Vec<u32>, Vec<f64>) = (Vec::new(), Vec::new());
-        let mut last: Option<(usize, usize)> = None;
-        for (r, c, v) in sorted {
-            assert!(r < nrows && c < ncols, "entry ({r}, {c}) outside a {nrows} x {ncols} matrix");
-            if last == Some((r, c)) {
-                *vals.last_mut().expect("a previous entry") += v;
-            } else {
-                cols.push(c as u32);
-                vals.push(v);
-                offsets[r + 1] += 1;
-                last = Some((r, c));
-            }
-        }
-        for i in 0..nrows {
-            offsets[i + 1] += offsets[i];
-        }
-        Csr::from_parts(nrows, ncols, offsets, cols, vals)
     }
 
     /// Rows.
@@ -108,14 +102,84 @@ impl Csr {
     }
 
     /// Values of all rows.
-    pub fn values(&self) -> &[f64] {
+    pub fn values(&self) -> &[V] {
         &self.vals
     }
 
     /// Row `i`.
-    pub fn row(&self, i: usize) -> Row<'_> {
+    pub fn row(&self, i: usize) -> Row<'_, V> {
         let range = self.offsets[i]..self.offsets[i + 1];
         Row { cols: &self.cols[range.clone()], vals: &self.vals[range] }
+    }
+}
+
+impl Csr {
+    /// The same matrix with its values rounded to single precision (values in half
+    /// the memory, an entry in two thirds): for operators whose application need only
+    /// be a fixed linear map, not the exact one (the multigrid's transfers).
+    pub fn into_single(self) -> Csr<f32> {
+        let vals = self.vals.iter().map(|&v| v as f32).collect();
+        Csr { nrows: self.nrows, ncols: self.ncols, offsets: self.offsets, cols: self.cols, vals }
+    }
+
+    /// The `nrows x ncols` matrix of the entries `(row, column, value)`, duplicates
+    /// summed (tests and small matrices).
+    pub fn from_triplets(nrows: usize, ncols: usize, entries: &[(usize, usize, f64)]) -> Self {
+        let mut sorted = entries.to_vec();
+        sorted.sort_by_key(|e| (e.0, e.1));
+        let mut offsets = vec![0usize; nrows + 1];
+        let (mut cols, mut vals): (Vec<u32>, Vec<f64>) = (Vec::new(), Vec::new());
+        let mut last: Option<(usize, usize)> = None;
+        for (r, c, v) in sorted {
+            assert!(r < nrows && c < ncols, "entry ({r}, {c}) outside a {nrows} x {ncols} matrix");
+            if last == Some((r, c)) {
+                *vals.last_mut().expect("a previous entry") += v;
+            } else {
+                cols.push(c as u32);
+                vals.push(v);
+                offsets[r + 1] += 1;
+                last = Some((r, c));
+            }
+        }
+        for i in 0..nrows {
+            offsets[i + 1] += offsets[i];
+        }
+        Csr::from_parts(nrows, ncols, offsets, cols, vals)
+    }
+
+    /// Every stored entry `(row, column, value)`, row by row.
+    pub fn entries(&self) -> impl Iterator<Item = (usize, usize, f64)> + Clone + '_ {
+        (0..self.nrows).flat_map(move |i| {
+            let row = self.row(i);
+            row.cols.iter().zip(row.vals).map(move |(&c, &v)| (i, c as usize, v))
+        })
+    }
+
+    /// The stored entry `(i, i)`, zero when there is none.
+    pub fn diagonal(&self, i: usize) -> f64 {
+        let row = self.row(i);
+        row.cols.binary_search(&(i as u32)).map_or(0.0, |k| row.vals[k])
+    }
+
+    /// `A ← D A`, `D = diag(scales)`, in place (groups of rows in parallel).
+    pub fn scale_rows(&mut self, scales: &[f64]) {
+        const GROUP: usize = 4096;
+        assert_eq!(scales.len(), self.nrows, "one scale per row");
+        let offsets = &self.offsets;
+        let mut rest: &mut [f64] = &mut self.vals;
+        let mut groups = Vec::with_capacity(self.nrows.div_ceil(GROUP));
+        for first in (0..self.nrows).step_by(GROUP) {
+            let last = self.nrows.min(first + GROUP);
+            let (group, tail) = std::mem::take(&mut rest).split_at_mut(offsets[last] - offsets[first]);
+            groups.push((first, last, group));
+            rest = tail;
+        }
+        groups.into_par_iter().for_each(|(first, last, group)| {
+            for i in first..last {
+                let d = scales[i];
+                group[offsets[i] - offsets[first]..offsets[i + 1] - offsets[first]].iter_mut().for_each(|v| *v *= d);
+            }
+        });
     }
 
     /// The parts: offsets, column indices, values.
@@ -189,11 +253,11 @@ pub fn transposed(ncols: usize, offsets: &[usize], cols: &[u32], mut place: impl
     out
 }
 
-/// `y = A x`, rows in parallel.
-pub fn product(a: &Csr, x: &[f64], y: &mut [f64]) {
+/// `y = A x`, rows in parallel, in double precision whatever `A` stores.
+pub fn product<V: Value>(a: &Csr<V>, x: &[f64], y: &mut [f64]) {
     let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
     y.par_iter_mut().enumerate().with_min_len(256).for_each(|(r, y)| {
-        *y = (ptr[r]..ptr[r + 1]).map(|k| val[k] * x[idx[k] as usize]).sum::<f64>();
+        *y = (ptr[r]..ptr[r + 1]).map(|k| val[k].to_f64() * x[idx[k] as usize]).sum::<f64>();
     });
 }
 
@@ -218,5 +282,22 @@ mod tests {
         let mut y = vec![0.0; 3];
         product(&a, &[1.0, 2.0, 4.0, 8.0], &mut y);
         assert_eq!(y, vec![2.0 + 10.0, -4.0, 1.0]);
+    }
+
+    /// Single precision keeps the pattern and rounds each value once (relative error
+    /// at most 2^-24); scaling multiplies each row by its own scale (exact here: powers
+    /// of two); the diagonal reads the stored entry or zero.
+    #[test]
+    fn single_precision_scaling_and_diagonal() {
+        let a = Csr::from_triplets(3, 3, &[(0, 0, 0.1), (0, 2, 1.0 / 3.0), (1, 0, -7.25), (2, 2, 1e-3)]);
+        let s = a.clone().into_single();
+        assert_eq!((s.row_offsets(), s.col_indices()), (a.row_offsets(), a.col_indices()));
+        for (&v, &w) in a.values().iter().zip(s.values()) {
+            assert!((f64::from(w) - v).abs() <= v.abs() * 2f64.powi(-24), "{v} -> {w}");
+        }
+        let mut scaled = a.clone();
+        scaled.scale_rows(&[2.0, 0.5, -4.0]);
+        assert_eq!(scaled, Csr::from_triplets(3, 3, &[(0, 0, 0.2), (0, 2, 2.0 / 3.0), (1, 0, -3.625), (2, 2, -4e-3)]));
+        assert_eq!([a.diagonal(0), a.diagonal(1), a.diagonal(2)], [0.1, 0.0, 1e-3]);
     }
 }

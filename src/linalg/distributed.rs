@@ -20,7 +20,7 @@
 
 use super::scaling::row_scale;
 use super::triplets::{compress, Entry};
-use super::{SolveError, SolveReport, SolverKind, SolverParams, SparseMatrix};
+use super::{Csr, SolveError, SolveReport, SolverKind, SolverParams};
 use crate::petsc::{self, KspDefaults, LocalRows, World};
 
 /// Owner rank and PETSc index of every point.
@@ -318,7 +318,7 @@ pub fn solve(
 /// caller that assembled in one piece): each rank hands PETSc the rows of the points
 /// `owner` gives it.
 pub fn solve_replicated(
-    a: &SparseMatrix,
+    a: &Csr,
     b: &[f64],
     owner: Vec<u32>,
     per_point: usize,
@@ -326,11 +326,7 @@ pub fn solve_replicated(
     params: &SolverParams,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let dist = Distribution::new(owner, per_point, petsc::world());
-    let entries = (0..a.ncols()).flat_map(|j| {
-        let rows = a.symbolic().row_idx_of_col_raw(j);
-        rows.iter().zip(a.val_of_col(j)).map(move |(&i, &v)| (i, j, v))
-    });
-    solve(&dist, entries, b, points, params)
+    solve(&dist, a.entries(), b, points, params)
 }
 
 /// Every rank's `(stage, seconds)`, in rank order (collective; each rank ran the same

@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use super::csr::Csr;
-use super::{amg, bicgstab, gmres, lu, norm2, precond, relative, residual, row_residual, scaling};
+use super::{amg, bicgstab, gmres, lu, norm2, precond, relative, residual, row_residual};
 use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
@@ -88,34 +88,41 @@ pub(super) fn iteration_limit(max_iterations: usize) -> String {
     format!("the iteration limit (solver.max_iterations = {max_iterations})")
 }
 
-/// The operator as solved, in columns (`D A` with the row maxima `row_max`); a matrix
-/// handed over is freed once scaled. (The multigrid makes its own copy in rows instead.)
-pub(super) fn working<'a>(a: Cow<'a, SparseMatrix>, rhs: &Rhs, row_max: &[f64]) -> Cow<'a, SparseMatrix> {
-    match &rhs.scales {
-        Some(_) => Cow::Owned(scaling::equilibrate_rows_with(&a, row_max).0),
-        None => a,
+/// The operator as solved in rows, `D A`: a matrix handed over is scaled in place (no
+/// second copy), a borrowed one copied first.
+pub(super) fn solved_rows(a: Cow<'_, Csr>, rhs: &Rhs) -> Csr {
+    let mut rows = a.into_owned();
+    if let Some(d) = &rhs.scales {
+        rows.scale_rows(d);
     }
+    rows
+}
+
+/// [`solved_rows`] in columns, for the solvers that work on columns (LU, the one-level
+/// preconditioners); the rows are freed once converted.
+pub(super) fn working(a: Cow<'_, Csr>, rhs: &Rhs) -> SparseMatrix {
+    amg::columns_of(solved_rows(a, rhs))
 }
 
 /// A solution and its report.
 pub(super) type Solved = (Vec<f64>, SolveReport);
 
 /// Why a GMRES attempt failed, and the operator it leaves for `auto`'s fallback.
-pub(super) type Failed<'a> = (SolveError, Leftover<'a>);
+pub(super) type Failed = (SolveError, Leftover);
 
 /// The solved operator a failed GMRES leaves for `auto`'s fallback.
-pub(super) enum Leftover<'a> {
+pub(super) enum Leftover {
     /// In columns, as the other preconditioners needed it.
-    Columns(Cow<'a, SparseMatrix>),
+    Columns(SparseMatrix),
     /// In rows, as the multigrid held it.
     Rows(Csr),
 }
 
-impl<'a> Leftover<'a> {
-    pub(super) fn into_columns(self) -> Cow<'a, SparseMatrix> {
+impl Leftover {
+    pub(super) fn into_columns(self) -> SparseMatrix {
         match self {
             Leftover::Columns(c) => c,
-            Leftover::Rows(r) => Cow::Owned(amg::columns_of(r)),
+            Leftover::Rows(r) => amg::columns_of(r),
         }
     }
 }
@@ -210,13 +217,13 @@ pub(super) struct GmresSettings {
 
 /// GMRES with the multigrid built on the solved operator in rows (`D A`, kept as its
 /// finest level); on failure the rows come back for `auto`'s fallback.
-pub(super) fn solve_gmres_multigrid<'a>(
+pub(super) fn solve_gmres_multigrid(
     rows: Csr,
     rhs: &Rhs,
     start: &Start,
     settings: GmresSettings,
     layout: Option<NodeLayout>,
-) -> Result<Solved, Box<Failed<'a>>> {
+) -> Result<Solved, Box<Failed>> {
     let amg = amg::Amg::build_from_rows(rows, layout, amg::AmgParams::default());
     let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
     let rows = pc.fine_operator().expect("the multigrid keeps its finest operator");

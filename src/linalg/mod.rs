@@ -6,8 +6,9 @@
 //! row first derivatives (`~1/h`) and a Dirichlet row is an identity row
 //! (`~1`). This module offers
 //!
-//! * [`Triplets`] + [`assemble`]: COO accumulation and CSC assembly
-//!   (duplicates summed),
+//! * [`row_assembly`]: compressed rows ([`Csr`]) assembled fragment by fragment in
+//!   row order, the form the solvers take; [`Triplets`] + [`assemble`]: COO
+//!   accumulation and CSC assembly (duplicates summed),
 //! * [`solve`]: optional row equilibration ([`scaling`]) followed by either the
 //!   sparse direct LU of `faer` ([`lu`]) or right-preconditioned BiCGSTAB
 //!   ([`bicgstab`]) with Jacobi, ILU(0) or ILUT ([`precond`]).
@@ -31,6 +32,7 @@ pub mod params;
 pub mod partition;
 pub mod precond;
 pub mod report;
+pub mod row_assembly;
 pub mod rowmat;
 pub mod scaling;
 pub mod smoother;
@@ -43,7 +45,9 @@ mod tests;
 use std::borrow::Cow;
 use std::time::Instant;
 
-use methods::{solve_gmres_multigrid, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, working, GmresSettings, Leftover, Rhs, Start};
+use methods::{
+    solve_gmres_multigrid, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, solved_rows, working, GmresSettings, Leftover, Rhs, Start,
+};
 
 pub use amg::NodeLayout;
 pub use csr::Csr;
@@ -115,7 +119,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// 1e300 then give the same digits (no overflow or underflow in the residual norms),
 /// and a solution beyond the double range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    solve_nodal(Cow::Borrowed(a), b, params, None)
+    solve_nodal(Cow::Owned(amg::to_csr(a)), b, params, None)
 }
 
 /// [`solve`] of a system whose unknowns belong to nodes (`layout`): the multigrid
@@ -124,7 +128,7 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
 /// works on (the equilibrated copy, or GMRES+AMG's equilibrated rows): one copy of the
 /// matrix fewer at the solve's peak (0.84 GB at 1e6 nodes, BENCHMARKS.md).
 pub fn solve_nodal(
-    a: Cow<'_, SparseMatrix>,
+    a: Cow<'_, Csr>,
     b: &[f64],
     params: &SolverParams,
     layout: Option<NodeLayout>,
@@ -182,13 +186,13 @@ pub fn solve_nodal(
 ///
 /// An empty system (`n = 0`) returns an empty solution.
 pub(crate) fn solve_with_memory(
-    a: Cow<'_, SparseMatrix>,
+    a: Cow<'_, Csr>,
     b: &[f64],
     params: &SolverParams,
     layout: Option<NodeLayout>,
     available: Option<f64>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let (kind, choice) = params.kind.resolve(a.nrows() as f64, a.compute_nnz() as f64, available);
+    let (kind, choice) = params.kind.resolve(a.nrows() as f64, a.nnz() as f64, available);
     let fallback = match (params.kind, kind) {
         (SolverKind::Auto { tolerance, max_iterations, .. }, SolverKind::Gmres { .. }) => Some((tolerance, max_iterations)),
         _ => None,
@@ -236,18 +240,16 @@ pub(crate) fn solve_with_memory(
     };
     match kind {
         SolverKind::Auto { .. } | SolverKind::Petsc { .. } => unreachable!("resolved and returned above"),
-        SolverKind::Lu => solve_lu(&working(a, &rhs, &row_max), &rhs, &start),
+        SolverKind::Lu => solve_lu(&working(a, &rhs), &rhs, &start),
         SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
-            solve_krylov_bicgstab(&working(a, &rhs, &row_max), &rhs, &start, (preconditioner, tolerance, max_iterations), layout)
+            solve_krylov_bicgstab(&working(a, &rhs), &rhs, &start, (preconditioner, tolerance, max_iterations), layout)
         }
         SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart } => {
             let settings = GmresSettings { preconditioner, tolerance, max_iterations, restart };
             let attempt = if preconditioner == Preconditioner::Amg {
-                let rows = amg::scaled_rows(&a, rhs.scales.as_deref());
-                drop(a);
-                solve_gmres_multigrid(rows, &rhs, &start, settings, layout)
+                solve_gmres_multigrid(solved_rows(a, &rhs), &rhs, &start, settings, layout)
             } else {
-                let a_work = working(a, &rhs, &row_max);
+                let a_work = working(a, &rhs);
                 match solve_krylov_gmres(&a_work, &rhs, &start, settings, layout) {
                     Ok(done) => Ok(done),
                     Err(e) => Err(Box::new((e, Leftover::Columns(a_work)))),

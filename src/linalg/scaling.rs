@@ -13,7 +13,8 @@
 //! but pivoting in LU, ILU drop tolerances and the Krylov residual all see
 //! comparable rows.
 
-use super::{SolveError, SparseMatrix};
+use super::csr::Csr;
+use super::SolveError;
 
 /// `max_j |a_ij|` for every row `i`, validating the matrix on the way.
 ///
@@ -21,27 +22,27 @@ use super::{SolveError, SparseMatrix};
 /// [`SolveError::Singular`] for a row or column whose stored entries are all
 /// zero (an equation constraining nothing, or an unknown appearing in no
 /// equation — the matrix is singular either way).
-pub fn row_max_abs(a: &SparseMatrix) -> Result<Vec<f64>, SolveError> {
-    let n = a.nrows();
-    let mut row_max = vec![0.0f64; n];
-    for j in 0..a.ncols() {
-        let rows = a.symbolic().row_idx_of_col_raw(j);
-        let mut col_max = 0.0f64;
-        for (&i, &v) in rows.iter().zip(a.val_of_col(j)) {
+pub fn row_max_abs(a: &Csr) -> Result<Vec<f64>, SolveError> {
+    let mut row_max = vec![0.0f64; a.nrows()];
+    let mut col_max = vec![0.0f64; a.ncols()];
+    for (i, m) in row_max.iter_mut().enumerate() {
+        let row = a.row(i);
+        for (&j, &v) in row.col_indices().iter().zip(row.values()) {
+            let j = j as usize;
             if !v.is_finite() {
                 return Err(SolveError::NotFinite { row: i, col: j, value: v });
             }
-            row_max[i] = row_max[i].max(v.abs());
-            col_max = col_max.max(v.abs());
+            *m = m.max(v.abs());
+            col_max[j] = col_max[j].max(v.abs());
         }
-        if col_max == 0.0 {
-            return Err(SolveError::Singular {
-                detail: format!(
-                    "column {j} of the matrix is entirely zero: unknown {j} appears in no \
-                     equation; check that every node's displacement enters some stencil"
-                ),
-            });
-        }
+    }
+    if let Some(j) = col_max.iter().position(|&m| m == 0.0) {
+        return Err(SolveError::Singular {
+            detail: format!(
+                "column {j} of the matrix is entirely zero: unknown {j} appears in no \
+                 equation; check that every node's displacement enters some stencil"
+            ),
+        });
     }
     if let Some(i) = row_max.iter().position(|&m| m == 0.0) {
         return Err(SolveError::Singular {
@@ -57,36 +58,18 @@ pub fn row_max_abs(a: &SparseMatrix) -> Result<Vec<f64>, SolveError> {
 /// Row-equilibrate `A`: returns `(D A, d)` with `d_i = ±1 / max_j |a_ij|`, the sign
 /// that of `a_ii` (`+` when `a_ii = 0`).
 /// Scale the right-hand side with [`scale_rhs`]. Errors as [`row_max_abs`].
-pub fn equilibrate_rows(a: &SparseMatrix) -> Result<(SparseMatrix, Vec<f64>), SolveError> {
+pub fn equilibrate_rows(a: &Csr) -> Result<(Csr, Vec<f64>), SolveError> {
     let row_max = row_max_abs(a)?;
-    Ok(equilibrate_rows_with(a, &row_max))
-}
-
-/// `(D A, d)` from precomputed, strictly positive row maxima
-/// (see [`row_max_abs`]); `D A` has a non-negative diagonal.
-pub fn equilibrate_rows_with(a: &SparseMatrix, row_max: &[f64]) -> (SparseMatrix, Vec<f64>) {
-    let d = row_scales(a, row_max);
+    let d = row_scales(a, &row_max);
     let mut s = a.clone();
-    let (sym, val) = s.parts_mut();
-    for j in 0..sym.ncols() {
-        let rows = sym.row_idx_of_col_raw(j);
-        for (v, &i) in val[sym.col_range(j)].iter_mut().zip(rows) {
-            *v *= d[i];
-        }
-    }
-    (s, d)
+    s.scale_rows(&d);
+    Ok((s, d))
 }
 
 /// The row scales `d_i = ±1 / max_j |a_ij|` of [`equilibrate_rows`], from the row
 /// maxima of [`row_max_abs`].
-pub fn row_scales(a: &SparseMatrix, row_max: &[f64]) -> Vec<f64> {
-    (0..a.nrows())
-        .map(|j| {
-            let rows = a.symbolic().row_idx_of_col_raw(j);
-            let diagonal = rows.binary_search(&j).map_or(0.0, |p| a.val_of_col(j)[p]);
-            row_scale(row_max[j], diagonal)
-        })
-        .collect()
+pub fn row_scales(a: &Csr, row_max: &[f64]) -> Vec<f64> {
+    (0..a.nrows()).map(|i| row_scale(row_max[i], a.diagonal(i))).collect()
 }
 
 /// The scale `d_i = ±1 / max_j |a_ij|` of a row, its sign that of the diagonal entry
@@ -106,41 +89,21 @@ pub fn scale_rhs(b: &[f64], d: &[f64]) -> Vec<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{assemble, Triplets};
     use super::*;
 
     #[test]
     fn rows_get_unit_max_and_zero_rows_are_singular() {
-        let mut t = Triplets::new(3);
-        t.push(0, 0, -4e12);
-        t.push(0, 1, 1e12);
-        t.push(1, 1, 2e-12);
-        t.push(2, 2, 3.0);
-        t.push(2, 0, -6.0);
-        let a = assemble(&t).unwrap();
+        let a = Csr::from_triplets(3, 3, &[(0, 0, -4e12), (0, 1, 1e12), (1, 1, 2e-12), (2, 2, 3.0), (2, 0, -6.0)]);
         let (s, d) = equilibrate_rows(&a).unwrap();
         // Division by a power of two or a single rounding: 1 ulp-level.
         assert!((d[0] + 0.25e-12).abs() < 1e-27, "a_00 < 0 flips the row: {}", d[0]);
-        for j in 0..3 {
-            let rows = s.symbolic().row_idx_of_col_raw(j);
-            let p = rows.binary_search(&j).unwrap();
-            assert!(s.val_of_col(j)[p] > 0.0, "diagonal {j} of D A is positive");
-        }
-        let mut row_max = [0.0f64; 3];
-        for j in 0..3 {
-            for (&i, &v) in s.symbolic().row_idx_of_col_raw(j).iter().zip(s.val_of_col(j)) {
-                row_max[i] = row_max[i].max(v.abs());
-            }
-        }
-        for m in row_max {
+        for i in 0..3 {
+            assert!(s.diagonal(i) > 0.0, "diagonal {i} of D A is positive");
+            let m = s.row(i).values().iter().fold(0.0f64, |m, v| m.max(v.abs()));
             assert!((m - 1.0).abs() < 1e-15, "row max {m}");
         }
 
-        let mut t = Triplets::new(2);
-        t.push(0, 0, 1.0);
-        t.push(0, 1, 1.0);
-        t.push(1, 1, 0.0); // stored, but zero
-        let a = assemble(&t).unwrap();
+        let a = Csr::from_triplets(2, 2, &[(0, 0, 1.0), (0, 1, 1.0), (1, 1, 0.0)]); // (1, 1) stored, but zero
         match equilibrate_rows(&a) {
             Err(SolveError::Singular { detail }) => assert!(detail.contains("row 1"), "{detail}"),
             other => panic!("expected Singular, got {other:?}"),

@@ -255,8 +255,8 @@ fn condensed<'a>(
     density: f64,
 ) -> Result<NavierDynamics<'a>, RunError> {
     let system = System { case, disc, exact };
-    let (triplets, rhs) = system.assemble()?;
-    let matrix = crate::linalg::assemble(&triplets)?;
+    let (rows, rhs) = system.assemble()?;
+    let matrix = crate::linalg::amg::columns_of(rows);
     let is_dynamic: Vec<bool> = (0..rhs.len()).map(|g| disc.has_navier_row(disc.dofs.location(g).0)).collect();
     let condensed = NavierDynamics::new(&matrix, &rhs, &is_dynamic, density)?;
     let loads = case.loads();

@@ -183,13 +183,12 @@ pub(super) fn assemble_and_solve(
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
     }
     let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
-        let (triplets, rhs) = System { case, disc, exact }.assemble()?;
-        let m = linalg::assemble(&triplets)?;
-        let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.compute_nnz());
+        let (m, rhs) = System { case, disc, exact }.assemble()?;
+        let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.nnz());
         Ok(((m, rhs), note))
     })?;
     disc.release_row_shapes(case.outputs.needs_gradient());
-    let nonzeros = matrix.compute_nnz();
+    let nonzeros = matrix.nnz();
     let (x, report, kept) = timer.run(stage::SOLVE, || {
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions });
         // Handed over unless kept: the solver frees it once it holds its own form.
@@ -201,7 +200,7 @@ pub(super) fn assemble_and_solve(
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report, kept), note))
     })?;
-    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (matrix, rhs)) })
+    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs)) })
 }
 
 /// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
@@ -216,16 +215,16 @@ fn assemble_and_solve_distributed(
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
     let dofs = disc.dofs;
-    let (triplets, rhs) = timer.run(stage::ASSEMBLY, || {
-        let (t, rhs) = agree(System { case, disc, exact }.assemble())?;
-        let note = format!("{} unknowns, {} entries in this rank's rows", dofs.len(), t.len());
-        Ok(((t, rhs), note))
+    let (rows, rhs) = timer.run(stage::ASSEMBLY, || {
+        let (m, rhs) = agree(System { case, disc, exact }.assemble())?;
+        let note = format!("{} unknowns, {} entries in this rank's rows", dofs.len(), m.nnz());
+        Ok(((m, rhs), note))
     })?;
     disc.release_row_shapes(case.outputs.needs_gradient());
     let owner = disc.owner.as_deref().expect("a distributed discretisation has owners");
     let (x, report) = timer.run(stage::SOLVE, || {
         let dist = Distribution::new(owner.to_vec(), dofs.unknowns().per_node(), crate::petsc::world());
-        let (x, report) = distributed::solve(&dist, triplets.entries(), &rhs, positions, solver)?;
+        let (x, report) = distributed::solve(&dist, rows.entries(), &rhs, positions, solver)?;
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report), note))
     })?;

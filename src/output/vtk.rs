@@ -173,6 +173,9 @@ pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fie
         return Err(OutputError::invalid(path, format!("triangle {k} {:?} refers to a point >= {n} (number of points)", triangles[k])));
     }
     let point_data = point_attributes(fields, n)?;
+    // Only an array holding NaN or inf gets a range to strip (the scan of the whole file
+    // took 0.4 s at 1e6 nodes).
+    let nonfinite = fields.iter().any(|f| matches!(&f.values, FieldValues::F64(v) if v.iter().any(|x| !x.is_finite())));
 
     let piece = UnstructuredGridPiece {
         points: points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect::<Vec<f64>>().into(),
@@ -196,7 +199,10 @@ pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fie
     let mut bytes = Vec::new();
     vtk.write_xml(&mut bytes).map_err(|e| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() })?;
     bytes.push(b'\n');
-    write_atomic(path, &strip_nonfinite_ranges(&bytes))
+    if nonfinite {
+        bytes = strip_nonfinite_ranges(&bytes);
+    }
+    write_atomic(path, &bytes)
 }
 
 /// Removes `RangeMin`/`RangeMax` attributes whose value is not a finite number.

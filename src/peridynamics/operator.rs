@@ -12,8 +12,7 @@
 use super::family::Families;
 use super::nodes::PdNodes;
 use crate::domain::Point;
-use crate::linalg::SparseMatrix;
-use faer::sparse::{SparseRowMat, SymbolicSparseRowMat};
+use crate::linalg::Csr;
 use rayon::prelude::*;
 
 /// Families with their bond coefficients.
@@ -60,7 +59,7 @@ impl Bonds<'_> {
     /// form (families are sorted, so every row's columns are too), and the right-hand
     /// side `V_i b_i + sum_{j constrained} V_i c_ij (xi ⊗ xi) u_j`. Returns the first
     /// row holding a non-finite coefficient as an error.
-    pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(SparseMatrix, Vec<f64>), usize> {
+    pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(Csr, Vec<f64>), usize> {
         let free = self.nodes.free;
         let dofs = self.nodes.dofs();
         let node_cols = |i: usize| [dofs.dof(i, 0), dofs.dof(i, 1)];
@@ -124,14 +123,12 @@ impl Bonds<'_> {
         row_ptr.push(0);
         for (cols, top, bottom, r) in rows {
             for vals in [top, bottom] {
-                col_idx.extend_from_slice(&cols);
+                col_idx.extend(cols.iter().map(|&c| c as u32));
                 values.extend(vals);
                 row_ptr.push(col_idx.len());
             }
             rhs.extend(r);
         }
-        let symbolic = SymbolicSparseRowMat::new_checked(n, n, row_ptr, None, col_idx);
-        let matrix = SparseRowMat::new(symbolic, values).to_col_major().expect("allocation of the column-major copy");
-        Ok((matrix, rhs))
+        Ok((Csr::from_parts(n, n, row_ptr, col_idx, values), rhs))
     }
 }

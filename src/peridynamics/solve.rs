@@ -182,10 +182,10 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
         let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]))?;
-        let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.compute_nnz());
+        let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.nnz());
         Ok(((m, rhs, b, layer), note))
     })?;
-    let nonzeros = matrix.compute_nnz();
+    let nonzeros = matrix.nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
         // The unknowns are the free nodes' displacements, free nodes first.
         let layout = linalg::NodeLayout { per_node: 2, positions: &disc.nodes.positions[..rhs.len() / 2] };
