@@ -6,6 +6,16 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // Blocks from 128 kB up are always mapped, and unmapped when freed. glibc raises
+    // this threshold to the size of the first mapped block that is freed (up to 32 MB),
+    // after which freed vectors of a few MB stay in its heaps: 0.07 GB of the peak at
+    // 1e6 nodes (BENCHMARKS.md); the multigrid keeps its cycle's vectors, so the solve
+    // does not map and fault in fresh pages at every iteration.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: sets one malloc parameter before any thread starts.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 128 * 1024);
+    }
     // Piping into `head` closes stdout early: end quietly like other command-line
     // tools instead of panicking in println! (Rust ignores SIGPIPE by default).
     #[cfg(unix)]

@@ -6,8 +6,8 @@
 //! ```text
 //! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
 //! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32)
-//! solve, LU    = Z (24 + 34 N^0.26)       (rows and columns of the matrix, 24 B per nonzero
-//!                                          with slack; the LU factors of faer, fitted: see below)
+//! solve, LU    = Z (16 + 34 N^0.26)       (the equilibrated columns, 16 B per nonzero, which
+//!                                          replace the rows; the LU factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (24 + 48)           (the equilibrated matrix, which replaces the
 //!                                          assembled one, and an ILU of about three times its size)
 //! solve, GMRES = 24 Z + (restart + 6) 8 N  (the rows as assembled, 12 B, equilibrated in
@@ -61,8 +61,8 @@ fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
         // 1.49 GB at assembly, 2.34 GB in the solve, estimated 2.43 (BENCHMARKS.md).
         SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 24.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
         // The rows (12 B per entry) become the equilibrated columns (16 B) and are freed;
-        // then the columns and the factors, with slack for the solve's vectors.
-        _ => 24.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
+        // then the columns and the factors.
+        _ => 16.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
     }
 }
 

@@ -151,12 +151,14 @@ pub fn solve_gmres(
             let s: f64 = (i + 1..steps).map(|k| h[i][k] * y[k]).sum();
             y[i] = if h[i][i] != 0.0 { (g[i] - s) / h[i][i] } else { 0.0 };
         }
-        let mut update = vec![0.0; n];
+        // The update in `z` (free until the next cycle): no vector more at the peak.
+        let update = &mut z;
+        update.fill(0.0);
         for (yi, v) in y.iter().zip(&basis) {
             update.par_iter_mut().zip(v).with_min_len(4096).for_each(|(u, v)| *u += yi * v);
         }
-        precondition(&mut update);
-        x.par_iter_mut().zip(&update).with_min_len(4096).for_each(|(x, u)| *x += u);
+        precondition(update);
+        x.par_iter_mut().zip(&*update).with_min_len(4096).for_each(|(x, u)| *x += u);
         out.restarts += 1;
         if x.iter().any(|v| !v.is_finite()) {
             out.status = Status::Breakdown;

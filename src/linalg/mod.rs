@@ -228,8 +228,10 @@ pub(crate) fn solve_with_memory(
     }
 
     // Validates finiteness / zero rows in every case.
-    let row_max = scaling::row_max_abs(&a)?;
-    let scales = params.equilibrate.then(|| scaling::row_scales(&a, &row_max));
+    let scales = {
+        let row_max = scaling::row_max_abs(&a)?;
+        params.equilibrate.then(|| scaling::row_scales(&a, &row_max))
+    };
     let rhs = Rhs {
         original: b,
         solved: match &scales {

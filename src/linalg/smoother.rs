@@ -78,12 +78,19 @@ fn pseudo_inverse(d: &DMatrix<f64>) -> DMatrix<f64> {
 /// Kolev & Yang, *SIAM J. Sci. Comput.* 33 (2011) 2864–2887): ranges of thousands of
 /// nodes couple only through their edges, so the sweep stays a Gauss–Seidel sweep
 /// almost everywhere.
-pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], forward: bool) {
+///
+/// `before` is the buffer the iterate is copied into when the sweep runs in parallel
+/// (kept by the caller between sweeps).
+pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], forward: bool, before: &mut Vec<f64>) {
     let b = blocks.block;
     let nodes = blocks.nodes;
     let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
     let per_part = nodes.div_ceil(parts);
-    let before: Option<Vec<f64>> = (parts > 1).then(|| z.to_vec());
+    if parts > 1 {
+        before.clear();
+        before.extend_from_slice(z);
+    }
+    let before: Option<&[f64]> = (parts > 1).then_some(&before[..]);
     let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
     z.par_chunks_mut(per_part * b).enumerate().for_each(|(part, own)| {
         let first = part * per_part;
@@ -97,7 +104,7 @@ pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64],
                 let mut sum = 0.0;
                 for k in ptr[row]..ptr[row + 1] {
                     let c = idx[k] as usize;
-                    let zc = if (start..end).contains(&c) { own[c - start] } else { before.as_ref().map_or(0.0, |z| z[c]) };
+                    let zc = if (start..end).contains(&c) { own[c - start] } else { before.map_or(0.0, |z| z[c]) };
                     sum += val[k] * zc;
                 }
                 *sm = f[row] - sum;
