@@ -158,16 +158,19 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
     }
     let mut series = Series::new(&dir, &p.case.domain);
     let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
-    let t_out = Instant::now();
-    let seconds = || t_out.elapsed().as_secs_f64();
+    // Each branch starts the output's clock where its output begins (after the
+    // estimate of a peridynamic run, which is timed as its own stage).
+    let clock = || {
+        let t_out = Instant::now();
+        move || t_out.elapsed().as_secs_f64()
+    };
     match outcome {
         Outcome::NavierStatic(sol) => write_navier_static(&p, sol, staged, t0, &req, None, term, quiet)?,
         Outcome::PdStatic(mut sol) => {
             let n = sol.nodes.free;
             let free = &sol.nodes.positions[..n];
             let estimate = peridynamics_estimate(&p, free, &sol.displacement[..n], sol.stress.as_ref(), &mut sol.timings, term);
-            let t_out = Instant::now();
-            let seconds = || t_out.elapsed().as_secs_f64();
+            let seconds = clock();
             let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
             checks.warnings.extend(warnings::memory(&p));
             write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, &pd_fields(&p.case, &sol, &estimate))?;
@@ -181,6 +184,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::NavierDynamic(mut sim) => {
+            let seconds = clock();
             series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
             sim.timings.record(OUTPUT, seconds());
             let dynamic = Dynamic {
@@ -193,6 +197,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
+            let seconds = clock();
             let nodes = &sim.discretisation.nodes;
             series.finish(&sim.energies, &nodes.positions[..nodes.free], &sim.u, &sim.v)?;
             sim.timings.record(OUTPUT, seconds());

@@ -257,7 +257,8 @@ pub fn transposed(ncols: usize, offsets: &[usize], cols: &[u32], mut place: impl
 pub fn product<V: Value>(a: &Csr<V>, x: &[f64], y: &mut [f64]) {
     let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
     y.par_iter_mut().enumerate().with_min_len(256).for_each(|(r, y)| {
-        *y = (ptr[r]..ptr[r + 1]).map(|k| val[k].to_f64() * x[idx[k] as usize]).sum::<f64>();
+        let entries = ptr[r]..ptr[r + 1];
+        *y = idx[entries.clone()].iter().zip(&val[entries]).map(|(&c, v)| v.to_f64() * x[c as usize]).sum::<f64>();
     });
 }
 

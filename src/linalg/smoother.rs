@@ -102,10 +102,11 @@ pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64],
             for (m, sm) in s.iter_mut().enumerate().take(b) {
                 let row = node * b + m;
                 let mut sum = 0.0;
-                for k in ptr[row]..ptr[row + 1] {
-                    let c = idx[k] as usize;
+                let entries = ptr[row]..ptr[row + 1];
+                for (&c, &v) in idx[entries.clone()].iter().zip(&val[entries]) {
+                    let c = c as usize;
                     let zc = if (start..end).contains(&c) { own[c - start] } else { before.map_or(0.0, |z| z[c]) };
-                    sum += val[k] * zc;
+                    sum += v * zc;
                 }
                 *sm = f[row] - sum;
             }
