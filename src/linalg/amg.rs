@@ -325,28 +325,28 @@ impl Amg {
             self.coarsest.solve(f, z);
             return;
         };
-        let LevelWork { residual: r, before, coarse_rhs: fc, coarse_correction: zc } = own;
+        let LevelWork { residual: r, copies, coarse_rhs: fc, coarse_correction: zc } = own;
         r.resize(f.len(), 0.0);
         fc.resize(level.r.nrows(), 0.0);
         zc.resize(level.r.nrows(), 0.0);
         z.fill(0.0);
-        level.gauss_seidel(f, z, true, before);
-        level.gauss_seidel(f, z, false, before);
+        level.gauss_seidel(f, z, true, copies);
+        level.gauss_seidel(f, z, false, copies);
         product(&level.a, z, r);
         r.iter_mut().zip(f).for_each(|(r, f)| *r = f - *r);
         product(&level.r, r, fc);
         self.cycle(l + 1, fc, zc, coarser);
         product(&level.p, zc, r);
         z.iter_mut().zip(r.iter()).for_each(|(z, c)| *z += c);
-        level.gauss_seidel(f, z, true, before);
-        level.gauss_seidel(f, z, false, before);
+        level.gauss_seidel(f, z, true, copies);
+        level.gauss_seidel(f, z, false, copies);
     }
 }
 
 impl Level {
     /// One block Gauss–Seidel sweep of this level ([`gauss_seidel`]).
-    fn gauss_seidel(&self, f: &[f64], z: &mut [f64], forward: bool, before: &mut Vec<f64>) {
-        gauss_seidel(&self.a, self.blocks, &self.inv_diag, f, z, forward, before);
+    fn gauss_seidel(&self, f: &[f64], z: &mut [f64], forward: bool, copies: &mut Vec<Vec<f64>>) {
+        gauss_seidel(&self.a, self.blocks, &self.inv_diag, f, z, forward, copies);
     }
 }
 
@@ -365,8 +365,8 @@ struct Workspace {
 struct LevelWork {
     /// `f − A z`, then the prolongated correction.
     residual: Vec<f64>,
-    /// The iterate before a parallel Gauss–Seidel sweep ([`gauss_seidel`]).
-    before: Vec<f64>,
+    /// The private copies of the iterate of a parallel Gauss–Seidel sweep ([`gauss_seidel`]).
+    copies: Vec<Vec<f64>>,
     /// `R (f − A z)`.
     coarse_rhs: Vec<f64>,
     /// The coarser level's solution.

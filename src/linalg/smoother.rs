@@ -79,48 +79,55 @@ fn pseudo_inverse(d: &DMatrix<f64>) -> DMatrix<f64> {
 /// nodes couple only through their edges, so the sweep stays a Gauss–Seidel sweep
 /// almost everywhere.
 ///
-/// `before` is the buffer the iterate is copied into when the sweep runs in parallel
-/// (kept by the caller between sweeps).
-pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], forward: bool, before: &mut Vec<f64>) {
-    let b = blocks.block;
+/// Each range is swept in a private copy of the whole iterate (`copies`, kept by the
+/// caller between sweeps), which holds the values of the other ranges from before the
+/// sweep and its own as they are updated, so that the inner loop reads one array
+/// without testing where a column lies (the test was 40 % of the sweep's samples);
+/// the ranges are then copied back.
+pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], forward: bool, copies: &mut Vec<Vec<f64>>) {
     let nodes = blocks.nodes;
     let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
-    let per_part = nodes.div_ceil(parts);
-    if parts > 1 {
-        before.clear();
-        before.extend_from_slice(z);
+    if parts == 1 {
+        sweep(a, blocks, inv_diag, f, z, 0..nodes, forward);
+        return;
     }
-    let before: Option<&[f64]> = (parts > 1).then_some(&before[..]);
-    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
-    z.par_chunks_mut(per_part * b).enumerate().for_each(|(part, own)| {
-        let first = part * per_part;
-        let start = first * b;
-        let end = start + own.len();
-        let range = first..first + own.len() / b;
-        let mut s = [0.0f64; MAX_BLOCK];
-        let mut sweep = |node: usize| {
-            for (m, sm) in s.iter_mut().enumerate().take(b) {
-                let row = node * b + m;
-                let mut sum = 0.0;
-                let entries = ptr[row]..ptr[row + 1];
-                for (&c, &v) in idx[entries.clone()].iter().zip(&val[entries]) {
-                    let c = c as usize;
-                    let zc = if (start..end).contains(&c) { own[c - start] } else { before.map_or(0.0, |z| z[c]) };
-                    sum += v * zc;
-                }
-                *sm = f[row] - sum;
-            }
-            let inv = &inv_diag[node * b * b..(node + 1) * b * b];
-            for m in 0..b {
-                own[(node - first) * b + m] += (0..b).map(|c| inv[m * b + c] * s[c]).sum::<f64>();
-            }
-        };
-        if forward {
-            range.for_each(&mut sweep);
-        } else {
-            range.rev().for_each(&mut sweep);
-        }
+    let (b, per_part) = (blocks.block, nodes.div_ceil(parts));
+    let range_of = |part: usize| part * per_part..nodes.min((part + 1) * per_part);
+    copies.resize_with(parts, Vec::new);
+    copies.par_iter_mut().enumerate().for_each(|(part, copy)| {
+        copy.clear();
+        copy.extend_from_slice(z);
+        sweep(a, blocks, inv_diag, f, copy, range_of(part), forward);
     });
+    z.par_chunks_mut(per_part * b).enumerate().for_each(|(part, own)| {
+        let first = range_of(part).start * b;
+        own.copy_from_slice(&copies[part][first..first + own.len()]);
+    });
+}
+
+/// One Gauss–Seidel sweep over the nodes of `range` of the iterate `x`, in increasing
+/// (`forward`) or decreasing order: `x_I += D_I⁺ (f − A x)_I`.
+fn sweep(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], x: &mut [f64], range: std::ops::Range<usize>, forward: bool) {
+    let b = blocks.block;
+    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
+    let mut s = [0.0f64; MAX_BLOCK];
+    let mut update = |node: usize| {
+        for (m, sm) in s.iter_mut().enumerate().take(b) {
+            let row = node * b + m;
+            let entries = ptr[row]..ptr[row + 1];
+            let sum: f64 = idx[entries.clone()].iter().zip(&val[entries]).map(|(&c, &v)| v * x[c as usize]).sum();
+            *sm = f[row] - sum;
+        }
+        let inv = &inv_diag[node * b * b..(node + 1) * b * b];
+        for m in 0..b {
+            x[node * b + m] += (0..b).map(|c| inv[m * b + c] * s[c]).sum::<f64>();
+        }
+    };
+    if forward {
+        range.for_each(&mut update);
+    } else {
+        range.rev().for_each(&mut update);
+    }
 }
 
 /// Below this many nodes a level is swept by one thread (the copy of the iterate
