@@ -27,8 +27,8 @@ use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 pub use super::csr::product;
 use super::csr::Csr;
 use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
-use super::spgemm;
 use super::SparseMatrix;
+use super::{gmres, spgemm};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -193,11 +193,11 @@ fn spectral_radius(a: &Csr, inv_diag: &Csr) -> f64 {
         let mut w = vec![0.0; n];
         product(inv_diag, &tmp, &mut w);
         for (i, vi) in v.iter().enumerate() {
-            let d: f64 = vi.par_iter().zip(&w).with_min_len(4096).map(|(a, b)| a * b).sum();
+            let d = gmres::dot(vi, &w);
             h[(i, j)] = d;
             w.par_iter_mut().zip(vi).with_min_len(4096).for_each(|(w, v)| *w -= d * v);
         }
-        let norm = w.par_iter().with_min_len(4096).map(|x| x * x).sum::<f64>().sqrt();
+        let norm = gmres::norm(&w);
         h[(j + 1, j)] = norm;
         m = j + 1;
         if norm <= 1e-12 * h.column(j).norm() {

@@ -52,11 +52,13 @@ pub struct GmresOutcome {
     pub history: Vec<f64>,
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+/// `a · b`, in parallel (GMRES's and the multigrid's Arnoldi processes).
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.par_iter().zip(b).with_min_len(4096).map(|(x, y)| x * y).sum()
 }
 
-fn norm(a: &[f64]) -> f64 {
+/// `‖a‖₂`, in parallel.
+pub(super) fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
 

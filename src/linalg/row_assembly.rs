@@ -43,6 +43,13 @@ impl RowFragment {
         RowFragment { entries }
     }
 
+    /// The entries of rows `from_row` and after, taken out of this fragment (sorted,
+    /// duplicates summed).
+    pub fn split_off_rows(&mut self, from_row: usize) -> Vec<StoredEntry> {
+        let at = self.entries.partition_point(|e| (e.0 as usize) < from_row);
+        self.entries.split_off(at)
+    }
+
     /// Stored entries (after duplicates were summed).
     pub fn len(&self) -> usize {
         self.entries.len()
@@ -131,7 +138,10 @@ mod tests {
         let mut rows = RowAssembler::new(5, 4);
         rows.append(RowFragment::new(vec![(1, 3, 1.0), (0, 2, 0.5), (1, 0, 2.0), (1, 3, 0.25)])).unwrap();
         rows.append(RowFragment::new(Vec::new())).unwrap();
-        rows.append(RowFragment::new(vec![(3, 1, -1.0)])).unwrap();
+        let mut tail = RowFragment::new(vec![(4, 0, 3.0), (3, 1, -1.0), (4, 0, 1.0)]);
+        let last = tail.split_off_rows(4);
+        assert_eq!((tail.len(), last), (1, vec![(4, 0, 4.0)]));
+        rows.append(tail).unwrap();
         let a = rows.finish();
         let expected = Csr::from_triplets(5, 4, &[(0, 2, 0.5), (1, 0, 2.0), (1, 3, 1.25), (3, 1, -1.0)]);
         assert_eq!(a, expected);

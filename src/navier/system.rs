@@ -160,8 +160,9 @@ impl System<'_> {
                             return Err(i);
                         }
                     }
-                    let (own, ghosts): (Entries, Entries) = block.into_iter().partition(|e| (e.0 as usize) < node_rows_end);
-                    Ok((RowFragment::new(own), ghosts))
+                    let mut own = RowFragment::new(block);
+                    let ghosts = own.split_off_rows(node_rows_end);
+                    Ok((own, ghosts))
                 })
                 .collect();
             for w in written {
