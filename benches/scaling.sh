@@ -2,18 +2,20 @@
 # Cost against size for one solver: per-stage seconds, iterations, peak memory and
 # errors of a scene at several spacings, the error estimate off. One Markdown row per run.
 # Usage: bash benches/scaling.sh SCENE "H1 H2 ..." SOLVER [EDIT ...]
-#   SOLVER: "gmres" (GMRES(30)+AMG), "lu", "bicgstab-ilu0"; EDIT: scene_variant.py edits,
+#   SOLVER: "gmres" (GMRES(30)+AMG), "auto", "lu", "bicgstab-ilu0"; EDIT: scene_variant.py edits,
 #   e.g. 'basis="tensor"' degree=2 'weight="gaussian"' sigma=1 support=13
 # Example: bash benches/scaling.sh cantilever "0.0387 0.0194 0.01225" gmres 'basis="tensor"' degree=2 'weight="gaussian"' sigma=1 support=13
+# MLSM_BIN=path runs that binary instead of building this tree (before/after runs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --quiet
-bin=target/release/mlsm
+if [ -z "${MLSM_BIN:-}" ]; then cargo build --release --quiet; fi
+bin=${MLSM_BIN:-target/release/mlsm}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 scene=$1; spacings=$2; solver=$3; shift 3
 case $solver in
   gmres) edits=('solver.kind="gmres"') ;;
+  auto) edits=('solver.kind="auto"') ;;
   lu) edits=('solver.kind="lu"') ;;
   bicgstab-ilu0) edits=('solver.kind="bicgstab"' 'solver.preconditioner="ilu0"' 'solver.max_iterations=5000') ;;
   *) echo "unknown solver $solver" >&2; exit 2 ;;

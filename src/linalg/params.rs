@@ -135,6 +135,21 @@ impl SolverKind {
         }
     }
 
+    /// The solver of an internal reference solve (an error estimate's higher-degree
+    /// system on the run's nodes): a scene's explicit GMRES or BiCGSTAB becomes `auto`
+    /// with the same tolerance and budget, so that a small reference is solved by LU and
+    /// a large one falls back to BiCGSTAB+ILU(0) when the multigrid does not converge
+    /// (degree-6 stencils of 56 nodes: GMRES+AMG stalled at 1.6e-2 on a 368-node Kirsch
+    /// plate whose degree-4 run it solved in 67 iterations); LU, PETSc and `auto` stay.
+    pub fn for_reference(&self) -> SolverKind {
+        match *self {
+            SolverKind::Gmres { tolerance, max_iterations, .. } | SolverKind::Bicgstab { tolerance, max_iterations, .. } => {
+                SolverKind::Auto { preconditioner: Preconditioner::Amg, tolerance, max_iterations }
+            }
+            other => other,
+        }
+    }
+
     /// The solver that runs on a system of `unknowns` rows and `nonzeros` entries with
     /// `available` bytes of memory, and for `Auto` why: LU when its estimated factors
     /// ([`lu_factor_bytes`]) take at most [`AUTO_LU_SHARE`] of the available memory

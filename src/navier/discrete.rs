@@ -170,6 +170,33 @@ impl Discretisation {
         i < self.nodes.len() && (!self.nodes.is_boundary(i) || self.ghost[i].is_some())
     }
 
+    /// The nodes whose row `c` holds component `c` of node `i`'s Navier equation and
+    /// of its boundary equation, `(navier, boundary)` (`navier` is `None` on a node
+    /// without a Navier row). A node with a ghost has two rows per component:
+    /// a traction goes in the ghost's row and the Navier equation in the node's own;
+    /// a displacement, whose only coefficient is the node's own unknown, stays in the
+    /// node's row (diagonal 1) and the Navier equation goes to the ghost's row.
+    /// Writing a displacement in the ghost's row left a zero diagonal there, which
+    /// stalled the multigrid on every scene with a symmetry edge (Kirsch, Lame: GMRES
+    /// stuck at a residual of 3e-2; with this rule, 50-60 iterations).
+    pub fn row_nodes(&self, i: usize, c: usize) -> (Option<usize>, usize) {
+        match (self.ghost.get(i).copied().flatten(), self.nodes.is_boundary(i)) {
+            (None, false) => (Some(i), i),
+            (None, true) => (None, i),
+            (Some(g), _) => match self.boundary_equations[i][c] {
+                ComponentEquation::Displacement { .. } => (Some(g), i),
+                ComponentEquation::Traction { .. } => (Some(i), g),
+            },
+        }
+    }
+
+    /// Whether unknown `c` of node `i` (a node or a ghost) is the one whose row holds
+    /// `i`'s own Navier equation of component `c`: the dynamic unknowns of an
+    /// explicit run (`dynamics`).
+    pub fn navier_row_is_own(&self, i: usize, c: usize) -> bool {
+        self.has_navier_row(i) && self.row_nodes(i, c).0 == Some(i)
+    }
+
     /// Nodal pressures `p = -lambda div u` (nodes, ghosts excluded) from the global
     /// vector `x`, in the displacement-pressure form (whose unknown is `p / mu`, `rows`).
     pub fn pressure(&self, material: &Material, x: &[f64]) -> Option<Vec<f64>> {

@@ -257,7 +257,12 @@ fn condensed<'a>(
     let system = System { case, disc, exact };
     let (rows, rhs) = system.assemble()?;
     let matrix = crate::linalg::amg::columns_of(rows);
-    let is_dynamic: Vec<bool> = (0..rhs.len()).map(|g| disc.has_navier_row(disc.dofs.location(g).0)).collect();
+    let is_dynamic: Vec<bool> = (0..rhs.len())
+        .map(|g| {
+            let (node, c) = disc.dofs.location(g);
+            c < 2 && disc.navier_row_is_own(node, c)
+        })
+        .collect();
     let condensed = NavierDynamics::new(&matrix, &rhs, &is_dynamic, density)?;
     let loads = case.loads();
     if !loads.depend_on_time() {

@@ -33,6 +33,7 @@ use crate::domain::{FillKind, NodeSet, Point};
 use crate::dynamics::DynamicsParams;
 use crate::elasticity::stress::StressField;
 use crate::exact::ExactSolution;
+use crate::linalg::SolverParams;
 use crate::mlsm::interpolate::mls_values;
 use crate::mlsm::{default_rbf_fd_support, Approximation, Basis, Radial, Weight};
 use crate::pipeline::{RunError, Silent, Stage, StageTimer};
@@ -247,7 +248,8 @@ pub fn higher_degree(
         Ok(a) => a,
         Err(reason) => return Estimate::Unavailable(EstimateMethod::HigherDegree.name(), reason),
     };
-    let reference_params = NavierParams { approximation, keep_system: false, ..params.clone() };
+    let solver = SolverParams { kind: params.solver.kind.for_reference(), ..params.solver };
+    let reference_params = NavierParams { approximation, keep_system: false, solver, ..params.clone() };
     let mut timer = StageTimer::new(&Silent);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
         .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params.solver, false, &mut timer).map(|s| (disc, s)));

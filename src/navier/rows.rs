@@ -56,12 +56,13 @@ impl RowWriter<'_> {
     }
 
     /// Navier rows (x and y) at node `i`, `(lambda + mu) grad div u + mu lap u`,
-    /// written in the rows of node `row_node` (`i` itself, or its ghost).
-    pub fn navier(&self, i: usize, row_node: usize, out: &mut Entries) {
+    /// component `c` written in row `c` of node `row_nodes[c]` (`i` itself, or its
+    /// ghost).
+    pub fn navier(&self, i: usize, row_nodes: [usize; 2], out: &mut Entries) {
         let Lame { lambda, mu } = self.displacement_lame();
         let pressure = self.has_pressure();
         let (xx, xy, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dxy), self.shapes.get(i, Op::Dyy));
-        let (rx, ry) = (self.dofs.dof(row_node, 0), self.dofs.dof(row_node, 1));
+        let (rx, ry) = (self.dofs.dof(row_nodes[0], 0), self.dofs.dof(row_nodes[1], 1));
         for (k, &j) in self.supports.of(i).iter().enumerate() {
             let (uj, vj) = (self.dofs.dof(j as usize, 0), self.dofs.dof(j as usize, 1));
             out.push(stored(rx, uj, (lambda + 2.0 * mu) * xx[k] + mu * yy[k]));
@@ -183,7 +184,7 @@ mod tests {
         let (l, m) = (lame.lambda, lame.mu);
 
         let mut e = Entries::new();
-        writer.navier(24, 24, &mut e);
+        writer.navier(24, [24, 24], &mut e);
         let rows = apply(&e, &x);
         let navier = [(l + 2.0 * m) * uxx + m * uyy + (l + m) * vxy, (l + m) * uxy + m * vxx + (l + 2.0 * m) * vyy];
         for c in 0..2 {
