@@ -857,6 +857,46 @@ fn compare_refuses_bad_requests() {
     }
 }
 
+/// An explicit RBF-FD run with ghosts and a symmetry edge (plate_pulse as a Navier run,
+/// PHS + degree 2, the bottom edge free in x and fixed in y). The displacement row of a
+/// node with a ghost used to sit in the ghost's row, which left the constraint block
+/// `A_AA` structurally singular ("no usable pivot", exit 3); now the node's y unknown is
+/// algebraic and held by its own row. The bottom edge's y displacement must stay at its
+/// prescribed 0 to the round-off of the constraint block's LU solve (measured 4.5e-12
+/// of max |u|; bound 1e-10), while the plate moves.
+#[test]
+fn dynamic_rbf_fd_run_with_ghosts_keeps_a_symmetry_edge_fixed() {
+    let tmp = TempDir::new().unwrap();
+    let scene = edit(
+        &shipped("plate_pulse"),
+        &[
+            ("model = \"peridynamics\"", "model = \"navier\""),
+            ("basis = \"tensor\"\nsupport = 13", "basis = \"phs\"\ndegree = 2\nghost_nodes = true"),
+            ("[peridynamics]\nhorizon = 0.1\nm = 6\nkernel = \"plain\"\nquadrature = \"full-area\"\n", ""),
+            (
+                "part = \"bottom\"\nkind = \"traction\"\nvalue = [0.0, 0.0]",
+                "part = \"bottom\"\nkind = \"mixed\"\nx = \"traction\"\ny = \"displacement\"\nvalue = [0.0, 0.0]",
+            ),
+        ],
+    );
+    write(tmp.path(), "sym.toml", &format!("{scene}\n[estimate]\nmethod = \"none\"\n"));
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "sym.toml", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    assert!(count(&s, "ghost_nodes") > 0, "{s}");
+    let pvd = std::fs::read_to_string(res.join("series.pvd")).unwrap();
+    let last = pvd.split("file=\"").skip(1).map(|s| s.split('"').next().unwrap()).last().unwrap().to_string();
+    let vtu = mlsm::output::read_vtu(&res.join(last)).unwrap();
+    let (dim, u) = &vtu.fields["displacement"];
+    let largest = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(largest > 0.0);
+    let bottom: Vec<f64> = vtu.points.iter().enumerate().filter(|(_, p)| p[1] == 0.0).map(|(i, _)| u[i * dim + 1]).collect();
+    assert!(bottom.len() > 10, "{} bottom nodes", bottom.len());
+    let worst = bottom.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(worst <= 1e-10 * largest, "bottom u_y up to {worst:.1e} of max |u| {largest:.1e}");
+}
+
 #[test]
 fn dynamic_run_writes_series_energies_and_summary() {
     let tmp = TempDir::new().unwrap();
