@@ -26,7 +26,8 @@
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 pub use super::csr::product;
 use super::csr::Csr;
-use super::smoother::{gauss_seidel, inverse_diagonal_blocks, left_near_null};
+use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
+use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
 use super::SparseMatrix;
 use super::{gmres, spgemm};
 use nalgebra::DMatrix;
@@ -58,11 +59,6 @@ pub struct AmgParams {
     /// Levels at most.
     pub max_levels: usize,
 }
-
-/// Symmetric Gauss–Seidel iterations that grow the finest level's left near-null space
-/// (`left_near_null`): pyamg takes 4; on the Lame ring 1 / 2 / 4 gave 105 / 42 / 41
-/// iterations (pyamg on our exported system).
-const LEFT_NULL_ITERATIONS: usize = 2;
 
 impl Default for AmgParams {
     fn default() -> Self {
@@ -107,32 +103,6 @@ pub struct Amg {
     operator_complexity: f64,
     /// The cycle's vectors.
     work: std::sync::Mutex<Workspace>,
-}
-
-/// The rigid-body modes at `layout` (unknowns × 3, row-major), positions centred and
-/// scaled to unit size so that the rotation has the translations' magnitude; a
-/// pressure unknown gets zeros (rigid motions carry no pressure). Without a layout,
-/// the two translations of a two-unknowns-per-node system (`k = 2`).
-fn rigid_body_modes(n: usize, layout: Option<NodeLayout>) -> (Vec<f64>, usize) {
-    let Some(layout) = layout.filter(|l| l.per_node >= 2 && l.positions.len() * l.per_node == n) else {
-        let mut b = vec![0.0; n * 2];
-        for i in 0..n {
-            b[i * 2 + i % 2] = 1.0;
-        }
-        return (b, 2);
-    };
-    let count = layout.positions.len() as f64;
-    let centre = layout.positions.iter().fold([0.0, 0.0], |c, p| [c[0] + p[0] / count, c[1] + p[1] / count]);
-    let size =
-        layout.positions.iter().map(|p| (p[0] - centre[0]).abs().max((p[1] - centre[1]).abs())).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-    let mut b = vec![0.0; n * 3];
-    for (node, p) in layout.positions.iter().enumerate() {
-        let (x, y) = ((p[0] - centre[0]) / size, (p[1] - centre[1]) / size);
-        let row = node * layout.per_node;
-        b[row * 3..row * 3 + 3].copy_from_slice(&[1.0, 0.0, -y]);
-        b[(row + 1) * 3..(row + 1) * 3 + 3].copy_from_slice(&[0.0, 1.0, x]);
-    }
-    (b, 3)
 }
 
 /// `a` (CSC) as a CSR matrix, transposed straight from faer's columns by a counting
@@ -478,16 +448,6 @@ mod tests {
             }
         }
         (assemble(&t).unwrap(), positions)
-    }
-
-    #[test]
-    fn rigid_body_modes_are_centred_translations_and_a_rotation() {
-        let positions = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
-        let (b, k) = rigid_body_modes(8, Some(NodeLayout { per_node: 2, positions: &positions }));
-        assert_eq!(k, 3);
-        // Node 2 at (1, 1) from the centre, scaled by 1: u = (-y, x) = (-1, 1).
-        assert_eq!(&b[4 * 3..4 * 3 + 3], &[1.0, 0.0, -1.0]);
-        assert_eq!(&b[5 * 3..5 * 3 + 3], &[0.0, 1.0, 1.0]);
     }
 
     /// One V-cycle as the preconditioner of GMRES: on the vector Laplacian the count

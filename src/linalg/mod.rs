@@ -28,6 +28,7 @@ pub mod gmres;
 pub mod ilut;
 pub mod lu;
 mod methods;
+pub mod near_null;
 pub mod params;
 pub mod partition;
 pub mod precond;

@@ -194,7 +194,7 @@ impl Discretisation {
     /// `i`'s own Navier equation of component `c`: the dynamic unknowns of an
     /// explicit run (`dynamics`).
     pub fn navier_row_is_own(&self, i: usize, c: usize) -> bool {
-        self.has_navier_row(i) && self.row_nodes(i, c).0 == Some(i)
+        i < self.nodes.len() && self.row_nodes(i, c).0 == Some(i)
     }
 
     /// Nodal pressures `p = -lambda div u` (nodes, ghosts excluded) from the global
