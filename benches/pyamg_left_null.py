@@ -5,31 +5,18 @@ relaxed instead), to see which side of the nonsymmetric hierarchy matters.
 Needs `pip install scipy pyamg`. Usage: python3 benches/pyamg_left_null.py DIR
 (BENCHMARKS.md, "The multigrid on scattered node sets with symmetry edges").
 """
-import csv
 import sys
 
 import numpy as np
 import pyamg
-import scipy.io as sio
 import scipy.sparse as sp
 from pyamg.relaxation.utils import relaxation_as_linear_operator
 
-d = sys.argv[1]
-A = sio.mmread(f'{d}/matrix.mtx').tocsr()
-b = sio.mmread(f'{d}/rhs.mtx')
-b = np.asarray(b.toarray() if sp.issparse(b) else b).ravel()
-xy = np.zeros((A.shape[0], 2))
-with open(f'{d}/unknowns.csv') as f:
-    rows = csv.reader(f)
-    next(rows)
-    for r in rows:
-        xy[int(r[0])] = (float(r[3]), float(r[4]))
-s = 1 / abs(A).max(axis=1).toarray().ravel()  # row equilibration, as mlsm solves
-A, b = (sp.diags(s) @ A).tobsr(blocksize=(2, 2)), s * b
-comp = np.arange(A.shape[0]) % 2
-B = np.zeros((A.shape[0], 3))
-B[comp == 0, 0], B[comp == 1, 1] = 1, 1
-B[comp == 0, 2], B[comp == 1, 2] = -xy[comp == 0, 1], xy[comp == 1, 0]
+from exported_system import load, rigid_body_modes
+
+a0, b, xy, s = load(sys.argv[1])
+A, b = (sp.diags(s) @ a0).tobsr(blocksize=(2, 2)), s * b  # row equilibration, as mlsm solves
+B = rigid_body_modes(xy)
 gs = ('block_gauss_seidel', {'sweep': 'symmetric'})
 zero = np.zeros((A.shape[0], 1))
 relax = lambda M, its: relaxation_as_linear_operator(('block_gauss_seidel', {'sweep': 'symmetric', 'iterations': its}), M, zero) @ B

@@ -534,6 +534,17 @@ fn invalid_scenes_exit_2_naming_the_field() {
         ("restart = 0", Some(scene_plus("[solver]\nkind = \"gmres\"\nrestart = 0\n")), &["solver.restart", "1..=1000"]),
         ("restart huge", Some(scene_plus("[solver]\nkind = \"gmres\"\nrestart = 100000000\n")), &["solver.restart", "100000000"]),
         ("restart with bicgstab", Some(scene_plus("[solver]\nkind = \"bicgstab\"\nrestart = 20\n")), &["solver.restart", "gmres"]),
+        (
+            "unknown multigrid operator",
+            Some(scene_plus("[solver]\nkind = \"gmres\"\nmultigrid = \"coarse\"\n")),
+            &["solver.multigrid", "coarse"],
+        ),
+        ("multigrid with lu", Some(scene_plus("[solver]\nkind = \"lu\"\nmultigrid = \"low-order\"\n")), &["solver.multigrid", "gmres"]),
+        (
+            "multigrid with ilu0",
+            Some(scene_plus("[solver]\nkind = \"gmres\"\npreconditioner = \"ilu0\"\nmultigrid = \"system\"\n")),
+            &["solver.multigrid", "amg"],
+        ),
         ("unknown exact kind", Some(scene(&[("kind = \"manufactured\"", "kind = \"hertz\"")])), &["exact.kind", "hertz"]),
         (
             "cantilever without load",
@@ -624,6 +635,11 @@ fn invalid_scenes_exit_2_naming_the_field() {
             "PD solver",
             Some(pd(&[("horizon = 0.2", "horizon = 0.2\n[peridynamics.solver]\nkind = \"cg\"")])),
             &["peridynamics.solver.kind", "cg"],
+        ),
+        (
+            "multigrid in the peridynamic solver",
+            Some(pd(&[("horizon = 0.2", "horizon = 0.2\n[peridynamics.solver]\nkind = \"gmres\"\nmultigrid = \"low-order\"")])),
+            &["peridynamics.solver.multigrid", "MLSM"],
         ),
         (
             "PD with a mixed condition",
@@ -1139,8 +1155,10 @@ fn auto_solver_switches_to_gmres_when_lu_does_not_fit_comfortably() {
 }
 
 /// When `auto` has gone iterative and GMRES + AMG does not converge (the Kirsch plate
-/// with degree-6 stencils of 56 nodes and a budget of 130 iterations: the multigrid
-/// reaches 8.2e-9 there, BiCGSTAB + ILU(0) converges in 109), the matrix the solver was
+/// with degree-6 stencils of 56 nodes, the multigrid forced onto the system itself
+/// (`solver.multigrid = "system"`; on the default low-order operator it converges in
+/// 50) and a budget of 130 iterations: the multigrid on the system stalls there,
+/// BiCGSTAB + ILU(0) converges in 109), the matrix the solver was
 /// handed (and freed) is rebuilt in columns from the multigrid's equilibrated rows and
 /// BiCGSTAB + ILU(0) solves it; the choice says so and the errors are LU's (measured
 /// 4e-5 apart relative, the 1e-10 tolerance on a system of condition ~1e5; the bound
@@ -1151,7 +1169,11 @@ fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
     let kirsch = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/kirsch.toml")).unwrap();
     let degree6 = kirsch.replace("basis = \"phs\"\ndegree = 4", "basis = \"phs\"\ndegree = 6");
     assert_ne!(degree6, kirsch, "the shipped Kirsch scene's basis changed");
-    write(tmp.path(), "scene.toml", &format!("{degree6}\n[solver]\nmax_iterations = 130\n\n[estimate]\nmethod = \"none\"\n"));
+    write(
+        tmp.path(),
+        "scene.toml",
+        &format!("{degree6}\n[solver]\nmax_iterations = 130\nmultigrid = \"system\"\n\n[estimate]\nmethod = \"none\"\n"),
+    );
     let scene = tmp.path().join("scene.toml");
     let run = |limit: Option<&str>, out: &str| run_with_memory_limit(&scene, &[], limit, &tmp.path().join(out));
     let tight = run(Some("100e6"), "tight");

@@ -5,6 +5,13 @@
 mod common;
 use common::*;
 
+/// `max |u - u_ref| / max |u_ref|` over the nodes (displacement vectors).
+fn relative_difference(u: &mlsm::navier::Solution, reference: &mlsm::navier::Solution) -> f64 {
+    let scale = reference.displacement.iter().fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])));
+    let diff = reference.displacement.iter().zip(&u.displacement).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).hypot(a[1] - b[1])));
+    diff / scale
+}
+
 /// Manufactured solution, displacement on every side, degree-2 monomials (grid, 9
 /// nearest): expected order 2. Measured 2.03 / 2.02 / 2.01 per halving
 /// (`mlsm convergence problems/manufactured_dirichlet.toml --levels 3`).
@@ -162,15 +169,41 @@ fn gmres_with_multigrid_keeps_its_iteration_count_under_refinement() {
             let mut edits = published();
             edits.extend([("nodes.spacing", f(h)), ("solver.kind", s("lu"))]);
             let lu = solve(&scene("cantilever", &edits));
-            let scale = lu.displacement.iter().fold(0.0f64, |m, u| m.max(u[0].hypot(u[1])));
-            let diff = lu.displacement.iter().zip(&it.displacement).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).hypot(a[1] - b[1])));
-            eprintln!("h = {h}: max|u_gmres - u_lu| / max|u_lu| = {:.1e}", diff / scale);
-            assert!(diff <= 1e-8 * scale, "{:.1e}", diff / scale);
+            let difference = relative_difference(&it, &lu);
+            eprintln!("h = {h}: max|u_gmres - u_lu| / max|u_lu| = {difference:.1e}");
+            assert!(difference <= 1e-8, "{difference:.1e}");
         }
     }
     eprintln!("GMRES+AMG iterations at h = 0.25, 0.125, 0.0625: {counts:?}");
     assert!(counts.iter().all(|&c| c <= 40), "{counts:?}");
     assert!(counts.iter().all(|&c| c as f64 <= 1.5 * counts[0] as f64), "{counts:?}");
+}
+
+/// High-order stencils (PHS r^3 + degree 6, 56 nodes) on the graded Kirsch set: with
+/// the multigrid built on the system GMRES stalls (0.09 at h = 0.04: the block
+/// Gauss-Seidel smoother diverges at the corners' ghosts); `solver.multigrid = "auto"`
+/// builds it on the low-order operator above 20-node stencils, and the count stays
+/// flat: measured 50, 49 at h = 0.08, 0.04 (54 at 0.02). Bands: at most 80 iterations,
+/// the finer level at most 1.3x the coarser. The solution is the high-order system's:
+/// it agrees with LU's to 1e-8 of max |u| (tolerance 1e-10 on the equilibrated
+/// residual, condition estimate 1.8e6; measured differences below 1e-9).
+#[test]
+fn degree_six_stencils_converge_with_the_multigrid_on_the_low_order_operator() {
+    let edits = |h: f64, kind: &str| vec![("approximation.degree", i(6)), ("nodes.spacing", f(h)), ("solver.kind", s(kind))];
+    let mut counts = Vec::new();
+    for h in [0.08, 0.04] {
+        let it = solve(&scene("kirsch", &edits(h, "gmres")));
+        assert!(it.solver.method.contains("on the low-order operator"), "{}", it.solver.method);
+        counts.push(it.solver.iterations);
+        if h == 0.08 {
+            let difference = relative_difference(&it, &solve(&scene("kirsch", &edits(h, "lu"))));
+            eprintln!("h = {h}: max|u_gmres - u_lu| / max|u_lu| = {difference:.1e}");
+            assert!(difference <= 1e-8, "{difference:.1e}");
+        }
+    }
+    eprintln!("degree 6, GMRES + multigrid on the low-order operator, iterations at h = 0.08, 0.04: {counts:?}");
+    assert!(counts.iter().all(|&c| c <= 80), "{counts:?}");
+    assert!(counts[1] as f64 <= 1.3 * counts[0] as f64, "{counts:?}");
 }
 
 /// Results do not depend on the number of threads: shapes are computed node by
@@ -246,11 +279,10 @@ fn iterative_and_direct_solutions_agree_on_every_shipped_scene() {
     let stalls = ["bracket"];
     for name in ["cantilever", "kirsch", "lame", "flamant", "bracket", "steel_plate", "manufactured_dirichlet", "manufactured_traction"] {
         let lu = solve(&scene(name, &[("solver.kind", s("lu"))]));
-        let scale = lu.displacement.iter().fold(0.0f64, |m, u| m.max(u[0].hypot(u[1])));
         let agree = |it: &mlsm::navier::Solution, method: &str| {
-            let diff = lu.displacement.iter().zip(&it.displacement).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).hypot(a[1] - b[1])));
-            eprintln!("{name}, {method}: {} iterations, max|u_it - u_lu| / max|u_lu| = {:.1e}", it.solver.iterations, diff / scale);
-            assert!(diff <= 1e-7 * scale, "{name}, {method}: {:.1e}", diff / scale);
+            let difference = relative_difference(it, &lu);
+            eprintln!("{name}, {method}: {} iterations, max|u_it - u_lu| / max|u_lu| = {difference:.1e}", it.solver.iterations);
+            assert!(difference <= 1e-7, "{name}, {method}: {difference:.1e}");
         };
         agree(&solve(&scene(name, &[("solver.kind", s("bicgstab"))])), "BiCGSTAB+ILUT");
         let p = scene(name, &[("solver.kind", s("gmres"))]);

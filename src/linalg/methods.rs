@@ -216,14 +216,23 @@ pub(super) struct GmresSettings {
 }
 
 /// GMRES with the multigrid built on the solved operator in rows (`D A`, kept as its
-/// finest level); on failure the rows come back for `auto`'s fallback.
+/// finest level), or on `auxiliary` (`D A_aux`, a low-order operator on the same
+/// unknowns, [`super::Auxiliary`]) when given; on failure the rows come back for
+/// `auto`'s fallback.
 pub(super) fn solve_gmres_multigrid(
     rows: Csr,
+    auxiliary: Option<Csr>,
     rhs: &Rhs,
     start: &Start,
     settings: GmresSettings,
     layout: Option<NodeLayout>,
 ) -> Result<Solved, Box<Failed>> {
+    if let Some(aux) = auxiliary {
+        let amg = amg::Amg::build_from_rows(aux, layout, amg::AmgParams::default());
+        let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
+        let start = Start { method: format!("{} on the low-order operator", start.method), choice: start.choice.clone(), ..*start };
+        return run_gmres(&rows, &pc, rhs, &start, settings).map_err(|e| Box::new((e, Leftover::Rows(rows))));
+    }
     let amg = amg::Amg::build_from_rows(rows, layout, amg::AmgParams::default());
     let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
     let rows = pc.fine_operator().expect("the multigrid keeps its finest operator");

@@ -126,8 +126,16 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// 1e300 then give the same digits (no overflow or underflow in the residual norms),
 /// and a solution beyond the double range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    solve_nodal(Cow::Owned(amg::to_csr(a)), b, params, None)
+    solve_nodal(Cow::Owned(amg::to_csr(a)), b, params, None, None)
 }
+
+/// A second operator on the same unknowns and rows for the multigrid preconditioner
+/// to be built on instead of the system (a low-order discretisation of the same
+/// equations on the same nodes, whose small stencils the block Gauss–Seidel smoother
+/// and the aggregation handle where the system's large ones defeat them). It is made
+/// only when the multigrid is built; `None` from it, or no builder, builds the
+/// multigrid on the system.
+pub type Auxiliary<'a> = Option<Box<dyn FnOnce() -> Option<Csr> + 'a>>;
 
 /// [`solve`] of a system whose unknowns belong to nodes (`layout`): the multigrid
 /// preconditioner takes its near-null space (rigid-body modes) from their positions.
@@ -139,6 +147,7 @@ pub fn solve_nodal(
     b: &[f64],
     params: &SolverParams,
     layout: Option<NodeLayout>,
+    auxiliary: Auxiliary<'_>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
@@ -147,7 +156,7 @@ pub fn solve_nodal(
     let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
     let scale = |x: f64, e: i32| x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
     let scaled: Vec<f64> = b.iter().map(|v| scale(*v, -exponent)).collect();
-    let (x, report) = solve_with_memory(a, &scaled, params, layout, crate::output::available_memory_bytes())?;
+    let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, crate::output::available_memory_bytes())?;
     if let Some(i) = x.iter().position(|v| !scale(*v, exponent).is_finite()) {
         return Err(SolveError::Overflow {
             detail: format!(
@@ -197,6 +206,7 @@ pub(crate) fn solve_with_memory(
     b: &[f64],
     params: &SolverParams,
     layout: Option<NodeLayout>,
+    auxiliary: Auxiliary<'_>,
     available: Option<f64>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let (kind, choice) = params.kind.resolve(a.nrows() as f64, a.nnz() as f64, available);
@@ -256,7 +266,10 @@ pub(crate) fn solve_with_memory(
         SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart } => {
             let settings = GmresSettings { preconditioner, tolerance, max_iterations, restart };
             let attempt = if preconditioner == Preconditioner::Amg {
-                solve_gmres_multigrid(solved_rows(a, &rhs), &rhs, &start, settings, layout)
+                // The auxiliary operator in the system's row scale, so that its
+                // multigrid approximates the inverse of the solved (equilibrated) rows.
+                let auxiliary = auxiliary.and_then(|build| build()).map(|aux| solved_rows(Cow::Owned(aux), &rhs));
+                solve_gmres_multigrid(solved_rows(a, &rhs), auxiliary, &rhs, &start, settings, layout)
             } else {
                 let a_work = working(a, &rhs);
                 match solve_krylov_gmres(&a_work, &rhs, &start, settings, layout) {

@@ -419,12 +419,12 @@ fn auto_retries_with_ilu0_when_the_iteration_stops() {
         kind: SolverKind::Auto { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 },
         equilibrate: true,
     };
-    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &auto, None, Some(1.0)).unwrap();
+    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &auto, None, None, Some(1.0)).unwrap();
     assert_eq!(rep.method, "bicgstab+ilu0");
     let why = rep.choice.unwrap();
     assert!(why.contains("did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
     let (x_lu, _) = solve(&a, &b, &SolverParams::default()).unwrap();
     assert!(max_rel_diff(&x, &x_lu) < 1e-7);
-    let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &auto, None, Some(1e12)).unwrap();
+    let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &auto, None, None, Some(1e12)).unwrap();
     assert_eq!(rep.method, "lu");
 }

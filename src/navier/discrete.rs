@@ -25,7 +25,7 @@ use crate::exact::ExactSolution;
 use crate::linalg::distributed::agree;
 use crate::linalg::partition::morton_owners;
 use crate::linalg::SolverKind;
-use crate::mlsm::{compute_shapes, degenerate_supports, Basis, Op, OpSet, Shapes};
+use crate::mlsm::{compute_shapes, degenerate_supports, Approximation, Basis, Op, OpSet, Shapes};
 use crate::pipeline::{stage, RunError, Stage, StageTimer};
 
 /// Ghost placement and support search.
@@ -93,7 +93,7 @@ impl Discretisation {
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
         let (positions, ghost, supports, needs, widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
-            let needs = shape_needs(case, &nodes, &boundary_equations, &ghost, positions.len(), unknowns);
+            let needs = shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, case.outputs.needs_gradient()));
             let (supports, widened) =
                 widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &needs);
             let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
@@ -136,6 +136,25 @@ impl Discretisation {
             dofs,
             owner,
         })
+    }
+
+    /// `assemble` run on this discretisation with the supports and shapes of
+    /// `approximation` in place of the scene's (those of the rows only, no gradient),
+    /// on the same nodes and ghosts: the same unknowns and row layout, other
+    /// coefficients ([`crate::navier::low_order`]). The scene's supports and shapes are
+    /// back in place afterwards. In-process runs only (not distributed).
+    pub fn with_approximation<T>(&mut self, approximation: &Approximation, assemble: impl FnOnce(&Self) -> T) -> Result<T, RunError> {
+        let positions: Vec<Point> = (0..self.dofs.nodes()).map(|i| self.point(i)).collect();
+        let needs = shape_needs(&self.nodes, &self.boundary_equations, &self.ghost, positions.len(), (self.dofs.unknowns(), false));
+        let size = approximation.support.min(positions.len());
+        let (supports, _) = widen_degenerate(Supports::nearest(&positions, size), &positions, &approximation.basis, &needs);
+        let shapes = compute_shapes(&positions, &supports, approximation, &needs)?;
+        let scene_supports = std::mem::replace(&mut self.supports, supports);
+        let scene_shapes = std::mem::replace(&mut self.shapes, shapes);
+        let out = assemble(self);
+        self.supports = scene_supports;
+        self.shapes = scene_shapes;
+        Ok(out)
     }
 
     /// Give back the memory of the shapes only the rows needed, once they are
@@ -320,14 +339,14 @@ fn widen_degenerate(mut supports: Supports, positions: &[Point], basis: &Basis, 
     (supports, widened.len())
 }
 
-/// The operators each of the `total` nodes and ghosts needs (module docs).
+/// The operators each of the `total` nodes and ghosts needs (module docs); `d1` at
+/// every node only with `gradient_needed`.
 fn shape_needs(
-    case: &Case,
     nodes: &NodeSet,
     equations: &[[ComponentEquation; 2]],
     ghost: &[Option<usize>],
     total: usize,
-    unknowns: Unknowns,
+    (unknowns, gradient_needed): (Unknowns, bool),
 ) -> Vec<OpSet> {
     // The displacement-pressure form has a continuity row (div u) at every node and ghost.
     let pressure = unknowns == Unknowns::DisplacementPressure;
@@ -339,7 +358,6 @@ fn shape_needs(
         };
         return (0..total).map(ops).collect();
     }
-    let gradient_needed = case.outputs.needs_gradient();
     let has_traction = |i: usize| nodes.is_boundary(i) && equations[i].iter().any(ComponentEquation::is_traction);
     (0..total)
         .map(|i| {

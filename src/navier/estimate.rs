@@ -252,7 +252,7 @@ pub fn higher_degree(
     let reference_params = NavierParams { approximation, keep_system: false, solver, ..params.clone() };
     let mut timer = StageTimer::new(&Silent);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
-        .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params.solver, false, &mut timer).map(|s| (disc, s)));
+        .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params, &mut timer).map(|s| (disc, s)));
     let (disc, solved) = match solved {
         Ok(s) => s,
         Err(e) => {

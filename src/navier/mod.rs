@@ -27,6 +27,7 @@ pub mod equations;
 pub mod equilibrium;
 pub mod estimate;
 pub mod formulation;
+pub mod low_order;
 pub mod rows;
 pub mod solve;
 pub mod system;
@@ -53,6 +54,8 @@ pub struct NavierParams {
     pub formulation: Formulation,
     /// Linear solver.
     pub solver: SolverParams,
+    /// The operator the multigrid preconditioner is built on.
+    pub multigrid: low_order::MultigridOperator,
     /// Error estimate.
     pub estimate: EstimateParams,
     /// Keep the assembled system in the solution (`mlsm run --export-system`).
@@ -102,6 +105,7 @@ pub(crate) mod test_case {
             },
             formulation: super::Formulation::Displacement,
             solver: SolverParams::default(),
+            multigrid: super::low_order::MultigridOperator::Auto,
             estimate: Default::default(),
             keep_system: false,
         };

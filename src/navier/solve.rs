@@ -8,6 +8,7 @@ use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
 use super::estimate::{self, Estimate};
+use super::low_order;
 use super::system::System;
 use super::NavierParams;
 use crate::case::Case;
@@ -87,8 +88,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let mut disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let Solved { x, nonzeros, report, system } =
-        assemble_and_solve(case, &mut disc, exact, &params.solver, params.keep_system, &mut timer)?;
+    let Solved { x, nonzeros, report, system } = assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
@@ -167,17 +167,19 @@ pub(super) struct Solved {
     pub system: Option<(SparseMatrix, Vec<f64>)>,
 }
 
-/// Assemble the rows of `disc` and solve them with `solver` (stages `assembly`, `solve`);
-/// `keep`: return the system too. The shapes only the rows needed are released before
-/// the solve ([`Discretisation::release_row_shapes`]).
+/// Assemble the rows of `disc` and solve them with `params.solver` (stages `assembly`,
+/// `solve`); with `params.keep_system` return the system too. The shapes only the rows
+/// needed are released before the solve ([`Discretisation::release_row_shapes`]). A
+/// multigrid built on the low-order operator ([`low_order`]) gets its rows when the
+/// solver builds it, inside the `solve` stage.
 pub(super) fn assemble_and_solve(
     case: &Case,
     disc: &mut Discretisation,
     exact: Option<&dyn ExactSolution>,
-    solver: &SolverParams,
-    keep: bool,
+    params: &NavierParams,
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
+    let (solver, keep) = (&params.solver, params.keep_system);
     let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
     if disc.owner.is_some() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
@@ -191,11 +193,15 @@ pub(super) fn assemble_and_solve(
     let nonzeros = matrix.nnz();
     let (x, report, kept) = timer.run(stage::SOLVE, || {
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions });
+        let auxiliary: linalg::Auxiliary = params.multigrid.low_order(disc.supports.requested()).then(|| {
+            let approximation = low_order::approximation(&params.approximation, params.fill.kind);
+            Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Option<linalg::Csr>>
+        });
         // Handed over unless kept: the solver frees it once it holds its own form.
         let ((x, report), kept) = if keep {
-            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout)?, Some(matrix))
+            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary)?, Some(matrix))
         } else {
-            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout)?, None)
+            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary)?, None)
         };
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report, kept), note))

@@ -189,7 +189,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let (x, report) = timer.run(stage::SOLVE, || {
         // The unknowns are the free nodes' displacements, free nodes first.
         let layout = linalg::NodeLayout { per_node: 2, positions: &disc.nodes.positions[..rhs.len() / 2] };
-        let (x, report) = linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout))?;
+        let (x, report) = linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?;
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;

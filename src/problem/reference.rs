@@ -14,6 +14,7 @@ use crate::elasticity::material::PlaneModel;
 use crate::exact::{ExactKind, ParameterKind};
 use crate::linalg::{PreconditionerKind, SolverMethod};
 use crate::mlsm::{BasisKind, WeightKind};
+use crate::navier::low_order::MultigridOperator;
 use crate::navier::{EstimateMethod, Formulation};
 use crate::peridynamics::{BondForce, KernelKind, Quadrature, SurfaceCorrection};
 use crate::post::probe::ProbeQuantity;
@@ -34,6 +35,7 @@ pub fn options() -> Vec<OptionDoc> {
         OptionDoc::of::<ComponentCondition>(),
         OptionDoc::of::<SolverMethod>(),
         OptionDoc::of::<PreconditionerKind>(),
+        OptionDoc::of::<MultigridOperator>(),
         OptionDoc::of::<OutputField>(),
         OptionDoc::of::<EstimateMethod>(),
         OptionDoc::of::<ProbeQuantity>(),

@@ -335,6 +335,8 @@ pub struct SolverSpec {
     pub restart: Option<usize>,
     /// Row equilibration.
     pub equilibrate: Option<bool>,
+    /// The operator the multigrid is built on: `auto`, `system`, `low-order`.
+    pub multigrid: Option<String>,
 }
 
 /// `[output]`.

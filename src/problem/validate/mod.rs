@@ -177,6 +177,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
     let present = parts_present(&domain, fill.spacing);
     let conditions = conditions::conditions(&c, &spec.boundary, &domain, &present, exact.is_some(), dynamic)?;
     let solver = solver::solver(&c, &spec.solver)?;
+    let multigrid = solver::multigrid(&c, &spec.solver, &solver)?;
     let mut outputs = outputs(&c, spec.output.fields.as_deref(), exact.is_some())?;
     let peridynamics = match &spec.peridynamics {
         Some(pd) => Some(peridynamics::peridynamics(&c, pd, &domain, &material, &spec.boundary, dynamic)?),
@@ -202,7 +203,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
         name,
         source: path.to_path_buf(),
         case: Case { domain, material, body_force, conditions, exact, outputs, dynamics, probes },
-        navier: NavierParams { fill, approximation, formulation, solver, estimate, keep_system: false },
+        navier: NavierParams { fill, approximation, formulation, solver, multigrid, estimate, keep_system: false },
         peridynamics,
         model,
         notes,

@@ -148,6 +148,10 @@ pub(super) fn peridynamics(
             kind: SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 5000 },
             equilibrate: true,
         },
+        Some(spec) if spec.multigrid.is_some() => {
+            return c
+                .err("peridynamics.solver.multigrid", "the low-order operator is an MLSM discretisation; the peridynamic solve has none");
+        }
         Some(spec) => super::solver::solver(c, spec).map_err(|mut e| {
             e.field = e.field.replacen("solver", "peridynamics.solver", 1);
             e

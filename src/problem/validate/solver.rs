@@ -4,6 +4,7 @@
 use super::Ctx;
 use crate::choice::Choice;
 use crate::linalg::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, GMRES_RESTART};
+use crate::navier::low_order::MultigridOperator;
 use crate::problem::spec::SolverSpec;
 use crate::problem::ProblemError;
 
@@ -96,6 +97,21 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
     })
 }
 
+/// `solver.multigrid` of the MLSM model's `[solver]`: which operator its multigrid
+/// preconditioner is built on; only with `amg` in-process (gmres, auto).
+pub(super) fn multigrid(c: &Ctx, s: &SolverSpec, params: &SolverParams) -> Result<MultigridOperator, ProblemError> {
+    let chosen = c.choose("solver.multigrid", s.multigrid.as_deref())?;
+    let in_process_amg = match params.kind {
+        SolverKind::Gmres { preconditioner, .. } | SolverKind::Auto { preconditioner, .. } => preconditioner == Preconditioner::Amg,
+        _ => false,
+    };
+    if s.multigrid.is_some() && !in_process_amg {
+        return c
+            .err("solver.multigrid", "only used by the in-process multigrid: kind = \"gmres\" or \"auto\" with preconditioner = \"amg\"");
+    }
+    Ok(chosen)
+}
+
 /// `[solver]`; the fields of errors start with `solver.` (the caller renames them
 /// for `[peridynamics.solver]`).
 pub(super) fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemError> {
@@ -109,6 +125,7 @@ pub(super) fn solver(c: &Ctx, s: &SolverSpec) -> Result<SolverParams, ProblemErr
                 ("tolerance", s.tolerance.is_some()),
                 ("max_iterations", s.max_iterations.is_some()),
                 ("restart", s.restart.is_some()),
+                ("multigrid", s.multigrid.is_some()),
             ];
             if let Some((k, _)) = iterative_only.iter().find(|(_, p)| *p) {
                 return c.err(format!("solver.{k}"), "only used by kind = \"bicgstab\", \"gmres\", \"petsc\" or \"auto\"");
