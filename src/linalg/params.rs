@@ -211,7 +211,7 @@ impl SolverKind {
 
 choice! {
     /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
-    pub enum SolverMethod("solver.kind", default Some(SolverMethod::Auto), note "\"auto\"; in [peridynamics.solver] \"bicgstab\" with \"ilu0\"") {
+    pub enum SolverMethod("solver.kind", default Some(SolverMethod::Auto), note "\"auto\"; in [peridynamics.solver] \"gmres\" with \"amg\"") {
         Auto = "auto" => "LU while its estimated factors take at most half the available memory, else GMRES with the preconditioner, tolerance and max_iterations given (reason in summary.json, `solver.choice`)",
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
