@@ -227,18 +227,24 @@ pub(super) fn solve_gmres_multigrid(
     settings: GmresSettings,
     layout: Option<NodeLayout>,
 ) -> Result<Solved, Box<Failed>> {
-    if let Some(aux) = auxiliary {
-        let amg = amg::Amg::build_from_rows(aux, layout, amg::AmgParams::default());
-        let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
-        let start = Start { method: format!("{} on the low-order operator", start.method), choice: start.choice.clone(), ..*start };
-        return run_gmres(&rows, &pc, rhs, &start, settings).map_err(|e| Box::new((e, Leftover::Rows(rows))));
-    }
-    let amg = amg::Amg::build_from_rows(rows, layout, amg::AmgParams::default());
-    let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
-    let rows = pc.fine_operator().expect("the multigrid keeps its finest operator");
-    run_gmres(rows, &pc, rhs, start, settings).map_err(|e| {
-        let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
-        Box::new((e, Leftover::Rows(amg.into_fine_operator())))
+    // The system's rows are the multigrid's finest level unless it is built on `auxiliary`.
+    let method = match auxiliary {
+        Some(_) => format!("{} on the low-order operator", start.method),
+        None => start.method.clone(),
+    };
+    let start = Start { method, choice: start.choice.clone(), ..*start };
+    let (finest, system) = match auxiliary {
+        Some(aux) => (aux, Some(rows)),
+        None => (rows, None),
+    };
+    let pc = precond::BuiltPreconditioner::Amg(Box::new(amg::Amg::build_from_rows(finest, layout, amg::AmgParams::default())));
+    let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
+    run_gmres(rows, &pc, rhs, &start, settings).map_err(|e| {
+        let rows = system.unwrap_or_else(|| {
+            let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
+            amg.into_fine_operator()
+        });
+        Box::new((e, Leftover::Rows(rows)))
     })
 }
 
