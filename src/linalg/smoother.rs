@@ -2,7 +2,7 @@
 //! blocks of a level, with the (pseudo-)inverses of its diagonal blocks.
 
 use super::aggregation::Blocks;
-use super::csr::Csr;
+use super::csr::{row_dot, Csr};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -115,7 +115,7 @@ fn sweep(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], x: &mut [f64], ra
         for (m, sm) in s.iter_mut().enumerate().take(b) {
             let row = node * b + m;
             let entries = ptr[row]..ptr[row + 1];
-            let sum: f64 = idx[entries.clone()].iter().zip(&val[entries]).map(|(&c, &v)| v * x[c as usize]).sum();
+            let sum = row_dot(&idx[entries.clone()], &val[entries], x);
             *sm = f[row] - sum;
         }
         let inv = &inv_diag[node * b * b..(node + 1) * b * b];
