@@ -50,9 +50,12 @@ pub struct MemoryEstimate {
 }
 
 /// Bytes of the solver for `nonzeros` and `unknowns`: assembly and matrix, plus
-/// factors or preconditioner (`auto` resolved as the solve will resolve it).
-fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64) -> f64 {
-    match kind.resolve(unknowns, nonzeros, available_memory_bytes()).0 {
+/// factors or preconditioner (`auto` resolved as the solve will resolve it, with its
+/// longer GMRES on the saddle point of the displacement-pressure form).
+fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: bool) -> f64 {
+    let resolved = kind.resolve(unknowns, nonzeros, available_memory_bytes()).0;
+    let resolved = if saddle_point && matches!(kind, SolverKind::Auto { .. }) { resolved.for_saddle_point() } else { resolved };
+    match resolved {
         // The assembled matrix is freed once equilibrated (`linalg::solve_nodal`).
         SolverKind::Bicgstab { .. } => 72.0 * nonzeros,
         // The rows as assembled (12 B per entry), equilibrated in place and kept as the
@@ -83,7 +86,8 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         // Dynamic: the triplets, the matrix, its split into dynamic and algebraic
         // blocks and the boundary block's factors, 100 B per entry (steel_plate_dynamic
         // at 1.2e4 / 4.9e4 nodes: 86 / 311 MB measured, 40 B gave 0.46 of it).
-        let solve = if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros) };
+        let solve =
+            if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros, k > 2.0) };
         (nonzeros, nodes * s * 44.0 + solve)
     };
     let (nonzeros, mut bytes) = one(params.approximation.support, nodes);
@@ -107,7 +111,7 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     let per_node = std::f64::consts::PI * params.ratio * params.ratio;
     let bonds = nodes * per_node;
     let nonzeros = 4.0 * nodes * (per_node + 1.0);
-    let peak_bytes = bonds * 32.0 + solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros) + BASE_BYTES;
+    let peak_bytes = bonds * 32.0 + solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros, false) + BASE_BYTES;
     MemoryEstimate { nodes, unknowns: 2.0 * nodes, nonzeros, bonds: Some(bonds), peak_bytes, driver: "peridynamics.horizon" }
 }
 
@@ -148,10 +152,10 @@ pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
             file: p.source.clone(),
             field: e.driver.into(),
             reason: format!(
-                "the run needs about {:.1} GB ({}), more than the {:.1} GB available; {}",
-                e.peak_bytes / 1e9,
+                "the run needs about {} ({}), more than the {} available; {}",
+                gigabytes(e.peak_bytes),
                 describe(&e),
-                available / 1e9,
+                gigabytes(available),
                 match e.driver {
                     "approximation.support" => "use a smaller support",
                     "peridynamics.horizon" => "use a larger horizon or a smaller m",
@@ -160,6 +164,16 @@ pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
             ),
         }),
         _ => Ok(e),
+    }
+}
+
+/// `bytes` in GB, with two decimals below 1 GB (so that small limits do not read
+/// "0.0 GB").
+pub fn gigabytes(bytes: f64) -> String {
+    if bytes < 1e9 {
+        format!("{:.2} GB", bytes / 1e9)
+    } else {
+        format!("{:.1} GB", bytes / 1e9)
     }
 }
 

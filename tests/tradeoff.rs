@@ -90,7 +90,7 @@ fn tradeoff_never_starts_a_run_its_memory_estimate_refuses() {
     for r in &refused {
         let id = r["id"].as_str().unwrap();
         assert!(r["estimated_peak_memory_bytes"].as_f64().unwrap() > limit);
-        assert!(r["reason"].as_str().unwrap().contains("more than the 0.1 GB available"), "{r}");
+        assert!(r["reason"].as_str().unwrap().contains("more than the 0.12 GB available"), "{r}");
         assert!(r["seconds"].is_null() && r["nodes"].is_null());
         assert!(!out.join("runs").join(id).exists() && !out.join("configs").join(format!("{id}.toml")).exists());
     }

@@ -43,6 +43,13 @@ pub struct NodeLayout<'a> {
     pub positions: &'a [[f64; 2]],
 }
 
+impl NodeLayout<'_> {
+    /// Whether each node's third unknown is a pressure (the displacement-pressure form).
+    pub fn has_pressure(&self) -> bool {
+        self.per_node == 3
+    }
+}
+
 /// Settings of the hierarchy.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AmgParams {

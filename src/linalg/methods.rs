@@ -248,6 +248,31 @@ pub(super) fn solve_gmres_multigrid(
     })
 }
 
+/// GMRES on the solved rows of a displacement-pressure system with the block-triangular
+/// preconditioner of [`super::saddle`], its multigrid on the displacement block of
+/// `auxiliary` when given (a low-order operator on the same unknowns), else of the
+/// system. There is no fallback to try after it (ILU(0) and ILUT diverge or overflow on
+/// these rows near nu = 1/2), so a failure is reported as it stands.
+pub(super) fn solve_gmres_saddle_point(
+    rows: Csr,
+    auxiliary: Option<Csr>,
+    rhs: &Rhs,
+    start: &Start,
+    settings: GmresSettings,
+    layout: NodeLayout,
+) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    let method = match auxiliary {
+        Some(_) => format!("{} (low-order operator)", start.method),
+        None => start.method.clone(),
+    };
+    let start = Start { method, choice: start.choice.clone(), ..*start };
+    let built = super::saddle::SaddlePoint::build(&rows, auxiliary.as_ref(), layout)
+        .ok_or_else(|| SolveError::Dimension { detail: "the displacement-pressure preconditioner needs three unknowns per node".into() })?;
+    drop(auxiliary);
+    let pc = precond::BuiltPreconditioner::SaddlePoint(Box::new(built));
+    run_gmres(&rows, &pc, rhs, &start, settings)
+}
+
 /// GMRES with a one-level preconditioner built on the solved operator `a` (`D A`).
 pub(super) fn solve_krylov_gmres(
     a: &SparseMatrix,

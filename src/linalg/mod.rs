@@ -35,6 +35,7 @@ pub mod precond;
 pub mod report;
 pub mod row_assembly;
 pub mod rowmat;
+pub mod saddle;
 pub mod scaling;
 pub mod smoother;
 pub mod spgemm;
@@ -47,13 +48,15 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use methods::{
-    solve_gmres_multigrid, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, solved_rows, working, GmresSettings, Leftover, Rhs, Start,
+    solve_gmres_multigrid, solve_gmres_saddle_point, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, solved_rows, working,
+    GmresSettings, Leftover, Rhs, Start,
 };
 
 pub use amg::NodeLayout;
 pub use csr::Csr;
 pub use params::{
     lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE, GMRES_RESTART,
+    SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
 };
 pub use report::{SolveError, SolveReport};
 pub use rowmat::{mul_add, row_matrix, RowMatrix};
@@ -133,9 +136,9 @@ pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<
 /// to be built on instead of the system (a low-order discretisation of the same
 /// equations on the same nodes, whose small stencils the block Gauss–Seidel smoother
 /// and the aggregation handle where the system's large ones defeat them). It is made
-/// only when the multigrid is built; `None` from it, or no builder, builds the
-/// multigrid on the system.
-pub type Auxiliary<'a> = Option<Box<dyn FnOnce() -> Option<Csr> + 'a>>;
+/// only when the multigrid is built; no builder builds the multigrid on the system,
+/// and so does a builder's failure, whose reason then goes into the report's `choice`.
+pub type Auxiliary<'a> = Option<Box<dyn FnOnce() -> Result<Csr, String> + 'a>>;
 
 /// [`solve`] of a system whose unknowns belong to nodes (`layout`): the multigrid
 /// preconditioner takes its near-null space (rigid-body modes) from their positions.
@@ -209,9 +212,24 @@ pub(crate) fn solve_with_memory(
     auxiliary: Auxiliary<'_>,
     available: Option<f64>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let (kind, choice) = params.kind.resolve(a.nrows() as f64, a.nnz() as f64, available);
+    let (kind, mut choice) = params.kind.resolve(a.nrows() as f64, a.nnz() as f64, available);
+    let saddle_point = layout.filter(|l| l.has_pressure());
+    let kind = match (params.kind, saddle_point) {
+        (SolverKind::Auto { .. }, Some(_)) if kind != kind.for_saddle_point() => {
+            let k = kind.for_saddle_point();
+            if let (Some(c), SolverKind::Gmres { restart, max_iterations, .. }) = (&mut choice, k) {
+                c.push_str(&format!(
+                    " (the displacement-pressure form: GMRES({restart}), up to {max_iterations} iterations, block-triangular preconditioner)"
+                ));
+            }
+            k
+        }
+        _ => kind,
+    };
     let fallback = match (params.kind, kind) {
-        (SolverKind::Auto { tolerance, max_iterations, .. }, SolverKind::Gmres { .. }) => Some((tolerance, max_iterations)),
+        (SolverKind::Auto { tolerance, max_iterations, .. }, SolverKind::Gmres { .. }) if saddle_point.is_none() => {
+            Some((tolerance, max_iterations))
+        }
         _ => None,
     };
     if let SolverKind::Petsc { .. } = kind {
@@ -268,7 +286,21 @@ pub(crate) fn solve_with_memory(
             let attempt = if preconditioner == Preconditioner::Amg {
                 // The auxiliary operator in the system's row scale, so that its
                 // multigrid approximates the inverse of the solved (equilibrated) rows.
-                let auxiliary = auxiliary.and_then(|build| build()).map(|aux| solved_rows(Cow::Owned(aux), &rhs));
+                let (auxiliary, note) = match auxiliary.map(|build| build()) {
+                    Some(Ok(aux)) => (Some(solved_rows(Cow::Owned(aux), &rhs)), None),
+                    Some(Err(why)) => {
+                        (None, Some(format!("the low-order operator for the multigrid could not be made ({why}): built on the system")))
+                    }
+                    None => (None, None),
+                };
+                let choice = match (&start.choice, note) {
+                    (Some(c), Some(n)) => Some(format!("{c}; {n}")),
+                    (c, n) => n.or_else(|| c.clone()),
+                };
+                let start = Start { method: start.method.clone(), choice, ..start };
+                if let Some(layout) = saddle_point {
+                    return solve_gmres_saddle_point(solved_rows(a, &rhs), auxiliary, &rhs, &start, settings, layout);
+                }
                 solve_gmres_multigrid(solved_rows(a, &rhs), auxiliary, &rhs, &start, settings, layout)
             } else {
                 let a_work = working(a, &rhs);

@@ -120,6 +120,14 @@ pub fn lu_factor_bytes(nonzeros: f64, unknowns: f64) -> f64 {
 /// 2e6 unknowns).
 pub const GMRES_RESTART: usize = 30;
 
+/// Krylov vectors of `auto`'s GMRES on a displacement-pressure system: on the Lame
+/// ring at nu = 0.4999 (5.3e4 nodes) GMRES(100) took 401 iterations and 18.8 s where
+/// GMRES(30) took 780 and 30.2 s, for 13 % more peak memory (BENCHMARKS.md).
+pub const SADDLE_POINT_RESTART: usize = 100;
+
+/// Least iteration budget of `auto`'s GMRES on a displacement-pressure system.
+pub const SADDLE_POINT_ITERATIONS: usize = 2000;
+
 /// Fraction of the available memory that `auto` lets the LU factors take.
 pub const AUTO_LU_SHARE: f64 = 0.5;
 
@@ -180,6 +188,22 @@ impl SolverKind {
         }
     }
 
+    /// The GMRES that `auto`, gone iterative, runs on a displacement-pressure system:
+    /// [`SADDLE_POINT_RESTART`] vectors and at least [`SADDLE_POINT_ITERATIONS`]
+    /// iterations (its block preconditioner needs some hundreds, `super::saddle`);
+    /// anything else unchanged.
+    pub fn for_saddle_point(self) -> SolverKind {
+        match self {
+            SolverKind::Gmres { preconditioner, tolerance, max_iterations, .. } => SolverKind::Gmres {
+                preconditioner,
+                tolerance,
+                max_iterations: max_iterations.max(SADDLE_POINT_ITERATIONS),
+                restart: SADDLE_POINT_RESTART,
+            },
+            other => other,
+        }
+    }
+
     /// A sensible iterative default: BiCGSTAB + ILUT(drop = 1e-5, fill = 20),
     /// tolerance 1e-10, at most 2000 iterations.
     pub fn default_bicgstab() -> Self {
@@ -212,7 +236,7 @@ impl SolverKind {
 choice! {
     /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
     pub enum SolverMethod("solver.kind", default Some(SolverMethod::Auto), note "\"auto\"; in [peridynamics.solver] \"gmres\" with \"amg\"") {
-        Auto = "auto" => "LU while its estimated factors take at most half the available memory, else GMRES with the preconditioner, tolerance and max_iterations given (reason in summary.json, `solver.choice`)",
+        Auto = "auto" => "LU while its estimated factors take at most half the available memory, else GMRES with the preconditioner, tolerance and max_iterations given (on the displacement-pressure form GMRES(100), at least 2000 iterations); reason in summary.json, `solver.choice`",
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
         Gmres = "gmres" => "right-preconditioned restarted GMRES(`restart`, default 30) to a true relative residual `tolerance`; stops when a restart cycle gains less than 1 %",

@@ -66,6 +66,8 @@ pub enum BuiltPreconditioner {
     Ilut(Ilut),
     /// See [`Amg`].
     Amg(Box<Amg>),
+    /// The block-triangular preconditioner of the displacement-pressure form.
+    SaddlePoint(Box<super::saddle::SaddlePoint>),
 }
 
 /// `a` with an explicit zero stored at every missing diagonal entry, or `None` when
@@ -128,6 +130,7 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Ilu0(p) => p.symbolic().l_nnz() + p.symbolic().u_nnz() - p.dim(),
             BuiltPreconditioner::Ilut(p) => p.nonzeros(),
             BuiltPreconditioner::Amg(p) => p.nonzeros(),
+            BuiltPreconditioner::SaddlePoint(p) => p.nonzeros(),
         }
     }
 
@@ -143,9 +146,9 @@ impl BuiltPreconditioner {
     /// What the report adds to the method's name: AMG's levels and operator complexity.
     pub fn describe(&self) -> String {
         match self {
-            BuiltPreconditioner::Amg(p) => {
-                let sizes: Vec<String> = p.sizes().iter().map(|s| s.to_string()).collect();
-                format!(" [levels {}, operator complexity {:.2}]", sizes.join("/"), p.operator_complexity())
+            BuiltPreconditioner::Amg(p) => levels(p),
+            BuiltPreconditioner::SaddlePoint(p) => {
+                format!(" on the displacement block{}, the Schur complement by its SIMPLE diagonal", levels(p.multigrid()))
             }
             _ => String::new(),
         }
@@ -157,6 +160,7 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Ilu0(p) => p.dim(),
             BuiltPreconditioner::Ilut(p) => p.dim(),
             BuiltPreconditioner::Amg(p) => p.dim(),
+            BuiltPreconditioner::SaddlePoint(p) => p.dim(),
         }
     }
 
@@ -166,6 +170,7 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Jacobi(j) => j.solve_in_place(x),
             BuiltPreconditioner::Ilut(p) => p.solve_in_place(x),
             BuiltPreconditioner::Amg(p) => p.solve_in_place(x),
+            BuiltPreconditioner::SaddlePoint(p) => p.solve_in_place(x),
             BuiltPreconditioner::Ilu0(p) => {
                 let n = x.len();
                 let m = faer::MatMut::from_column_major_slice_mut(x, n, 1);
@@ -219,6 +224,12 @@ impl Precond<f64> for BuiltPreconditioner {
     fn conj_apply_in_place(&self, rhs: MatMut<'_, f64>, par: Par, stack: &mut MemStack) {
         self.apply_in_place(rhs, par, stack);
     }
+}
+
+/// ` [levels 2013888/199833/..., operator complexity 1.27]` of a multigrid.
+fn levels(p: &Amg) -> String {
+    let sizes: Vec<String> = p.sizes().iter().map(|s| s.to_string()).collect();
+    format!(" [levels {}, operator complexity {:.2}]", sizes.join("/"), p.operator_complexity())
 }
 
 #[cfg(test)]

@@ -428,3 +428,23 @@ fn auto_retries_with_ilu0_when_the_iteration_stops() {
     let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &auto, None, None, Some(1e12)).unwrap();
     assert_eq!(rep.method, "lu");
 }
+
+/// A low-order operator that cannot be made leaves the multigrid on the system and
+/// says why in the report's `choice` (never only in the method's label): the solution
+/// is the system's, as without a builder.
+#[test]
+fn a_failed_low_order_operator_is_reported() {
+    let (t, _, b) = navier_like(100, 20.0);
+    let a = assemble(&t).unwrap();
+    let params = SolverParams { kind: SolverKind::default_gmres(), equilibrate: true };
+    let failing: Auxiliary = Some(Box::new(|| Err("a stencil without enough nodes".to_string())));
+    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &params, None, failing, None).unwrap();
+    assert!(!rep.method.contains("low-order"), "{}", rep.method);
+    let why = rep.choice.unwrap_or_default();
+    assert!(why.contains("could not be made (a stencil without enough nodes): built on the system"), "{why}");
+    let (plain, rep) = solve_with_memory(std::borrow::Cow::Owned(amg::to_csr(&a)), &b, &params, None, None, None).unwrap();
+    assert_eq!(rep.choice, None);
+    // The same method on the same operator (rayon's reductions may order sums
+    // differently between runs: round-off only).
+    assert!(max_rel_diff(&x, &plain) < 1e-9);
+}

@@ -62,8 +62,10 @@ pub fn approximation(scene: &Approximation, fill: FillKind) -> Approximation {
 }
 
 /// The rows of the low-order operator on the nodes and ghosts of `disc`, unscaled as
-/// assembled; `None` when its shapes or rows cannot be made (the multigrid then
-/// takes the system).
-pub fn rows(case: &Case, disc: &mut Discretisation, exact: Option<&dyn ExactSolution>, low_order: &Approximation) -> Option<Csr> {
-    disc.with_approximation(low_order, |d| System { case, disc: d, exact }.assemble().ok().map(|(m, _)| m)).ok().flatten()
+/// assembled; the reason when its shapes or rows cannot be made (the multigrid then
+/// takes the system and the solver's report says why).
+pub fn rows(case: &Case, disc: &mut Discretisation, exact: Option<&dyn ExactSolution>, low_order: &Approximation) -> Result<Csr, String> {
+    disc.with_approximation(low_order, |d| System { case, disc: d, exact }.assemble().map(|(m, _)| m))
+        .and_then(|assembled| assembled)
+        .map_err(|e| e.to_string())
 }

@@ -195,7 +195,7 @@ pub(super) fn assemble_and_solve(
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions });
         let auxiliary: linalg::Auxiliary = params.multigrid.low_order(disc.supports.requested()).then(|| {
             let approximation = low_order::approximation(&params.approximation, params.fill.kind);
-            Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Option<linalg::Csr>>
+            Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
         });
         // Handed over unless kept: the solver frees it once it holds its own form.
         let ((x, report), kept) = if keep {

@@ -324,11 +324,11 @@ pub fn memory(p: &Problem) -> Option<Warning> {
     resources::above_half(&e).map(|available| Warning {
         check: "memory",
         message: format!(
-            "the run was estimated at {:.1} GB ({}), more than half of the {:.1} GB available; \
+            "the run was estimated at {} ({}), more than half of the {} available; \
              a larger problem would not fit (see {})",
-            e.peak_bytes / 1e9,
+            resources::gigabytes(e.peak_bytes),
             resources::describe(&e),
-            available / 1e9,
+            resources::gigabytes(available),
             e.driver
         ),
     })
