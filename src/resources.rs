@@ -5,7 +5,8 @@
 //!
 //! ```text
 //! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
-//! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32)
+//! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32; a static
+//!                                          run frees them after assembly: max(shapes + 12 Z, solve))
 //! solve, LU    = Z (16 + 34 N^0.26)       (the equilibrated columns, 16 B per nonzero, which
 //!                                          replace the rows; the LU factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (24 + 48)           (the equilibrated matrix, which replaces the
@@ -88,7 +89,10 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         // at 1.2e4 / 4.9e4 nodes: 86 / 311 MB measured, 40 B gave 0.46 of it).
         let solve =
             if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros, k > 2.0) };
-        (nonzeros, nodes * s * 44.0 + solve)
+        // A static run releases its shapes once the rows are assembled (they and the
+        // rows, 12 B per entry, are the assembly's peak); a dynamic one keeps them.
+        let shapes = nodes * s * 44.0;
+        (nonzeros, if dynamic { shapes + solve } else { (shapes + 12.0 * nonzeros).max(solve) })
     };
     let (nonzeros, mut bytes) = one(params.approximation.support, nodes);
     if params.estimate.method.static_navier_estimates() && !dynamic {

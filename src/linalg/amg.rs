@@ -236,28 +236,18 @@ impl Amg {
             let d = block_diagonal(&inv_diag, blocks);
             let rho = spectral_radius(&current, &d).max(f64::MIN_POSITIVE);
             let omega = 4.0 / (3.0 * rho);
-            // P = T − ω D⁻¹ (A T);  R = T_leftᵀ − ω (T_leftᵀ A) D⁻¹.
-            // Intermediates are dropped as soon as they are used: at 8e5 unknowns each
-            // is a few hundred MB. (Forming D⁻¹ A T and Tᵀ A D⁻¹ by `triple_product`
-            // instead was slower and lowered no peak: the solve's peak is in GMRES.)
-            let p = {
-                let at = spgemm::product(&current, &t);
-                let dat = spgemm::product(&d, &at);
-                drop(at);
-                t.minus_scaled(omega, &dat)
-            };
+            // P = T − ω (D⁻¹ A) T and R = Tᵀ − ω (Tᵀ A) D⁻¹, each formed row by row
+            // in single precision (`spgemm::smoothed`): what the cycle applies and what
+            // the coarse operator is formed with.
+            let p = spgemm::smoothed(&t, omega, &d, &current, &t);
             drop(t);
             let r = {
                 let tt = t_left.transpose();
                 drop(t_left);
-                let ta = spgemm::product(&tt, &current);
-                let tad = spgemm::product(&ta, &d);
-                drop(ta);
-                tt.minus_scaled(omega, &tad)
+                spgemm::smoothed(&tt, omega, &tt, &current, &d)
             };
             drop(d);
             let coarse = spgemm::triple_product(&r, &current, &p);
-            let (p, r) = (p.into_single(), r.into_single());
             levels.push(Level { a: current, blocks, inv_diag, p, r });
             sizes.push(coarse.nrows());
             current = coarse;

@@ -16,17 +16,25 @@ use rayon::prelude::*;
 pub trait Value: Copy + Send + Sync + Default + std::fmt::Debug + PartialEq + 'static {
     /// The value in double precision (exact).
     fn to_f64(self) -> f64;
+    /// A double rounded to this type.
+    fn from_f64(x: f64) -> Self;
 }
 
 impl Value for f64 {
     fn to_f64(self) -> f64 {
         self
     }
+    fn from_f64(x: f64) -> Self {
+        x
+    }
 }
 
 impl Value for f32 {
     fn to_f64(self) -> f64 {
         f64::from(self)
+    }
+    fn from_f64(x: f64) -> Self {
+        x as f32
     }
 }
 

@@ -7,7 +7,7 @@
 //! serial and was most of the 10 s setup at 1e6 nodes. sprs has a parallel product,
 //! but every operand would have to be copied into its format and back.
 
-use super::csr::Csr;
+use super::csr::{Csr, Value};
 use rayon::prelude::*;
 
 /// Rows handed to one task: large enough to amortise the task, small enough to
@@ -43,12 +43,13 @@ impl Accumulator {
         }
     }
 
-    /// Accumulate `sum_k x_k (row k of b)` for the entries `(k, x_k)` of `row` into row `i`.
-    fn add_rows(&mut self, i: usize, cols: &[u32], vals: &[f64], b: &Csr) {
+    /// Accumulate `sum_k x_k (row k of b)` for the entries `(k, x_k)` of `row` into row
+    /// `i`, in double precision whatever the operands store.
+    fn add_rows<X: Value, B: Value>(&mut self, i: usize, cols: &[u32], vals: &[X], b: &Csr<B>) {
         for (&k, &x) in cols.iter().zip(vals) {
             let brow = b.row(k as usize);
             for (&j, &bkj) in brow.col_indices().iter().zip(brow.values()) {
-                self.add(i, j as usize, x * bkj);
+                self.add(i, j as usize, x.to_f64() * bkj.to_f64());
             }
         }
     }
@@ -64,12 +65,12 @@ impl Accumulator {
 /// parallel. Two passes over the rows: the row lengths, then the entries written in
 /// place, so that the result is held once (a single pass collecting per-task parts
 /// held it twice: +0.4 GB at 1e6 nodes).
-fn rows_of_products<S: Send>(
+fn rows_of_products<S: Send, V: Value>(
     n: usize,
     m: usize,
     scratch: impl Fn() -> S + Sync + Send,
     row: impl Fn(usize, &mut S) -> &mut Accumulator + Sync + Send,
-) -> Csr {
+) -> Csr<V> {
     let tasks = n.div_ceil(ROWS_PER_TASK);
     let rows_of = |task: usize| task * ROWS_PER_TASK..n.min((task + 1) * ROWS_PER_TASK);
     let lengths: Vec<Vec<usize>> =
@@ -81,7 +82,7 @@ fn rows_of_products<S: Send>(
     }
     drop(lengths);
     let nnz = offsets[n];
-    let (mut cols, mut vals) = (vec![0u32; nnz], vec![0.0f64; nnz]);
+    let (mut cols, mut vals) = (vec![0u32; nnz], vec![V::default(); nnz]);
     // Each task's slice of the result.
     let mut slices = Vec::with_capacity(tasks);
     let (mut rest_c, mut rest_v) = (cols.as_mut_slice(), vals.as_mut_slice());
@@ -99,7 +100,7 @@ fn rows_of_products<S: Send>(
             let start = offsets[i] - base;
             for (k, (j, x)) in row(i, s).sorted().enumerate() {
                 c[start + k] = j as u32;
-                v[start + k] = x;
+                v[start + k] = V::from_f64(x);
             }
         }
     });
@@ -127,8 +128,9 @@ pub fn product(a: &Csr, b: &Csr) -> Csr {
 /// `(A B) C` without holding `A B`: each row of `A B` is formed in one accumulator and
 /// at once multiplied into the next. The multigrid's coarse operator `R A P` this way
 /// never holds `R A`, whose rows reach two stencils around an aggregate: 1.5 GB at
-/// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md).
-pub fn triple_product(a: &Csr, b: &Csr, c: &Csr) -> Csr {
+/// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md). `A` and `C` may be
+/// stored in single precision (the multigrid's transfers); the sums are in double.
+pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr {
     assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
     assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
     rows_of_products(
@@ -146,6 +148,42 @@ pub fn triple_product(a: &Csr, b: &Csr, c: &Csr) -> Csr {
                 vals.push(x);
             }
             abc.start();
+            abc.add_rows(i, cols, vals, c);
+            abc
+        },
+    )
+}
+
+/// `base − ω (A B C)` in single precision, without holding `A B`, `A B C` or any
+/// double-precision copy: each row is `base`'s row plus `−ω` times the row of `A B`
+/// (formed in one accumulator) multiplied into `C`, summed in double and rounded
+/// once. The multigrid's smoothed transfers are of this form:
+/// `P = T − ω (D⁻¹ A) T` and `R = Tᵀ − ω (Tᵀ A) D⁻¹`; formed by separate products
+/// they held `A T`, `D⁻¹ A T` and `P` in double at once, 0.4-0.5 GB at 1e6 nodes and
+/// the peak of the run (BENCHMARKS.md).
+pub fn smoothed<VB: Value>(base: &Csr<VB>, omega: f64, a: &Csr, b: &Csr, c: &Csr) -> Csr<f32> {
+    assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
+    assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
+    assert_eq!((base.nrows(), base.ncols()), (a.nrows(), c.ncols()), "the base must have the shape of the product");
+    rows_of_products(
+        a.nrows(),
+        c.ncols(),
+        || (Accumulator::new(b.ncols()), Accumulator::new(c.ncols()), Vec::new(), Vec::new()),
+        |i, (ab, abc, cols, vals)| {
+            ab.start();
+            let row = a.row(i);
+            ab.add_rows(i, row.col_indices(), row.values(), b);
+            cols.clear();
+            vals.clear();
+            for (j, x) in ab.sorted() {
+                cols.push(j as u32);
+                vals.push(-omega * x);
+            }
+            abc.start();
+            let own = base.row(i);
+            for (&j, &x) in own.col_indices().iter().zip(own.values()) {
+                abc.add(i, j as usize, x.to_f64());
+            }
             abc.add_rows(i, cols, vals, c);
             abc
         },
@@ -206,6 +244,25 @@ mod tests {
             assert_eq!(fused.col_indices(), staged.col_indices(), "{n}x{k}x{l}x{m}: columns");
             let worst = fused.values().iter().zip(staged.values()).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
             assert!(worst <= 1e-14, "{n}x{k}x{l}x{m}: values differ by {worst:e}");
+        }
+    }
+
+    /// `base − ω A B C` fused equals the staged products and difference, rounded once
+    /// to single precision (relative 2^-24 of each entry's size, plus the round-off of
+    /// sums that cancel: 1e-6 of the largest entry), on the union of the patterns.
+    #[test]
+    fn smoothed_matches_the_staged_difference() {
+        for (n, k, l, m) in [(3000, 5000, 2500, 400), (7, 5, 4, 3)] {
+            let (a, b, c) = (random(n, k, 6, 3 + n as u64).1, random(k, l, 5, 5 + l as u64).1, random(l, m, 4, 11 + m as u64).1);
+            let base = random(n, m, 3, 17 + n as u64).1;
+            let omega = 0.37;
+            let fused = smoothed(&base, omega, &a, &b, &c);
+            let staged = base.minus_scaled(omega, &triple_product(&a, &b, &c));
+            assert_eq!(fused.row_offsets(), staged.row_offsets(), "{n}x{k}x{l}x{m}: pattern");
+            assert_eq!(fused.col_indices(), staged.col_indices(), "{n}x{k}x{l}x{m}: columns");
+            let largest = staged.values().iter().fold(0.0f64, |x, v| x.max(v.abs()));
+            let worst = fused.values().iter().zip(staged.values()).map(|(x, y)| (f64::from(*x) - y).abs()).fold(0.0, f64::max);
+            assert!(worst <= 1e-6 * largest, "{n}x{k}x{l}x{m}: values differ by {worst:e} of {largest:e}");
         }
     }
 }

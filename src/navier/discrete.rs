@@ -91,13 +91,23 @@ impl Discretisation {
         case.check_formulas(&nodes.positions, &on_parts)?;
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
-        let (positions, ghost, supports, needs, widened) = timer.run(SUPPORTS, || {
+        let (positions, ghost, supports, (every, needs), widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
-            let needs = shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, case.outputs.needs_gradient()));
+            // Supports are widened for every shape the run will make, the gradient's
+            // included; a static run makes the gradient's shapes only after its solve
+            // (`restore_gradient_shapes`), explicit dynamics reads them at every snapshot.
+            let gradient = case.outputs.needs_gradient();
+            let every = shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, gradient));
             let (supports, widened) =
-                widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &needs);
+                widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &every);
+            let now = gradient && case.dynamics.is_some();
+            let needs = if now == gradient {
+                every.clone()
+            } else {
+                shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, now))
+            };
             let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
-            Ok(((positions, ghost, supports, needs, widened), note))
+            Ok(((positions, ghost, supports, (every, needs), widened), note))
         })?;
         let world = crate::petsc::world();
         let owner = matches!(params.solver.kind, SolverKind::Petsc { .. }).then(|| {
@@ -105,10 +115,10 @@ impl Discretisation {
             let ghosts: Vec<u32> = ghost_parents(&ghost, positions.len() - nodes.len()).into_iter().map(|i| owner[i]).collect();
             [owner, ghosts].concat()
         });
-        let mut needs = needs;
+        let (mut every, mut needs) = (every, needs);
         if let Some(owner) = &owner {
-            for (need, _) in needs.iter_mut().zip(owner).filter(|(_, &o)| o as usize != world.rank) {
-                *need = OpSet::EMPTY;
+            for ((need, all), _) in needs.iter_mut().zip(every.iter_mut()).zip(owner).filter(|(_, &o)| o as usize != world.rank) {
+                (*need, *all) = (OpSet::EMPTY, OpSet::EMPTY);
             }
         }
         let shapes = timer.run(SHAPES, || {
@@ -117,10 +127,12 @@ impl Discretisation {
             Ok((s, note))
         })?;
         let n = nodes.len();
+        // Every shape the run makes, those of the gradient after the solve included.
+        let stored = every.iter().fold(OpSet::EMPTY, |a, &b| a | b);
         let operators_computed = Op::ALL
             .iter()
-            .filter(|op| shapes.operators().contains(**op))
-            .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| shapes.computed_at(i).contains(*op)).count()))
+            .filter(|op| stored.contains(**op))
+            .map(|op| (OpSet::from(*op).names()[0].to_string(), (0..n).filter(|&i| every[i].contains(*op)).count()))
             .collect();
         let dofs = DofMap::new(positions.len(), unknowns);
         let ghost_positions = positions[n..].to_vec();
@@ -157,11 +169,26 @@ impl Discretisation {
         Ok(out)
     }
 
-    /// Give back the memory of the shapes only the rows needed, once they are
-    /// assembled: the first derivatives stay when post-processing computes the gradient
-    /// (`gradient`), nothing otherwise.
-    pub fn release_row_shapes(&mut self, gradient: bool) {
-        self.shapes.retain(if gradient { OpSet::D1 } else { OpSet::EMPTY });
+    /// Give back the memory of every shape once the rows are assembled: the solve is
+    /// the peak of a large run, and the first derivatives that post-processing needs
+    /// are made again after it ([`Discretisation::restore_gradient_shapes`]; at 1e6
+    /// nodes 0.21 GB less at the peak, for 2-3.5 s more in post-processing: the same
+    /// local solves took 1.2 s before the solve and 2.2-3.7 s after it, cause not
+    /// found; BENCHMARKS.md).
+    pub fn release_row_shapes(&mut self) {
+        self.shapes.retain(OpSet::EMPTY);
+    }
+
+    /// The first-derivative shapes of `approximation` (the one the discretisation was
+    /// built with) at every node this rank owns, ghosts excluded, on the supports in
+    /// place: what [`Discretisation::gradients`] reads. The same local solves as the
+    /// first time, so the same weights.
+    pub fn restore_gradient_shapes(&mut self, approximation: &Approximation) -> Result<(), RunError> {
+        let positions: Vec<Point> = (0..self.dofs.nodes()).map(|i| self.point(i)).collect();
+        let n = self.nodes.len();
+        let needs: Vec<OpSet> = (0..positions.len()).map(|i| if i < n && self.owns(i) { OpSet::D1 } else { OpSet::EMPTY }).collect();
+        self.shapes = compute_shapes(&positions, &self.supports, approximation, &needs)?;
+        Ok(())
     }
 
     /// Whether this rank computes node `i`'s shapes and rows (always, unless distributed).
@@ -383,15 +410,17 @@ mod tests {
     use crate::navier::test_case::quadratic_plate;
     use crate::pipeline::{Silent, StageTimer};
 
-    /// The operators of each node are those of the table in the module docs.
+    /// The operators of each node are those of the table in the module docs: before
+    /// the solve those of its rows; after it ([`Discretisation::restore_gradient_shapes`])
+    /// the first derivatives at every node when the gradient is an output.
     #[test]
     fn each_node_gets_exactly_the_operators_its_rows_need() {
         let (mut case, params) = quadratic_plate(FillKind::Grid, 0.1);
         for gradient in [false, true] {
             case.outputs.stress = gradient;
             let exact = case.exact_solution();
-            let disc = Discretisation::new(&case, &params, exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap();
-            let d1 = if gradient { OpSet::D1 } else { OpSet::EMPTY };
+            let mut disc = Discretisation::new(&case, &params, exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap();
+            let d1 = OpSet::EMPTY;
             for i in 0..disc.dofs.nodes() {
                 let got = disc.shapes.computed_at(i);
                 let want = if i >= disc.nodes.len() {
@@ -406,6 +435,14 @@ mod tests {
                     d1
                 };
                 assert_eq!(got, want, "node {i} (gradient output {gradient})");
+            }
+            let every_d1 = disc.operators_computed.iter().find(|(name, _)| name == "d/dx").map_or(0, |(_, count)| *count);
+            assert_eq!(every_d1 == disc.nodes.len(), gradient, "d/dx counted at every node exactly when the gradient is an output");
+            disc.release_row_shapes();
+            disc.restore_gradient_shapes(&params.approximation).unwrap();
+            for i in 0..disc.dofs.nodes() {
+                let want = if i < disc.nodes.len() { OpSet::D1 } else { OpSet::EMPTY };
+                assert_eq!(disc.shapes.computed_at(i), want, "node {i} after the solve");
             }
             // Left edge (displacement): no ghosts, no Navier rows; the traction edges'
             // interior nodes have ghosts and Navier rows.

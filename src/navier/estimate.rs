@@ -253,6 +253,12 @@ pub fn higher_degree(
     let mut timer = StageTimer::new(&Silent);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
         .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params, &mut timer).map(|s| (disc, s)));
+    let solved = solved.and_then(|(mut disc, solved)| {
+        if stress.is_some() {
+            disc.restore_gradient_shapes(&approximation)?;
+        }
+        Ok((disc, solved))
+    });
     let (disc, solved) = match solved {
         Ok(s) => s,
         Err(e) => {

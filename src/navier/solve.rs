@@ -94,6 +94,9 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
         let displacement = disc.dofs.displacements(&x, n);
         let pressure = disc.pressure(&case.material, &x);
+        if case.outputs.needs_gradient() {
+            disc.restore_gradient_shapes(&params.approximation)?;
+        }
         let gradient = case.outputs.needs_gradient().then(|| disc.gradients(&x));
         let stress = gradient.as_ref().map(|g| disc.stress(&case.material, g, &x));
         let exact_fields = exact.map(|e| ExactFields::at(e, &disc.nodes.positions, true));
@@ -168,8 +171,9 @@ pub(super) struct Solved {
 }
 
 /// Assemble the rows of `disc` and solve them with `params.solver` (stages `assembly`,
-/// `solve`); with `params.keep_system` return the system too. The shapes only the rows
-/// needed are released before the solve ([`Discretisation::release_row_shapes`]). A
+/// `solve`); with `params.keep_system` return the system too. Every shape is released
+/// before the solve ([`Discretisation::release_row_shapes`]; post-processing makes the
+/// gradient's again). A
 /// multigrid built on the low-order operator ([`low_order`]) gets its rows when the
 /// solver builds it, inside the `solve` stage.
 pub(super) fn assemble_and_solve(
@@ -189,7 +193,7 @@ pub(super) fn assemble_and_solve(
         let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.nnz());
         Ok(((m, rhs), note))
     })?;
-    disc.release_row_shapes(case.outputs.needs_gradient());
+    disc.release_row_shapes();
     let nonzeros = matrix.nnz();
     let (x, report, kept) = timer.run(stage::SOLVE, || {
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions });
@@ -226,7 +230,7 @@ fn assemble_and_solve_distributed(
         let note = format!("{} unknowns, {} entries in this rank's rows", dofs.len(), m.nnz());
         Ok(((m, rhs), note))
     })?;
-    disc.release_row_shapes(case.outputs.needs_gradient());
+    disc.release_row_shapes();
     let owner = disc.owner.as_deref().expect("a distributed discretisation has owners");
     let (x, report) = timer.run(stage::SOLVE, || {
         let dist = Distribution::new(owner.to_vec(), dofs.unknowns().per_node(), crate::petsc::world());
