@@ -125,19 +125,27 @@ pub fn product(a: &Csr, b: &Csr) -> Csr {
     )
 }
 
-/// `(A B) C` without holding `A B`: each row of `A B` is formed in one accumulator and
-/// at once multiplied into the next. The multigrid's coarse operator `R A P` this way
-/// never holds `R A`, whose rows reach two stencils around an aggregate: 1.5 GB at
-/// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md). `A` and `C` may be
-/// stored in single precision (the multigrid's transfers); the sums are in double.
-pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr {
+/// `base + scale (A B) C` (no base: `scale (A B) C`), rows in parallel, each row of
+/// `A B` formed in one accumulator and at once multiplied into `C`, the sums in double
+/// and stored as `V`.
+fn plus_triple<V: Value, VB: Value, VA: Value, VC: Value>(base: Option<&Csr<VB>>, scale: f64, a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr<V> {
     assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
     assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
+    if let Some(base) = base {
+        assert_eq!((base.nrows(), base.ncols()), (a.nrows(), c.ncols()), "the base must have the shape of the product");
+    }
     rows_of_products(
         a.nrows(),
         c.ncols(),
         || (Accumulator::new(b.ncols()), Accumulator::new(c.ncols()), Vec::new(), Vec::new()),
         |i, (ab, abc, cols, vals)| {
+            abc.start();
+            if let Some(base) = base {
+                let own = base.row(i);
+                for (&j, &x) in own.col_indices().iter().zip(own.values()) {
+                    abc.add(i, j as usize, x.to_f64());
+                }
+            }
             ab.start();
             let row = a.row(i);
             ab.add_rows(i, row.col_indices(), row.values(), b);
@@ -145,13 +153,21 @@ pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -
             vals.clear();
             for (j, x) in ab.sorted() {
                 cols.push(j as u32);
-                vals.push(x);
+                vals.push(scale * x);
             }
-            abc.start();
             abc.add_rows(i, cols, vals, c);
             abc
         },
     )
+}
+
+/// `(A B) C` without holding `A B`: each row of `A B` is formed in one accumulator and
+/// at once multiplied into the next. The multigrid's coarse operator `R A P` this way
+/// never holds `R A`, whose rows reach two stencils around an aggregate: 1.5 GB at
+/// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md). `A` and `C` may be
+/// stored in single precision (the multigrid's transfers); the sums are in double.
+pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr {
+    plus_triple(None::<&Csr>, 1.0, a, b, c)
 }
 
 /// `base − ω (A B C)` in single precision, without holding `A B`, `A B C` or any
@@ -162,32 +178,7 @@ pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -
 /// they held `A T`, `D⁻¹ A T` and `P` in double at once, 0.4-0.5 GB at 1e6 nodes and
 /// the peak of the run (BENCHMARKS.md).
 pub fn smoothed<VB: Value>(base: &Csr<VB>, omega: f64, a: &Csr, b: &Csr, c: &Csr) -> Csr<f32> {
-    assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
-    assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
-    assert_eq!((base.nrows(), base.ncols()), (a.nrows(), c.ncols()), "the base must have the shape of the product");
-    rows_of_products(
-        a.nrows(),
-        c.ncols(),
-        || (Accumulator::new(b.ncols()), Accumulator::new(c.ncols()), Vec::new(), Vec::new()),
-        |i, (ab, abc, cols, vals)| {
-            ab.start();
-            let row = a.row(i);
-            ab.add_rows(i, row.col_indices(), row.values(), b);
-            cols.clear();
-            vals.clear();
-            for (j, x) in ab.sorted() {
-                cols.push(j as u32);
-                vals.push(-omega * x);
-            }
-            abc.start();
-            let own = base.row(i);
-            for (&j, &x) in own.col_indices().iter().zip(own.values()) {
-                abc.add(i, j as usize, x.to_f64());
-            }
-            abc.add_rows(i, cols, vals, c);
-            abc
-        },
-    )
+    plus_triple(Some(base), -omega, a, b, c)
 }
 
 #[cfg(test)]
