@@ -212,20 +212,8 @@ pub(crate) fn solve_with_memory(
     auxiliary: Auxiliary<'_>,
     available: Option<f64>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let (kind, mut choice) = params.kind.resolve(a.nrows() as f64, a.nnz() as f64, available);
     let saddle_point = layout.filter(|l| l.has_pressure());
-    let kind = match (params.kind, saddle_point) {
-        (SolverKind::Auto { .. }, Some(_)) if kind != kind.for_saddle_point() => {
-            let k = kind.for_saddle_point();
-            if let (Some(c), SolverKind::Gmres { restart, max_iterations, .. }) = (&mut choice, k) {
-                c.push_str(&format!(
-                    " (the displacement-pressure form: GMRES({restart}), up to {max_iterations} iterations, block-triangular preconditioner)"
-                ));
-            }
-            k
-        }
-        _ => kind,
-    };
+    let (kind, choice) = params.kind.resolve_system(a.nrows() as f64, a.nnz() as f64, saddle_point.is_some(), available);
     let fallback = match (params.kind, kind) {
         (SolverKind::Auto { tolerance, max_iterations, .. }, SolverKind::Gmres { .. }) if saddle_point.is_none() => {
             Some((tolerance, max_iterations))

@@ -188,6 +188,23 @@ impl SolverKind {
         }
     }
 
+    /// [`SolverKind::resolve`] for a system that may be a saddle point (the
+    /// displacement-pressure form): there `auto`, gone iterative, runs
+    /// [`SolverKind::for_saddle_point`]'s longer GMRES and says so in the reason.
+    pub fn resolve_system(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> (SolverKind, Option<String>) {
+        let (kind, mut choice) = self.resolve(unknowns, nonzeros, available);
+        if !saddle_point || !matches!(self, SolverKind::Auto { .. }) {
+            return (kind, choice);
+        }
+        let longer = kind.for_saddle_point();
+        if let (Some(c), SolverKind::Gmres { restart, max_iterations, .. }) = (&mut choice, longer) {
+            c.push_str(&format!(
+                " (the displacement-pressure form: GMRES({restart}), up to {max_iterations} iterations, block-triangular preconditioner)"
+            ));
+        }
+        (longer, choice)
+    }
+
     /// The GMRES that `auto`, gone iterative, runs on a displacement-pressure system:
     /// [`SADDLE_POINT_RESTART`] vectors and at least [`SADDLE_POINT_ITERATIONS`]
     /// iterations (its block preconditioner needs some hundreds, `super::saddle`);

@@ -40,8 +40,8 @@ pub struct SaddlePoint {
     gradient: Csr,
     /// `1 / S̃_i` for each node's pressure.
     inverse_schur: Vec<f64>,
-    /// The displacement part of a vector, reused between applications.
-    work: Mutex<Vec<f64>>,
+    /// The displacement and the pressure parts of a vector, reused between applications.
+    work: Mutex<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The entries of `a` whose row and column components (index mod 3) are those of
@@ -109,24 +109,26 @@ impl SaddlePoint {
         drop(continuity);
         let layout = NodeLayout { per_node: 2, positions: layout.positions };
         let displacement = Amg::build_from_rows(displacement, Some(layout), AmgParams::default());
-        Some(SaddlePoint { displacement, gradient, inverse_schur, work: Mutex::new(Vec::new()) })
+        Some(SaddlePoint { displacement, gradient, inverse_schur, work: Mutex::new((Vec::new(), Vec::new())) })
     }
 
     /// `z = P⁻¹ z` (module docs).
     pub fn solve_in_place(&self, z: &mut [f64]) {
         let nodes = self.inverse_schur.len();
-        let mut work = self.work.lock().unwrap_or_else(|e| e.into_inner());
+        let mut guard = self.work.lock().unwrap_or_else(|e| e.into_inner());
+        let (work, pressure) = &mut *guard;
         work.resize(2 * nodes, 0.0);
+        pressure.clear();
         for (node, s) in self.inverse_schur.iter().enumerate() {
             z[PER_NODE * node + 2] *= s;
+            pressure.push(z[PER_NODE * node + 2]);
         }
-        let pressure: Vec<f64> = (0..nodes).map(|node| z[PER_NODE * node + 2]).collect();
         let (ptr, idx, val) = (self.gradient.row_offsets(), self.gradient.col_indices(), self.gradient.values());
         for (row, w) in work.iter_mut().enumerate() {
             let entries = ptr[row]..ptr[row + 1];
-            *w = z[row / 2 * PER_NODE + row % 2] - super::csr::row_dot(&idx[entries.clone()], &val[entries], &pressure);
+            *w = z[row / 2 * PER_NODE + row % 2] - super::csr::row_dot(&idx[entries.clone()], &val[entries], pressure);
         }
-        self.displacement.solve_in_place(&mut work);
+        self.displacement.solve_in_place(work);
         for (row, w) in work.iter().enumerate() {
             z[row / 2 * PER_NODE + row % 2] = *w;
         }
