@@ -6,7 +6,8 @@
 //! ```text
 //! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
 //! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32; a static
-//!                                          run frees them after assembly: max(shapes + 12 Z, solve))
+//!                                          run frees them after assembly: max(shapes + 12 Z, solve),
+//!                                          RBF-FD keeps the gradient's 16 n s through the solve)
 //! solve, LU    = Z (16 + 34 N^0.26)       (the equilibrated columns, 16 B per nonzero, which
 //!                                          replace the rows; the LU factors of faer, fitted: see below)
 //! solve, BiCGSTAB = Z (24 + 48)           (the equilibrated matrix, which replaces the
@@ -25,6 +26,7 @@
 
 use crate::case::Case;
 use crate::linalg::{lu_factor_bytes, SolverKind};
+use crate::navier::discrete::keeps_gradient_shapes;
 use crate::navier::estimate::reference_approximation;
 use crate::navier::NavierParams;
 use crate::output::available_memory_bytes;
@@ -88,9 +90,11 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         let solve =
             if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros, k > 2.0) };
         // A static run releases its shapes once the rows are assembled (they and the
-        // rows, 12 B per entry, are the assembly's peak); a dynamic one keeps them.
+        // rows, 12 B per entry, are the assembly's peak), except the gradient's under
+        // RBF-FD (two operators of f64); a dynamic one keeps them all.
         let shapes = nodes * s * 44.0;
-        (nonzeros, if dynamic { shapes + solve } else { (shapes + 12.0 * nonzeros).max(solve) })
+        let kept = if case.outputs.needs_gradient() && keeps_gradient_shapes(&params.approximation.basis) { nodes * s * 16.0 } else { 0.0 };
+        (nonzeros, if dynamic { shapes + solve } else { (shapes + 12.0 * nonzeros).max(solve + kept) })
     };
     let (nonzeros, mut bytes) = one(params.approximation.support, nodes);
     if params.estimate.method.static_navier_estimates() && !dynamic {

@@ -29,7 +29,7 @@ use super::csr::Csr;
 use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
 use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
 use super::SparseMatrix;
-use super::{gmres, spgemm};
+use super::{gmres, spgemm, vector_state};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -385,13 +385,16 @@ impl Coarsest {
                 dense[(i, i)] = 1.0;
             }
         }
-        Coarsest { lu: dense.partial_piv_lu(), n }
+        let lu = dense.partial_piv_lu();
+        vector_state::clear_upper_halves_everywhere();
+        Coarsest { lu, n }
     }
 
     fn solve(&self, f: &[f64], z: &mut [f64]) {
         use faer::linalg::solvers::Solve;
         let rhs = faer::MatRef::from_column_major_slice(f, self.n, 1);
         let x = self.lu.solve(rhs);
+        vector_state::clear_upper_halves();
         for (i, zi) in z.iter_mut().enumerate() {
             *zi = if x[(i, 0)].is_finite() { x[(i, 0)] } else { 0.0 };
         }

@@ -114,6 +114,7 @@ pub fn solve_bicgstab(
             ..Default::default()
         };
         let result = bicgstab(x.as_mut(), id, pc, a.as_ref(), rhs, params, |_| {}, par, MemStack::new(&mut mem));
+        super::vector_state::clear_upper_halves_everywhere();
         let claimed = match result {
             Ok(info) => {
                 out.iterations += info.iter_count;

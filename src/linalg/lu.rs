@@ -42,6 +42,7 @@ impl SparseLu {
             },
             LuError::Generic(e) => SolveError::Dimension { detail: format!("sparse LU could not run ({e:?}); the problem is too large") },
         })?;
+        super::vector_state::clear_upper_halves_everywhere();
         Ok(SparseLu { lu, n: a.nrows() })
     }
 
@@ -64,6 +65,7 @@ impl SparseLu {
         } else {
             self.lu.solve_in_place(x.as_mat_mut());
         }
+        super::vector_state::clear_upper_halves();
         x.iter().copied().collect()
     }
 

@@ -40,6 +40,7 @@ pub mod scaling;
 pub mod smoother;
 pub mod spgemm;
 pub mod triplets;
+pub mod vector_state;
 
 #[cfg(test)]
 mod tests;

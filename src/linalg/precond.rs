@@ -207,6 +207,8 @@ impl Precond<f64> for BuiltPreconditioner {
         if let BuiltPreconditioner::Ilu0(p) = self {
             return Precond::apply_in_place(&**p, rhs, par, stack);
         }
+        // Called from faer's BiCGSTAB, between its vector kernels.
+        super::vector_state::clear_upper_halves();
         let mut buf = Vec::new();
         for c in 0..rhs.ncols() {
             if let Some(col) = rhs.rb_mut().col_mut(c).try_as_col_major_mut() {

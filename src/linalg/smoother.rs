@@ -55,7 +55,9 @@ fn pseudo_inverse(d: &DMatrix<f64>) -> DMatrix<f64> {
         }
     }
     let m = faer::Mat::<f64>::from_fn(b, b, |i, j| d[(i, j)]);
-    let Ok(svd) = m.svd() else { return DMatrix::zeros(b, b) };
+    let svd = m.svd();
+    super::vector_state::clear_upper_halves();
+    let Ok(svd) = svd else { return DMatrix::zeros(b, b) };
     let (u, s, v) = (svd.U(), svd.S(), svd.V());
     let largest = (0..b).map(|i| s[i]).fold(0.0f64, f64::max);
     let mut out = DMatrix::<f64>::zeros(b, b);

@@ -189,6 +189,7 @@ pub fn shape_functions(
         a
     };
     let w = faer::linalg::solvers::Solve::solve(&sys.partial_piv_lu(), &rhs);
+    crate::linalg::vector_state::clear_upper_halves();
     let amplification = if (0..w.ncols()).all(|j| w.col(j).iter().all(|v| v.is_finite())) {
         norm(&w) * norm(&sys) / norm(&rhs).max(f64::MIN_POSITIVE)
     } else {

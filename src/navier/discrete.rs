@@ -50,6 +50,9 @@ pub struct Discretisation {
     pub widened_supports: usize,
     /// Shape functions over nodes and ghosts.
     pub shapes: Shapes,
+    /// Whether the gradient's shapes were made with those of the rows and outlive the
+    /// assembly ([`keeps_gradient_shapes`]).
+    pub gradient_kept: bool,
     /// Operators computed, with the number of nodes each was computed at.
     pub operators_computed: Vec<(String, usize)>,
     /// Unknown layout over nodes and ghosts.
@@ -91,23 +94,24 @@ impl Discretisation {
         case.check_formulas(&nodes.positions, &on_parts)?;
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
-        let (positions, ghost, supports, (every, needs), widened) = timer.run(SUPPORTS, || {
+        let (positions, ghost, supports, (every, needs, gradient_kept), widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
             // Supports are widened for every shape the run will make, the gradient's
-            // included; a static run makes the gradient's shapes only after its solve
-            // (`restore_gradient_shapes`), explicit dynamics reads them at every snapshot.
+            // included; a static least-squares run makes the gradient's shapes only
+            // after its solve (`restore_gradient_shapes`), RBF-FD makes them with the
+            // rows (`keeps_gradient_shapes`), explicit dynamics reads them at every snapshot.
             let gradient = case.outputs.needs_gradient();
             let every = shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, gradient));
             let (supports, widened) =
                 widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &every);
-            let now = gradient && case.dynamics.is_some();
+            let now = gradient && (case.dynamics.is_some() || keeps_gradient_shapes(&params.approximation.basis));
             let needs = if now == gradient {
                 every.clone()
             } else {
                 shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, now))
             };
             let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
-            Ok(((positions, ghost, supports, (every, needs), widened), note))
+            Ok(((positions, ghost, supports, (every, needs, now), widened), note))
         })?;
         let world = crate::petsc::world();
         let owner = matches!(params.solver.kind, SolverKind::Petsc { .. }).then(|| {
@@ -143,6 +147,7 @@ impl Discretisation {
             ghost_positions,
             supports,
             widened_supports: widened,
+            gradient_kept,
             shapes,
             operators_computed,
             dofs,
@@ -169,21 +174,24 @@ impl Discretisation {
         Ok(out)
     }
 
-    /// Give back the memory of every shape once the rows are assembled: the solve is
-    /// the peak of a large run, and the first derivatives that post-processing needs
-    /// are made again after it ([`Discretisation::restore_gradient_shapes`]; at 1e6
-    /// nodes 0.21 GB less at the peak, for 2-3.5 s more in post-processing: the same
-    /// local solves took 1.2 s before the solve and 2.2-3.7 s after it, cause not
-    /// found; BENCHMARKS.md).
+    /// Give back the memory of the rows' shapes once the rows are assembled: the solve
+    /// is the peak of a large run. The first derivatives that post-processing needs
+    /// are kept when they were made with the rows ([`keeps_gradient_shapes`]), else
+    /// made again after the solve ([`Discretisation::restore_gradient_shapes`]; the
+    /// cantilever at 1e6 nodes: 0.21 GB less at the peak for 1.1 s more in
+    /// post-processing).
     pub fn release_row_shapes(&mut self) {
-        self.shapes.retain(OpSet::EMPTY);
+        self.shapes.retain(if self.gradient_kept { OpSet::D1 } else { OpSet::EMPTY });
     }
 
     /// The first-derivative shapes of `approximation` (the one the discretisation was
     /// built with) at every node this rank owns, ghosts excluded, on the supports in
     /// place: what [`Discretisation::gradients`] reads. The same local solves as the
-    /// first time, so the same weights.
+    /// first time, so the same weights. Nothing to do when they were kept.
     pub fn restore_gradient_shapes(&mut self, approximation: &Approximation) -> Result<(), RunError> {
+        if self.gradient_kept {
+            return Ok(());
+        }
         let positions: Vec<Point> = (0..self.dofs.nodes()).map(|i| self.point(i)).collect();
         let n = self.nodes.len();
         let needs: Vec<OpSet> = (0..positions.len()).map(|i| if i < n && self.owns(i) { OpSet::D1 } else { OpSet::EMPTY }).collect();
@@ -295,6 +303,18 @@ impl Discretisation {
         }
         g
     }
+}
+
+/// Whether a static run makes the gradient's shapes together with the rows' and keeps
+/// them through the solve, instead of making them again after it: yes for RBF-FD,
+/// whose cost is the LU of the `(s + m)`-square local system, shared by every operator
+/// of the node (two more right-hand sides are nearly free, a second round of LUs
+/// doubled the shapes' time: Kirsch, PHS p = 4, 30-node supports, 7.5e4 nodes, 1.1 s
+/// for the rows and 1.05 s for the gradient again); no for least squares, whose
+/// local solves are cheap (1.1 s per 1e6 nodes again) and whose 16 s bytes per node
+/// then stay out of the solve's peak.
+pub fn keeps_gradient_shapes(basis: &Basis) -> bool {
+    matches!(basis, Basis::RbfFd { .. })
 }
 
 /// The node of each of the `count` ghosts (ghost `n + k` belongs to `parents[k]`).
@@ -449,6 +469,38 @@ mod tests {
             let left: Vec<usize> = (0..disc.nodes.boundary.len()).filter(|&i| disc.nodes.positions[i][0] == 0.0).collect();
             assert!(!left.is_empty() && left.iter().all(|&i| disc.ghost[i].is_none() && !disc.has_navier_row(i)));
             assert!((0..disc.nodes.boundary.len()).any(|i| disc.ghost[i].is_some() && disc.has_navier_row(i)));
+        }
+    }
+
+    /// Under RBF-FD the gradient's shapes are made with the rows and survive the
+    /// release, at every node (none at ghosts), with exactly the weights a second round
+    /// of local solves gives; least squares releases them (the test above).
+    #[test]
+    fn rbf_fd_keeps_the_gradient_shapes_it_made_with_the_rows() {
+        let (mut case, mut params) = quadratic_plate(FillKind::Scattered, 0.1);
+        params.approximation = Approximation {
+            basis: Basis::RbfFd { radial: crate::mlsm::Radial::Phs { order: 3 }, degree: 2 },
+            weight: params.approximation.weight,
+            support: 12,
+            ghost_nodes: true,
+        };
+        case.outputs.stress = true;
+        let exact = case.exact_solution();
+        let mut disc = Discretisation::new(&case, &params, exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap();
+        assert!(disc.gradient_kept);
+        disc.release_row_shapes();
+        let n = disc.nodes.len();
+        for i in 0..disc.dofs.nodes() {
+            assert_eq!(disc.shapes.computed_at(i), if i < n { OpSet::D1 } else { OpSet::EMPTY }, "node {i} after the release");
+        }
+        let kept = disc.shapes.clone();
+        disc.restore_gradient_shapes(&params.approximation).unwrap();
+        disc.gradient_kept = false;
+        disc.restore_gradient_shapes(&params.approximation).unwrap();
+        for i in 0..n {
+            for op in OpSet::D1.iter() {
+                assert_eq!(kept.get(i, op), disc.shapes.get(i, op), "node {i}, {op:?}");
+            }
         }
     }
 }
