@@ -164,7 +164,6 @@ pub fn scattered_fill(domain: &Domain, boundary: &[Point], field: &SpacingField,
 }
 
 fn advancing_front(domain: &Domain, boundary: &[Point], field: &SpacingField, seed: u64, mut index: impl Occupancy) -> Vec<Point> {
-    const CANDIDATES: usize = 12;
     let mut front: Vec<Point> = boundary.to_vec();
     for &p in boundary {
         index.insert(p);
@@ -173,25 +172,51 @@ fn advancing_front(domain: &Domain, boundary: &[Point], field: &SpacingField, se
     let mut next = 0usize;
     let mut interior = Vec::new();
     while next < front.len() {
-        let p = front[next];
-        next += 1;
-        let h = field.at(p);
-        let theta0: f64 = rng.random::<f64>() * std::f64::consts::TAU;
-        for k in 0..CANDIDATES {
-            let th = theta0 + std::f64::consts::TAU * k as f64 / CANDIDATES as f64;
-            let c = [p[0] + h * th.cos(), p[1] + h * th.sin()];
-            let hc = if field.is_uniform() { h } else { field.at(c) };
-            // The exclusion radius is the smaller of the two spacings: with `h(c)` alone a
-            // candidate where the spacing grows (h(c) > h(p) = |c - p|) is blocked by its
-            // own parent, and the front dies out in coarsening regions, leaving holes.
-            if domain.signed_distance(c) < -0.3 * hc && !index.any_within(c, hc.min(h) * (1.0 - 1e-9)) {
-                index.insert(c);
-                front.push(c);
-                interior.push(c);
+        // The front points known now, in order: their random rotations drawn in that
+        // order (one each, as one at a time would), their candidates and spacings made
+        // in parallel (a graded spacing is a nearest-target query, 0.2-2 us each, 87 %
+        // of a sequential fill), then accepted one by one in the same order: the same
+        // nodes as a point-by-point front, bit for bit.
+        let batch: Vec<(Point, f64)> = front[next..].iter().map(|&p| (p, rng.random::<f64>() * std::f64::consts::TAU)).collect();
+        next = front.len();
+        let proposals: Vec<(f64, [Candidate; CANDIDATES])> = batch.par_iter().map(|&(p, theta0)| candidates(field, p, theta0)).collect();
+        for (h, candidates) in proposals {
+            for Candidate { position: c, spacing: hc } in candidates {
+                // The exclusion radius is the smaller of the two spacings: with `h(c)` alone a
+                // candidate where the spacing grows (h(c) > h(p) = |c - p|) is blocked by its
+                // own parent, and the front dies out in coarsening regions, leaving holes.
+                if domain.signed_distance(c) < -0.3 * hc && !index.any_within(c, hc.min(h) * (1.0 - 1e-9)) {
+                    index.insert(c);
+                    front.push(c);
+                    interior.push(c);
+                }
             }
         }
     }
     interior
+}
+
+/// Candidates proposed by each front point.
+const CANDIDATES: usize = 12;
+
+/// A proposed node and the spacing there.
+#[derive(Clone, Copy, Default)]
+struct Candidate {
+    position: Point,
+    spacing: f64,
+}
+
+/// `h(p)` and the [`CANDIDATES`] points on the circle of that radius around `p`, the
+/// first at angle `theta0`, each with its own spacing.
+fn candidates(field: &SpacingField, p: Point, theta0: f64) -> (f64, [Candidate; CANDIDATES]) {
+    let h = field.at(p);
+    let mut out = [Candidate::default(); CANDIDATES];
+    for (k, slot) in out.iter_mut().enumerate() {
+        let th = theta0 + std::f64::consts::TAU * k as f64 / CANDIDATES as f64;
+        let c = [p[0] + h * th.cos(), p[1] + h * th.sin()];
+        *slot = Candidate { position: c, spacing: if field.is_uniform() { h } else { field.at(c) } };
+    }
+    (h, out)
 }
 
 /// Relaxation sweeps over the interior nodes `positions[first_interior..]` (module
