@@ -26,11 +26,11 @@ pub struct RankDeficient {
 /// Relative size of the smallest QR pivot below which `W B` counts as rank deficient.
 pub const RANK_TOLERANCE: f64 = 1e-10;
 
-/// Smallest `|R_kk| / max |R_kk|` of an upper triangular `r` (0 for a zero matrix).
-fn diagonal_ratio(r: &DMatrix<f64>) -> f64 {
-    let m = r.ncols().min(r.nrows());
-    let diag_max = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
-    let diag_min = (0..m).map(|k| r[(k, k)].abs()).fold(f64::INFINITY, f64::min);
+/// Smallest `|R_kk| / max |R_kk|` over the diagonal `diag` of an upper triangular `R`
+/// (0 for a zero matrix).
+fn pivot_ratio(diag: impl Iterator<Item = f64> + Clone) -> f64 {
+    let diag_max = diag.clone().map(f64::abs).fold(0.0, f64::max);
+    let diag_min = diag.map(f64::abs).fold(f64::INFINITY, f64::min);
     if diag_max > 0.0 {
         diag_min / diag_max
     } else {
@@ -40,7 +40,8 @@ fn diagonal_ratio(r: &DMatrix<f64>) -> f64 {
 
 /// Smallest relative QR pivot `|R_kk| / max |R_kk|` of `b`: its numerical rank test.
 pub fn rank_ratio(b: &DMatrix<f64>) -> f64 {
-    diagonal_ratio(&b.clone().qr().r())
+    let r = b.clone().qr().r();
+    pivot_ratio((0..r.nrows().min(r.ncols())).map(|k| r[(k, k)]))
 }
 
 /// Shape functions of `ops` at `centre` for the support `points` (the centre first),
@@ -61,6 +62,9 @@ pub fn shape_functions(
     let LocalFrame { dist, radius: s, nearest: h_p, z } = LocalFrame::new(centre, points);
     let local = LocalBasis::new(basis);
     let m = local.len();
+    if n < m {
+        return Err(RankDeficient { ratio: 0.0, basis_size: m });
+    }
     // One buffer: W B (n x m, column-major, then the Householder vectors and R), R's
     // diagonal, the reflections' factors, a row of the basis, W's diagonal, a column.
     let mut work = vec![0.0; n * m + 3 * m + 2 * n];
@@ -76,13 +80,8 @@ pub fn shape_functions(
             wb[k * n + j] = sw[j] * row[k];
         }
     }
-    if n < m {
-        return Err(RankDeficient { ratio: 0.0, basis_size: m });
-    }
     householder_qr(wb, n, m, diag, beta);
-    let diag_max = diag.iter().fold(0.0f64, |a, d| a.max(d.abs()));
-    let diag_min = diag.iter().fold(f64::INFINITY, |a, d| a.min(d.abs()));
-    let ratio = if diag_max > 0.0 { diag_min / diag_max } else { 0.0 };
+    let ratio = pivot_ratio(diag.iter().copied());
     if ratio.is_nan() || ratio <= RANK_TOLERANCE {
         return Err(RankDeficient { ratio, basis_size: m });
     }
