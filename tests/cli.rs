@@ -429,6 +429,11 @@ fn invalid_scenes_exit_2_naming_the_field() {
         ("body_force = exact without [exact]", Some(scene(&[("[exact]\nkind = \"manufactured\"\n", "")])), &["body_force", "[exact]"]),
         ("support < basis size", Some(scene(&[("support = 9", "support = 5")])), &["approximation.support", "6"]),
         ("degree 0", Some(scene(&[("degree = 2", "degree = 0")])), &["approximation.degree"]),
+        (
+            "negative pressure stabilisation",
+            Some(scene(&[("support = 9", "support = 9\npressure_stabilisation = -0.1")])),
+            &["approximation.pressure_stabilisation", ">= 0"],
+        ),
         // Degree 1 has no second derivatives: the Navier rows would vanish (this used
         // to pass validation and end in a singular matrix, exit 3).
         ("degree 1", Some(scene(&[("degree = 2", "degree = 1")])), &["approximation.degree"]),

@@ -351,7 +351,11 @@ fn print_navier(sol: &crate::navier::Solution) {
 fn print_estimate(estimate: &Estimate) {
     match estimate {
         Estimate::Done(e) => {
-            print!("estimated: e_inf(u) ~ {:.2e}  rel_l2(u) ~ {:.2e}", e.norms.e_inf_u, e.norms.rel_l2_u);
+            print!("estimated: e_inf(u) ~ {:.2e}", e.norms.e_inf_u);
+            if let Some(t) = e.largest_u_time {
+                print!(" (largest at t = {t:.3e} s)");
+            }
+            print!("  rel_l2(u) ~ {:.2e}", e.norms.rel_l2_u);
             if let Some(s) = e.norms.e_inf_sigma {
                 print!("  e_inf(sigma) ~ {s:.2e}");
             }

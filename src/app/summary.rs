@@ -263,7 +263,7 @@ pub(super) struct Dynamic<'a> {
     pub report: &'a DynamicReport,
     pub energies: &'a [EnergyRow],
     pub timings: &'a StageTimings,
-    /// The error estimate at the end time.
+    /// The error estimate (Navier: over the history; peridynamics: at the end time).
     pub estimate: &'a navier::Estimate,
 }
 

@@ -85,21 +85,40 @@ pub fn time_grid(stable: f64, params: &DynamicsParams) -> Result<TimeGrid, RunEr
 /// N >= 1`: the N + 1 steps `round(j steps / N)`, j = 0..=N (t = 0, N - 1 evenly spaced
 /// states and the final one), every step when N >= steps. With N = 0: the last step only.
 pub fn is_snapshot(step: usize, steps: usize, params: &DynamicsParams) -> bool {
-    let n = params.snapshots;
     match params.snapshot_every {
         Some(k) => step.is_multiple_of(k) || step == steps,
-        None if n == 0 => step == steps,
-        None if n >= steps => true,
-        None => {
-            // Nearest j; for N < steps the targets are more than one step apart.
-            let round_div = |a: usize, b: usize| (a + b / 2) / b;
-            round_div(round_div(step * n, steps) * steps, n) == step
-        }
+        None => evenly_spaced(step, steps, params.snapshots),
     }
 }
 
+/// Whether `step` is one of the `n + 1` steps `round(j steps / n)`, j = 0..=n (every
+/// step when `n >= steps`, the last one only when `n = 0`).
+fn evenly_spaced(step: usize, steps: usize, n: usize) -> bool {
+    if n == 0 {
+        step == steps
+    } else if n >= steps {
+        true
+    } else {
+        // Nearest j; for N < steps the targets are more than one step apart.
+        let round_div = |a: usize, b: usize| (a + b / 2) / b;
+        round_div(round_div(step * n, steps) * steps, n) == step
+    }
+}
+
+/// States over the history at which a dynamic run's error is estimated (besides none
+/// at t = 0, where every run starts from the same prescribed state).
+pub const HISTORY_SAMPLES: usize = 8;
+
+/// The steps of the error estimate's history, `round(j steps / HISTORY_SAMPLES)` for
+/// j = 1..=[`HISTORY_SAMPLES`] (the steps `snapshots = HISTORY_SAMPLES` writes, the
+/// initial one excepted), the last step included.
+pub fn history_steps(steps: usize) -> Vec<usize> {
+    (1..=steps).filter(|&s| evenly_spaced(s, steps, HISTORY_SAMPLES)).collect()
+}
+
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
-/// `snapshot` at the steps [`is_snapshot`] picks, and recording `energies` (kinetic,
+/// `visit` at the steps [`is_snapshot`] picks and at the steps `also` (sorted; the
+/// callback tells them apart; `(grid, also)` is the schedule), and recording `energies` (kinetic,
 /// elastic, external) at every step (every `ceil(steps / 1000)`-th step for longer runs). The loop is the [`INTEGRATE`] stage
 /// of `timer`, interruptible by Ctrl-C between steps (`pipeline::interrupt`). Returns
 /// the report and the history.
@@ -107,12 +126,13 @@ pub fn integrate(
     system: &dyn SecondOrderSystem,
     energies: &dyn Fn(&State) -> (f64, f64, f64),
     state: &mut State,
-    grid: TimeGrid,
+    (grid, also): (TimeGrid, &[usize]),
     params: &DynamicsParams,
     timer: &mut StageTimer,
-    mut snapshot: impl FnMut(usize, &State) -> Result<(), RunError>,
+    mut visit: impl FnMut(usize, &State) -> Result<(), RunError>,
 ) -> Result<(DynamicReport, Vec<EnergyRow>), RunError> {
     let TimeGrid { dt, steps, stable } = grid;
+    let visited = |step: usize| is_snapshot(step, steps, params) || also.binary_search(&step).is_ok();
     // Energies cost one more pass over the operator: at most about 1000 rows.
     let energy_every = steps.div_ceil(1000).max(1);
     let mut history = Vec::with_capacity(steps.min(1000) + 2);
@@ -121,8 +141,8 @@ pub fn integrate(
         history.push([s.t, k, e, x]);
     };
     record(state, &mut history);
-    if is_snapshot(0, steps, params) {
-        snapshot(0, state)?;
+    if visited(0) {
+        visit(0, state)?;
     }
     let progress = timer.progress();
     let _listening = interrupt::Interruptible::listen();
@@ -142,8 +162,8 @@ pub fn integrate(
             if step % energy_every == 0 || step == steps {
                 record(state, &mut history);
             }
-            if is_snapshot(step, steps, params) {
-                snapshot(step, state)?;
+            if visited(step) {
+                visit(step, state)?;
             }
             progress.advance(step as u64, steps as u64);
         }
@@ -195,6 +215,15 @@ mod tests {
                 let (lo, hi) = (gaps.iter().min().unwrap(), gaps.iter().max().unwrap());
                 assert!(hi - lo <= 1, "steps {steps}, N {n}: gaps {lo}..{hi}");
             }
+        }
+    }
+
+    /// The estimate's history is what `snapshots = HISTORY_SAMPLES` writes after t = 0.
+    #[test]
+    fn history_steps_are_the_snapshots_of_history_samples_without_the_start() {
+        for steps in [1, 5, 8, 9, 100, 1001] {
+            let snapshots = taken(steps, &params(HISTORY_SAMPLES, None));
+            assert_eq!(history_steps(steps), snapshots[1..], "steps {steps}");
         }
     }
 

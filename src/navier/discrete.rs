@@ -57,6 +57,9 @@ pub struct Discretisation {
     pub operators_computed: Vec<(String, usize)>,
     /// Unknown layout over nodes and ghosts.
     pub dofs: DofMap,
+    /// `tau` of the continuity rows' pressure stabilisation (`navier::formulation`;
+    /// used by the displacement-pressure form only).
+    pub pressure_stabilisation: f64,
     /// Owner rank of each node and ghost when the solve is distributed over MPI ranks
     /// (`solver.kind = "petsc"`): a rank computes the shapes and rows of its own nodes
     /// only (a ghost belongs to its node's rank).
@@ -148,6 +151,7 @@ impl Discretisation {
             supports,
             widened_supports: widened,
             gradient_kept,
+            pressure_stabilisation: params.pressure_stabilisation,
             shapes,
             operators_computed,
             dofs,

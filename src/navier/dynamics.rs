@@ -27,7 +27,7 @@ use super::system::System;
 use super::NavierParams;
 use crate::case::{Case, Loads};
 use crate::domain::cells::{cells_inside, nodal_areas};
-use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::dynamics::driver::{history_steps, integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
 use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
@@ -240,8 +240,11 @@ pub struct Simulation {
     pub ghost_nodes: usize,
     /// Dynamic and algebraic unknowns.
     pub unknowns: (usize, usize),
-    /// Error estimate at `end_time` (`estimate.method`; module `estimate`).
+    /// Error estimate over the history (`estimate.method`; module `estimate`).
     pub estimate: Estimate,
+    /// The states kept for an error estimate, `(t, displacement at the nodes)`
+    /// ([`Sampling`]); empty without one.
+    pub history: Vec<(f64, Vec<[f64; 2]>)>,
     /// Stage timings (assembly includes the split and the boundary factorisation).
     pub timings: StageTimings,
 }
@@ -304,8 +307,19 @@ fn energies(
     (kin, el, ext)
 }
 
+/// The states a simulation keeps in [`Simulation::history`].
+#[derive(Debug, Clone, Copy)]
+pub enum Sampling<'a> {
+    /// Those of its own error estimate ([`history_steps`]), when `estimate.method`
+    /// makes one.
+    Estimate,
+    /// The steps whose time is one of these (a run's history, for its reference):
+    /// `k = round(t / dt)`, kept when `k dt` equals `t` to 1e-9 of the end time.
+    Times(&'a [f64]),
+}
+
 /// Run `case` (with `dynamics`) by explicit MLSM elastodynamics, calling `snapshot`
-/// at the snapshot steps. Energies:
+/// at the snapshot steps, and estimate its error over the history. Energies:
 /// `E_kin = sum rho A_i |v_i|^2 / 2`, `E_el = sum A_i sigma : eps / 2`,
 /// `E_ext = -sum A_i f(x_i) . u_i`, `A_i` lumped Delaunay areas.
 pub fn simulate(
@@ -313,6 +327,18 @@ pub fn simulate(
     params: &NavierParams,
     dynamics: &DynamicsParams,
     progress: &dyn Progress,
+    snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
+    simulate_sampled(case, params, dynamics, progress, Sampling::Estimate, snapshot)
+}
+
+/// [`simulate`], keeping the states `sampling` picks.
+pub fn simulate_sampled(
+    case: &Case,
+    params: &NavierParams,
+    dynamics: &DynamicsParams,
+    progress: &dyn Progress,
+    sampling: Sampling,
     mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
     // Energies need the displacement gradient at every node.
@@ -346,14 +372,36 @@ pub fn simulate(
     let nodal = |x: &[f64]| dofs.displacements(x, n);
     let body = (&case.body_force, exact.as_deref());
     let energy = |s: &State| energies(&system, &disc, body, &areas, case.material.lame(), dynamics.density, s);
-    let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
-        let (u, v) = (nodal(&system.expand(s.t, &s.u, false)), nodal(&system.expand(s.t, &s.v, true)));
+    let method = params.estimate.method;
+    let samples: Vec<usize> = match sampling {
+        Sampling::Estimate if method.dynamic_navier_estimates() => history_steps(grid.steps),
+        Sampling::Estimate => Vec::new(),
+        Sampling::Times(times) => {
+            let mut k: Vec<usize> = times
+                .iter()
+                .map(|&t| ((t / grid.dt).round(), t))
+                .filter(|&(k, t)| k >= 1.0 && k <= grid.steps as f64 && (k * grid.dt - t).abs() <= 1e-9 * dynamics.end_time)
+                .map(|(k, _)| k as usize)
+                .collect();
+            k.dedup();
+            k
+        }
+    };
+    let mut history = Vec::with_capacity(samples.len());
+    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples), dynamics, &mut timer, |step, s| {
+        let u = nodal(&system.expand(s.t, &s.u, false));
+        if samples.binary_search(&step).is_ok() {
+            history.push((s.t, u.clone()));
+        }
+        if !is_snapshot(step, grid.steps, dynamics) {
+            return Ok(());
+        }
+        let v = nodal(&system.expand(s.t, &s.v, true));
         snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })
     })?;
     let u = nodal(&system.expand(state.t, &state.u, false));
-    let method = params.estimate.method;
     let estimate = estimate::stage(method, method.dynamic_navier_estimates(), &mut timer, || {
-        estimate::refined_dynamic(case, params, dynamics, report.time_step, points, &u)
+        estimate::refined_dynamic(case, params, dynamics, report.time_step, points, &history)
     })?;
     Ok(Simulation {
         positions: points.clone(),
@@ -364,6 +412,7 @@ pub fn simulate(
         ghost_nodes: disc.ghost_count(),
         unknowns: (system.dynamic.len(), system.algebraic.len()),
         estimate,
+        history,
         timings: timer.finish(),
     })
 }

@@ -25,6 +25,7 @@
 //! `estimated_error_stress`).
 
 use super::discrete::Discretisation;
+use super::dynamics::Sampling;
 use super::solve::assemble_and_solve;
 use super::NavierParams;
 use crate::case::Case;
@@ -117,6 +118,9 @@ pub struct ErrorEstimate {
     pub norms: ErrorNorms,
     /// Node where the displacement indicator is largest.
     pub largest_u_at: Point,
+    /// Time at which it is largest (a dynamic run's estimate over its history).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub largest_u_time: Option<f64>,
     /// Node where the stress indicator is largest (when stress is computed).
     pub largest_sigma_at: Option<Point>,
     /// Wall-clock seconds of the reference (nodes reused; supports, shapes, assembly,
@@ -288,14 +292,29 @@ pub fn higher_degree(
     }))
 }
 
-/// The `refined` estimate of a dynamic run at its end time: the scene integrated again
-/// with the run's approximation on nodes at half the spacing ([`crate::domain::FillParams::scaled`])
-/// and the run's `time_step` divided by `2^ceil(2 / order)` (halved for Verlet and RK4,
-/// quartered for the first-order emu; the reference's own stable step when the finer
-/// nodes need a smaller one), so that both the reference's spatial error (order >= 2
-/// in h) and its time error are at most a quarter of the run's. Its displacement,
-/// interpolated to the run's `positions` by moving least squares, differs from the
-/// run's by 0.75 to 1 times the run's error (space and time together).
+/// A time and the run's and the reference's displacement then.
+type StatePair<'a> = (f64, &'a [[f64; 2]], &'a [[f64; 2]]);
+
+/// The `refined` estimate of a dynamic run over its history: the scene integrated
+/// again with the run's approximation on nodes at half the spacing
+/// ([`crate::domain::FillParams::scaled`]) and the run's `time_step` divided by
+/// `2^ceil(2 / order)` (halved for Verlet and RK4, quartered for the first-order emu;
+/// the reference's own stable step when the finer nodes need a smaller one), so that
+/// both the reference's spatial error (order >= 2 in h) and its time error are at most
+/// a quarter of the run's. At each of the run's `history` states
+/// ([`crate::dynamics::driver::history_steps`]) that the reference also reaches (every
+/// one unless the reference had to take its own stable step), the reference's
+/// displacement is interpolated to the run's `positions` by moving least squares; the
+/// estimate is the space-time difference over those states,
+///
+/// ```text
+/// est e_inf(u)  = max_{t,i,c} |u - u_ref| / max_{t,i,c} |u_ref|
+/// est rel_l2(u) = sqrt(sum_{t,i} |u - u_ref|^2 / sum_{t,i} |u_ref|^2)
+/// ```
+///
+/// which is 0.75 to 1 times the run's error (space and time together). Without a
+/// common state the final states are compared, and the description says at which
+/// times. The per-node indicator is the largest over the states.
 ///
 /// Why not a higher degree on the same nodes as for static runs: the PHS stencils
 /// of the reference have growing modes in explicit elastodynamics (both shipped
@@ -307,15 +326,18 @@ pub fn refined_dynamic(
     dynamics: &DynamicsParams,
     time_step: f64,
     positions: &[Point],
-    displacement: &[[f64; 2]],
+    history: &[(f64, Vec<[f64; 2]>)],
 ) -> Estimate {
     let t0 = Instant::now();
     let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::Refined.name(), why);
+    let Some(last) = history.last() else { return unavailable("the run kept no state to compare".into()) };
     let estimate = EstimateParams { method: EstimateMethod::None, ..params.estimate };
     let reference_params = NavierParams { fill: params.fill.scaled(0.5), keep_system: false, estimate, ..params.clone() };
     let divisor = f64::from(1u32 << 2u32.div_ceil(dynamics.integrator.order()));
     let fine = DynamicsParams { time_step: Some(time_step / divisor), ..dynamics.clone() };
-    let run = |d: &DynamicsParams| super::dynamics::simulate(case, &reference_params, d, &Silent, |_| Ok(()));
+    let times: Vec<f64> = history.iter().map(|h| h.0).collect();
+    let run =
+        |d: &DynamicsParams| super::dynamics::simulate_sampled(case, &reference_params, d, &Silent, Sampling::Times(&times), |_| Ok(()));
     let simulated = match run(&fine) {
         Err(RunError::UnstableTimeStep { .. }) => run(&DynamicsParams { time_step: None, ..fine.clone() }),
         other => other,
@@ -324,13 +346,30 @@ pub fn refined_dynamic(
         Ok(s) => s,
         Err(e) => return unavailable(format!("the reference at half the spacing failed: {e}")),
     };
-    let u_ref = match mls_values(&sim.positions, &sim.u, positions) {
-        Ok(u) => u,
-        Err(e) => return unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
-    };
+    let same_time = |a: f64, b: f64| (a - b).abs() <= 1e-9 * dynamics.end_time;
+    let mut pairs: Vec<StatePair> = history
+        .iter()
+        .filter_map(|(t, u)| sim.history.iter().find(|(r, _)| same_time(*r, *t)).map(|(_, r)| (*t, u.as_slice(), r.as_slice())))
+        .collect();
     let r = &sim.report;
+    let reference_end = r.time_step * r.steps as f64;
+    let compared = if pairs.is_empty() {
+        pairs.push((last.0, &last.1, &sim.u));
+        format!("the final states only (t = {:.4e} s and {reference_end:.4e} s: the reference's steps miss the run's)", last.0)
+    } else {
+        format!("{} states from t = {:.4e} to {:.4e} s", pairs.len(), pairs[0].0, pairs[pairs.len() - 1].0)
+    };
+    let mut u_ref = Vec::with_capacity(pairs.len() * positions.len());
+    for (_, _, r) in &pairs {
+        match mls_values(&sim.positions, r, positions) {
+            Ok(u) => u_ref.extend(u),
+            Err(e) => return unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
+        }
+    }
+    let u: Vec<[f64; 2]> = pairs.iter().flat_map(|(_, u, _)| u.iter().copied()).collect();
+    let at: Vec<Point> = pairs.iter().flat_map(|_| positions.iter().copied()).collect();
     let description = format!(
-        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({})",
+        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({}); compared at {compared}",
         sim.positions.len(),
         reference_params.fill.spacing,
         r.steps,
@@ -338,10 +377,15 @@ pub fn refined_dynamic(
         dynamics.integrator.name()
     );
     let reference = ExactFields { displacement: u_ref, stress: None };
+    let mut e = ErrorEstimate::between(EstimateMethod::Refined, description, &at, &u, None, &reference, t0);
+    // Over the states: the time of the largest difference, and each node's largest.
+    let n = positions.len();
+    e.largest_u_time = Some(pairs[argmax(&e.per_node_u) / n].0);
+    e.per_node_u = (0..n).map(|i| e.per_node_u.iter().skip(i).step_by(n).fold(0.0, |m: f64, &v| m.max(v))).collect();
     Estimate::Done(Box::new(ErrorEstimate {
         reference_degree: params.approximation.basis.polynomial_degree(),
         reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
-        ..ErrorEstimate::between(EstimateMethod::Refined, description, positions, displacement, None, &reference, t0)
+        ..e
     }))
 }
 
@@ -369,6 +413,7 @@ impl ErrorEstimate {
             reference_estimated_e_inf_u: None,
             norms,
             largest_u_at: largest(&per_node_u),
+            largest_u_time: None,
             largest_sigma_at: per_node_sigma.as_deref().map(largest),
             seconds: t0.elapsed().as_secs_f64(),
             reference_unknowns: 0,

@@ -22,6 +22,25 @@
 //!   equation written at the ghost itself (an extrapolating stencil) gave 5x larger
 //!   errors at `nu = 1/2` (Lame, PHS p = 4, h = 2.5e-4: e_inf(u) 1.3e-3 against
 //!   2.6e-4; README, "Near-incompressible solids").
+//!
+//! **Pressure stabilisation.** Equal-order collocation has no inf-sup guarantee: at
+//! `nu = 1/2` the pressure near the Lame ring's bore oscillated (standard deviation
+//! 5x its mean error there) and e_inf(sigma) was 3.5x that of `nu = 0.3`. The
+//! continuity row of every node with second-derivative shapes (interior nodes and
+//! nodes with a ghost) gets a consistent pressure-Laplacian term, the strong-form
+//! analogue of pressure-stabilised Petrov-Galerkin:
+//!
+//!   ```text
+//!   a div u + b p / mu - tau h^2 ((a + 2b) lap p - a div f) / mu = 0
+//!   ```
+//!
+//! `h` the node's local spacing, `tau` = `approximation.pressure_stabilisation`
+//! ([`PRESSURE_STABILISATION`]). The divergence of the momentum equation with
+//! `div u = -(b / a) p / mu` gives `(a + 2b) lap p = a div f` for the exact solution
+//! of a homogeneous solid, so the term vanishes on it and the order is kept; `div f`
+//! is taken with the node's gradient shapes over the body force at its support (zero
+//! for a constant body force). It damps the pressure's oscillating modes, which the
+//! continuity rows alone do not see.
 
 use crate::choice::choice;
 use crate::elasticity::dofs::Unknowns;
@@ -39,6 +58,13 @@ choice! {
 /// Poisson's ratio from which `auto` takes the displacement-pressure form in plane
 /// strain (README, "Near-incompressible solids": where the two forms' errors cross).
 pub const AUTO_FROM_POISSON: f64 = 0.45;
+
+/// Default `tau` of the continuity rows' pressure stabilisation (module docs), in
+/// squared local spacings. Measured (PHS p = 4, BENCHMARKS.md): 0.03 to 1 all bring
+/// Lame at nu = 0.5 to the errors of nu = 0.3; over 5 levels of manufactured_traction
+/// at nu = 0.4999, 0.05, 0.1, 0.2 and 1 converge cleanly and 0.3 has one 6x step up;
+/// 0.1 is also clean over 5 levels of Lame.
+pub const PRESSURE_STABILISATION: f64 = 0.1;
 
 impl Formulation {
     /// The unknowns this choice solves for with `material` (`auto` resolved).

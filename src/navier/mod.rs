@@ -52,6 +52,9 @@ pub struct NavierParams {
     pub approximation: Approximation,
     /// Unknowns: displacement, or displacement and pressure.
     pub formulation: Formulation,
+    /// `tau` of the continuity rows' pressure stabilisation in the displacement-pressure
+    /// form (`navier::formulation`; 0: none).
+    pub pressure_stabilisation: f64,
     /// Linear solver.
     pub solver: SolverParams,
     /// The operator the multigrid preconditioner is built on.
@@ -104,6 +107,7 @@ pub(crate) mod test_case {
                 ghost_nodes: true,
             },
             formulation: super::Formulation::Displacement,
+            pressure_stabilisation: super::formulation::PRESSURE_STABILISATION,
             solver: SolverParams::default(),
             multigrid: super::low_order::MultigridOperator::Auto,
             estimate: Default::default(),

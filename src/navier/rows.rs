@@ -12,7 +12,9 @@
 //!
 //! In the displacement-pressure form (`navier::formulation`) the displacement terms
 //! are those above with `lambda = 0`, the Navier rows gain `-grad p`, the traction rows
-//! `-p n`, and every node and ghost a continuity row `a div u + b p / mu = 0`. The
+//! `-p n`, and every node and ghost a continuity row `a div u + b p / mu = 0`
+//! (stabilised by `- tau h^2 ((a + 2b) lap p - a div f) / mu` where the node has
+//! second-derivative shapes, `navier::formulation`). The
 //! pressure unknown is `p / mu` (a strain, like the displacement gradient), so that
 //! the columns of `u` and `p` have comparable scales whatever the units.
 
@@ -37,6 +39,10 @@ pub struct RowWriter<'a> {
     pub supports: &'a Supports,
     /// Shape functions.
     pub shapes: &'a Shapes,
+    /// `tau` of the continuity rows' stabilisation (`navier::formulation`; 0: none).
+    pub stabilisation: f64,
+    /// Local spacing `h` of each node, for that stabilisation.
+    pub local_spacing: &'a [f64],
 }
 
 impl RowWriter<'_> {
@@ -101,8 +107,10 @@ impl RowWriter<'_> {
         }
     }
 
-    /// Continuity row of the displacement-pressure form at node `i`,
-    /// `a mu div u + b p = 0` divided by `mu`, written in its own pressure row.
+    /// Continuity row of the displacement-pressure form at node `i`, written in its
+    /// own pressure row: `a div u + b p / mu = 0`, stabilised where the node has
+    /// second-derivative shapes by `- tau h^2 (a + 2b) lap p / mu` (its right-hand side
+    /// `- tau h^2 a div f / mu`, [`continuity_load`]; `navier::formulation`).
     pub fn continuity(&self, i: usize, out: &mut Entries) {
         let (a, b) = self.pressure_weights;
         let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
@@ -112,6 +120,38 @@ impl RowWriter<'_> {
             out.push(stored(r, self.dofs.dof(j as usize, 1), a * dy[k]));
         }
         out.push(stored(r, r, b));
+        if let Some(w) = self.stabilisation(i) {
+            let (xx, yy) = (self.shapes.get(i, Op::Dxx), self.shapes.get(i, Op::Dyy));
+            for (k, &j) in self.supports.of(i).iter().enumerate() {
+                out.push(stored(r, self.dofs.dof(j as usize, PRESSURE), -w * (a + 2.0 * b) * (xx[k] + yy[k])));
+            }
+        }
+    }
+
+    /// `tau h^2` of node `i`'s continuity row, where it is stabilised (the node has
+    /// second-derivative shapes: interior nodes and nodes with a ghost).
+    pub fn stabilisation(&self, i: usize) -> Option<f64> {
+        (self.stabilisation > 0.0 && self.shapes.computed_at(i).contains(Op::Dxx))
+            .then(|| self.stabilisation * self.local_spacing[i].powi(2))
+    }
+
+    /// Right-hand side of node `i`'s stabilised continuity row, `- tau h^2 a div f / mu`,
+    /// with `div f` from the gradient shapes over the body force `f_at(j)` at the
+    /// support's nodes; zero where the row is not stabilised.
+    pub fn continuity_load(&self, i: usize, f_at: impl Fn(usize) -> [f64; 2]) -> f64 {
+        let Some(w) = self.stabilisation(i) else { return 0.0 };
+        let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
+        let div_f: f64 = self
+            .supports
+            .of(i)
+            .iter()
+            .enumerate()
+            .map(|(k, &j)| {
+                let f = f_at(j as usize);
+                dx[k] * f[0] + dy[k] * f[1]
+            })
+            .sum();
+        -w * self.pressure_weights.0 * div_f / self.lame.mu
     }
 
     /// Normal derivative of the continuity row at boundary node `i` with outward
@@ -140,6 +180,7 @@ impl RowWriter<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::elasticity::dofs::Unknowns;
     use crate::mlsm::{compute_shapes, Approximation, Basis, OpSet, Weight};
 
     /// A 7 x 7 lattice of spacing 0.1 (node 24 at the centre), supports of 13 nodes and
@@ -175,7 +216,15 @@ mod tests {
         let (positions, supports, shapes) = lattice();
         let lame = Lame { lambda: 2.0, mu: 0.7 };
         let dofs = DofMap::displacement_only(positions.len());
-        let writer = RowWriter { dofs, lame, pressure_weights: (0.0, 1.0), supports: &supports, shapes: &shapes };
+        let writer = RowWriter {
+            dofs,
+            lame,
+            pressure_weights: (0.0, 1.0),
+            supports: &supports,
+            shapes: &shapes,
+            stabilisation: 0.0,
+            local_spacing: &[],
+        };
         // u = x + 0.5 x^2 - xy + 2 y^2, v = -y + 3 x y + 0.25 x^2.
         let field =
             |p: [f64; 2]| [p[0] + 0.5 * p[0] * p[0] - p[0] * p[1] + 2.0 * p[1] * p[1], -p[1] + 3.0 * p[0] * p[1] + 0.25 * p[0] * p[0]];
@@ -209,5 +258,44 @@ mod tests {
         let mut e = Entries::new();
         writer.displacement(3, 3, 1, &mut e);
         assert_eq!(e, vec![stored(dofs.dof(3, 1), dofs.dof(3, 1), 1.0)]);
+    }
+
+    /// The stabilised continuity row on a quadratic `u` and pressure unknown `q = p / mu`
+    /// is `a div u + b q - tau h^2 (a + 2b) lap q`, its right-hand side
+    /// `- tau h^2 a div f / mu` (exact for quadratics and a linear `f` on degree-2
+    /// shapes, up to the local solves' round-off, 1e-9 as above); with `tau = 0` both
+    /// terms are absent.
+    #[test]
+    fn the_stabilised_continuity_row_adds_the_pressure_laplacian() {
+        let (positions, supports, shapes) = lattice();
+        let (lame, (a, b), tau, h) = (Lame { lambda: 2.0, mu: 0.7 }, (0.6, 0.4), 0.3, 0.1);
+        let dofs = DofMap::new(positions.len(), Unknowns::DisplacementPressure);
+        let spacing = vec![h; positions.len()];
+        let writer = |stabilisation| RowWriter {
+            dofs,
+            lame,
+            pressure_weights: (a, b),
+            supports: &supports,
+            shapes: &shapes,
+            stabilisation,
+            local_spacing: &spacing,
+        };
+        // u as above (div u = 4x - y), q = 1 + x + 2y + 0.5 x^2 + y^2 (lap q = 3), at node 24 = (0, 0).
+        let mut x = dofs.from_displacements(|i| {
+            let p = positions[i];
+            [p[0] + 0.5 * p[0] * p[0] - p[0] * p[1] + 2.0 * p[1] * p[1], -p[1] + 3.0 * p[0] * p[1] + 0.25 * p[0] * p[0]]
+        });
+        for (i, p) in positions.iter().enumerate() {
+            x[dofs.dof(i, PRESSURE)] = 1.0 + p[0] + 2.0 * p[1] + 0.5 * p[0] * p[0] + p[1] * p[1];
+        }
+        let f = |j: usize| [2.0 * positions[j][0] + positions[j][1], positions[j][0] - 3.0 * positions[j][1]]; // div f = -1
+        for (stabilisation, row, load) in [(tau, b - tau * h * h * (a + 2.0 * b) * 3.0, tau * h * h * a / lame.mu), (0.0, b, 0.0)] {
+            let mut e = Entries::new();
+            writer(stabilisation).continuity(24, &mut e);
+            let got = apply(&e, &x)[&dofs.dof(24, PRESSURE)];
+            assert!((got - row).abs() < 1e-9, "tau = {stabilisation}: row {got} against {row}");
+            let got = writer(stabilisation).continuity_load(24, f);
+            assert!((got - load).abs() < 1e-9, "tau = {stabilisation}: load {got} against {load}");
+        }
     }
 }

@@ -13,7 +13,8 @@ use super::discrete::Discretisation;
 use super::equations::{resolve, ComponentEquation};
 use super::rows::{Entries, RowWriter};
 use crate::case::{Case, Loads};
-use crate::elasticity::dofs::Unknowns;
+use crate::elasticity::conditions::Value;
+use crate::elasticity::dofs::{Unknowns, PRESSURE};
 use crate::exact::{self, ExactSolution};
 use crate::linalg::row_assembly::{RowAssembler, RowFragment};
 use crate::linalg::Csr;
@@ -27,11 +28,11 @@ const BLOCK_NODES: usize = 4096;
 /// threads, with 13-node supports, about 30 MB of entries in flight).
 const WAVE_BLOCKS_PER_THREAD: usize = 4;
 
-/// The right-hand sides `(row, value)` of one node: at most two boundary rows and
-/// two Navier rows (no allocation per node).
+/// The right-hand sides `(row, value)` of one node: at most two boundary rows, two
+/// Navier rows and a continuity row (no allocation per node).
 #[derive(Debug, Clone, Copy, Default)]
 struct NodeLoads {
-    entries: [(usize, f64); 4],
+    entries: [(usize, f64); 5],
     len: usize,
 }
 
@@ -53,6 +54,20 @@ pub struct System<'a> {
 }
 
 impl System<'_> {
+    /// The writer of this system's rows.
+    fn writer(&self) -> RowWriter<'_> {
+        let material = &self.case.material;
+        RowWriter {
+            dofs: self.disc.dofs,
+            lame: material.lame(),
+            pressure_weights: material.pressure_weights(),
+            supports: &self.disc.supports,
+            shapes: &self.disc.shapes,
+            stabilisation: self.disc.pressure_stabilisation,
+            local_spacing: &self.disc.nodes.local_spacing,
+        }
+    }
+
     /// Append the coefficients of the rows of node `i` to `e` (module docs).
     fn node_rows(&self, writer: &RowWriter, i: usize, e: &mut Entries) {
         let disc = self.disc;
@@ -78,8 +93,9 @@ impl System<'_> {
 
     /// Right-hand sides `(row, value)` of node `i` under `loads`: the prescribed
     /// value of each boundary row (in the rows of its ghost, if any), `-f` in the
-    /// Navier rows (`L u = -f`); the continuity rows have none (zero).
-    fn node_loads(&self, loads: &Loads, i: usize) -> NodeLoads {
+    /// Navier rows (`L u = -f`); the continuity row that of its stabilisation
+    /// ([`RowWriter::continuity_load`]), zero under a constant body force.
+    fn node_loads(&self, writer: &RowWriter, loads: &Loads, i: usize) -> NodeLoads {
         let (disc, dofs) = (self.disc, self.disc.dofs);
         let mut rhs = NodeLoads::default();
         if disc.nodes.is_boundary(i) {
@@ -99,6 +115,13 @@ impl System<'_> {
                 }
             }
         }
+        if dofs.unknowns() == Unknowns::DisplacementPressure && !matches!(loads.body_force, Value::Constant(_)) {
+            let f_at = |j: usize| {
+                let p = if j < disc.nodes.len() { disc.nodes.positions[j] } else { disc.ghost_positions[j - disc.nodes.len()] };
+                exact::value(&loads.body_force, p, self.exact, |e| e.body_force(p))
+            };
+            rhs.push(dofs.dof(i, PRESSURE), writer.continuity_load(i, f_at));
+        }
         rhs
     }
 
@@ -115,7 +138,8 @@ impl System<'_> {
     /// Overwrite the right-hand sides of the rows of `nodes` in `rhs` with those of
     /// `loads` (a time-dependent run rewrites only the nodes whose loads vary).
     pub fn update_right_hand_side(&self, loads: &Loads, nodes: &[usize], rhs: &mut [f64]) -> Result<(), RunError> {
-        let per_node: Vec<NodeLoads> = nodes.par_iter().map(|&i| self.node_loads(loads, i)).collect();
+        let writer = self.writer();
+        let per_node: Vec<NodeLoads> = nodes.par_iter().map(|&i| self.node_loads(&writer, loads, i)).collect();
         for (&i, r) in nodes.iter().zip(&per_node) {
             let r = &r.entries[..r.len];
             if r.iter().any(|v| !v.1.is_finite()) {
@@ -139,14 +163,7 @@ impl System<'_> {
     /// aside and appended last. The peak is the matrix plus one wave.
     pub fn assemble(&self) -> Result<(Csr, Vec<f64>), RunError> {
         let (disc, dofs) = (self.disc, self.disc.dofs);
-        let material = &self.case.material;
-        let writer = RowWriter {
-            dofs,
-            lame: material.lame(),
-            pressure_weights: material.pressure_weights(),
-            supports: &disc.supports,
-            shapes: &disc.shapes,
-        };
+        let writer = self.writer();
         let n = disc.nodes.len();
         let node_rows_end = dofs.dof(n, 0);
         let mut rows = RowAssembler::new(dofs.len(), dofs.len());

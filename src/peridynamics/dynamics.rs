@@ -277,7 +277,7 @@ pub fn simulate(
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
     let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
     let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
-    let (report, energies) = integrate(&system, &energy, &mut state, grid, dynamics, &mut timer, |step, s| {
+    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &[]), dynamics, &mut timer, |step, s| {
         snapshot(Snapshot { step, t: s.t, positions: free, u: &nodal(&s.u), v: &nodal(&s.v) })
     })?;
     let throughput =

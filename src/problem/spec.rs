@@ -270,6 +270,8 @@ pub struct ApproximationSpec {
     pub ghost_nodes: Option<bool>,
     /// `auto`, `displacement` or `displacement-pressure`.
     pub formulation: Option<String>,
+    /// `tau` of the displacement-pressure form's continuity stabilisation.
+    pub pressure_stabilisation: Option<f64>,
 }
 
 /// `[material]`.

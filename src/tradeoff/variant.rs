@@ -27,7 +27,7 @@ pub struct Edits(pub Vec<(String, Value)>);
 
 impl Edits {
     /// The changes that make the scene `p` use `setting` (the approximation table is
-    /// replaced, its `formulation` and `ghost_nodes` kept) and the spacing function
+    /// replaced, its `formulation`, `ghost_nodes` and `pressure_stabilisation` kept) and the spacing function
     /// scaled to the far-field spacing `h` (a graded refinement scaled with it).
     pub fn of(p: &Problem, setting: Option<&Setting>, h: f64) -> Result<Edits, ProblemError> {
         let mut edits = Vec::new();
@@ -59,7 +59,7 @@ impl Edits {
         scene.remove("preset");
         if self.0.iter().any(|(k, _)| k == "approximation.basis") {
             if let Some(Value::Table(a)) = scene.get_mut("approximation") {
-                a.retain(|k, _| k == "formulation" || k == "ghost_nodes");
+                a.retain(|k, _| ["formulation", "ghost_nodes", "pressure_stabilisation"].contains(&k));
             }
         }
         for (key, value) in &self.0 {

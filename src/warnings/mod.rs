@@ -18,7 +18,7 @@
 //!   condition estimate `κ₁ ε` above [`DIGITS_LIMIT`] (fewer than about 6 digits
 //!   certain), and unknowns that underflowed.
 //!
-//! Dynamic runs ([`dynamic`]): the `refined` estimate at the end time (Navier) above
+//! Dynamic runs ([`dynamic`]): the `refined` estimate over the history (Navier) above
 //! the threshold, the drift of the total energy above the threshold.
 //!
 //! Peridynamic runs ([`peridynamics_static`], [`dynamic`]): `m < 3`; the `local-model`

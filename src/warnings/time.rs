@@ -1,4 +1,4 @@
-//! The checks of a time-dependent run: its estimate at the end time, the drift of its
+//! The checks of a time-dependent run: its estimate over the history, the drift of its
 //! total energy, and each load formula in `t` against the time step.
 
 use super::peridynamics::estimate_of_peridynamics;
@@ -43,10 +43,14 @@ pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool, estimat
                 checks.warnings.push(Warning {
                     check: "estimate",
                     message: format!(
-                        "estimated error at the end time above the threshold {threshold:.0e}: e_inf(u) ~ {:.1e} (largest at \
-                         ({:.4e}, {:.4e}); space and time, against {}); try a smaller nodes.spacing, a higher \
-                         approximation.degree or a smaller dynamics.time_step",
-                        e.norms.e_inf_u, e.largest_u_at[0], e.largest_u_at[1], e.reference
+                        "estimated error over the history above the threshold {threshold:.0e}: e_inf(u) ~ {:.1e} (largest \
+                         at ({:.4e}, {:.4e}), t = {:.4e} s; space and time, against {}); try a smaller nodes.spacing, a \
+                         higher approximation.degree or a smaller dynamics.time_step",
+                        e.norms.e_inf_u,
+                        e.largest_u_at[0],
+                        e.largest_u_at[1],
+                        e.largest_u_time.unwrap_or(f64::NAN),
+                        e.reference
                     ),
                 });
             }

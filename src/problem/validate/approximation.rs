@@ -7,6 +7,7 @@ use crate::domain::{Domain, FillKind, FillParams, Primitive, Refinement};
 use crate::elasticity::dofs::Unknowns;
 use crate::elasticity::material::Material;
 use crate::mlsm::{default_rbf_fd_support, default_support, Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
+use crate::navier::formulation::PRESSURE_STABILISATION;
 use crate::navier::Formulation;
 use crate::problem::spec::{ApproximationSpec, NodesSpec, RefineSpec};
 use crate::problem::ProblemError;
@@ -243,6 +244,18 @@ pub(super) fn check_node_count(
         );
     }
     Ok(())
+}
+
+/// `approximation.pressure_stabilisation`: `tau >= 0` (0 turns the stabilisation
+/// off), default [`PRESSURE_STABILISATION`] (`navier::formulation`).
+pub(super) fn pressure_stabilisation(c: &Ctx, s: &ApproximationSpec) -> Result<f64, ProblemError> {
+    match s.pressure_stabilisation {
+        None => Ok(PRESSURE_STABILISATION),
+        Some(tau) if tau.is_finite() && tau >= 0.0 => Ok(tau),
+        Some(tau) => {
+            c.err("approximation.pressure_stabilisation", format!("{tau} is not a finite number >= 0 (0 turns the stabilisation off)"))
+        }
+    }
 }
 
 /// `approximation.formulation`, resolved against the material and the run:

@@ -171,6 +171,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
         notes.extend(peridynamics::snap_poisson(&mut material));
     }
     let formulation = approximation::formulation(&c, &spec.approximation, &material, dynamic)?;
+    let pressure_stabilisation = approximation::pressure_stabilisation(&c, &spec.approximation)?;
     let exact = spec.exact.as_ref().map(|e| exact::exact(&c, e, material)).transpose()?;
     let body_force = exact::body_force(&c, spec.body_force.as_ref(), exact.as_ref())?;
     let dynamics = spec.dynamics.as_ref().map(|d| dynamics::dynamics(&c, d)).transpose()?;
@@ -203,7 +204,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
         name,
         source: path.to_path_buf(),
         case: Case { domain, material, body_force, conditions, exact, outputs, dynamics, probes },
-        navier: NavierParams { fill, approximation, formulation, solver, multigrid, estimate, keep_system: false },
+        navier: NavierParams { fill, approximation, formulation, pressure_stabilisation, solver, multigrid, estimate, keep_system: false },
         peridynamics,
         model,
         notes,
