@@ -918,6 +918,27 @@ fn dynamic_rbf_fd_run_with_ghosts_keeps_a_symmetry_edge_fixed() {
     assert!(worst <= 1e-10 * largest, "bottom u_y up to {worst:.1e} of max |u| {largest:.1e}");
 }
 
+/// A dynamic MLSM run estimates its error over its history: `summary.json` says when
+/// the difference is largest and over how many states, and `solution.vtu` carries each
+/// node's largest difference over them, whose maximum is the estimated e_inf(u).
+#[test]
+fn a_dynamic_navier_run_estimates_its_error_over_the_history() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "pulse.toml", &shipped("plate_pulse"));
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "pulse.toml", "--model", "navier", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    let est = &s["estimated_errors"];
+    assert_eq!(est["method"], "refined", "{est}");
+    assert!(est["reference"].as_str().unwrap().contains("compared at 8 states"), "{est}");
+    let (t, end) = (num(est, "largest_u_time"), num(&s["integration"], "time_step") * count(&s["integration"], "steps") as f64);
+    assert!(t > 0.0 && t <= end * (1.0 + 1e-12), "largest at t = {t}, end {end}");
+    let vtu = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
+    let largest = vtu.fields["estimated_error"].1.iter().fold(0.0f64, |m, v| m.max(*v));
+    assert!((largest - num(est, "e_inf_u")).abs() <= 1e-12 * largest, "{largest} against {est}");
+}
+
 #[test]
 fn dynamic_run_writes_series_energies_and_summary() {
     let tmp = TempDir::new().unwrap();
@@ -943,6 +964,9 @@ fn dynamic_run_writes_series_energies_and_summary() {
     let first = mlsm::output::read_vtu(&res.join(files[0])).unwrap();
     let last = mlsm::output::read_vtu(&res.join(files[files.len() - 1])).unwrap();
     assert_ne!(first.fields["velocity"].1, last.fields["velocity"].1);
+    // The final solution carries the estimate's per-node indicator, the snapshots not.
+    let solution = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
+    assert!(solution.fields.contains_key("estimated_error") && !last.fields.contains_key("estimated_error"));
     let csv = std::fs::read_to_string(res.join("energies.csv")).unwrap();
     assert!(csv.starts_with("t,kinetic,elastic,external,total\n"));
     assert_eq!(csv.lines().count() as u64, steps + 2, "one row per step plus the initial state and the header");

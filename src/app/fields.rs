@@ -100,7 +100,7 @@ pub(super) fn navier_fields(case: &Case, sol: &Solution) -> Vec<PointField> {
 
 /// The per-node indicators of an estimate: `estimated_error` (displacement) and
 /// `estimated_error_stress`.
-fn estimate_fields(estimate: &Estimate) -> Vec<PointField> {
+pub(super) fn estimate_fields(estimate: &Estimate) -> Vec<PointField> {
     let mut f = Vec::new();
     if let Some(e) = estimate.done() {
         f.push(scalar("estimated_error", e.per_node_u.iter().copied()));

@@ -185,7 +185,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         }
         Outcome::NavierDynamic(mut sim) => {
             let seconds = clock();
-            series.finish(&sim.energies, &sim.positions, &sim.u, &sim.v)?;
+            series.finish(&sim.energies, &sim.positions, (&sim.u, &sim.v), &sim.estimate)?;
             sim.timings.record(OUTPUT, seconds());
             let dynamic = Dynamic {
                 nodes: sim.positions.len(),
@@ -197,11 +197,11 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
-            let seconds = clock();
             let nodes = &sim.discretisation.nodes;
-            series.finish(&sim.energies, &nodes.positions[..nodes.free], &sim.u, &sim.v)?;
-            sim.timings.record(OUTPUT, seconds());
             let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], &sim.u, None, &mut sim.timings, term);
+            let seconds = clock();
+            series.finish(&sim.energies, &nodes.positions[..nodes.free], (&sim.u, &sim.v), &estimate)?;
+            sim.timings.record(OUTPUT, seconds());
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }

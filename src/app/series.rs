@@ -4,11 +4,12 @@
 //! which replaces the earlier results only when the run finishes: a run that fails or
 //! is interrupted leaves no partial series and the earlier results intact.
 
-use super::fields::vector;
+use super::fields::{estimate_fields, vector};
 use super::AppError;
 use crate::domain::{cells::cells_inside, Domain};
 use crate::dynamics::driver::{EnergyRow, Snapshot};
-use crate::output::{self, OutputError};
+use crate::navier::Estimate;
+use crate::output::{self, OutputError, PointField};
 use std::path::{Path, PathBuf};
 
 /// Folder of the snapshots, inside the run's folder.
@@ -28,10 +29,17 @@ impl<'a> Series<'a> {
         Series { dir: dir.to_path_buf(), domain, triangles: None, entries: Vec::new() }
     }
 
-    fn write(&mut self, path: &Path, points: &[[f64; 2]], u: &[[f64; 2]], v: &[[f64; 2]]) -> Result<(), OutputError> {
+    fn write(
+        &mut self,
+        path: &Path,
+        points: &[[f64; 2]],
+        (u, v): (&[[f64; 2]], &[[f64; 2]]),
+        more: Vec<PointField>,
+    ) -> Result<(), OutputError> {
         let domain = self.domain;
         let tris = self.triangles.get_or_insert_with(|| cells_inside(domain, points));
-        let fields = vec![vector("displacement", u.iter().copied()), vector("velocity", v.iter().copied())];
+        let mut fields = vec![vector("displacement", u.iter().copied()), vector("velocity", v.iter().copied())];
+        fields.extend(more);
         output::write_vtu(path, points, tris, &fields)
     }
 
@@ -42,16 +50,23 @@ impl<'a> Series<'a> {
             std::fs::create_dir(&folder).map_err(|e| OutputError::io(&folder, e))?;
         }
         let file = format!("step_{:06}.vtu", s.step);
-        self.write(&folder.join(&file), s.positions, s.u, s.v)?;
+        self.write(&folder.join(&file), s.positions, (s.u, s.v), Vec::new())?;
         self.entries.push((s.t, format!("{SNAPSHOTS}/{file}")));
         Ok(())
     }
 
-    /// `series.pvd`, `energies.csv` and the final `solution.vtu`.
-    pub(super) fn finish(&mut self, energies: &[EnergyRow], points: &[[f64; 2]], u: &[[f64; 2]], v: &[[f64; 2]]) -> Result<(), AppError> {
+    /// `series.pvd`, `energies.csv` and the final `solution.vtu` (with the estimate's
+    /// per-node indicator `estimated_error`, its largest over the history, when made).
+    pub(super) fn finish(
+        &mut self,
+        energies: &[EnergyRow],
+        points: &[[f64; 2]],
+        (u, v): (&[[f64; 2]], &[[f64; 2]]),
+        estimate: &Estimate,
+    ) -> Result<(), AppError> {
         output::write_pvd(&self.dir.join("series.pvd"), &self.entries)?;
         let rows: Vec<Vec<f64>> = energies.iter().map(|e| vec![e[0], e[1], e[2], e[3], e[1] + e[2] + e[3]]).collect();
         output::write_csv(&self.dir.join("energies.csv"), &["t", "kinetic", "elastic", "external", "total"], &rows)?;
-        Ok(self.write(&self.dir.join("solution.vtu"), points, u, v)?)
+        Ok(self.write(&self.dir.join("solution.vtu"), points, (u, v), estimate_fields(estimate))?)
     }
 }
