@@ -62,9 +62,11 @@ impl Accumulator {
 }
 
 /// The `n x m` matrix whose row `i` the accumulators `row(i, scratch)` build, rows in
-/// parallel. Two passes over the rows: the row lengths, then the entries written in
-/// place, so that the result is held once (a single pass collecting per-task parts
-/// held it twice: +0.4 GB at 1e6 nodes).
+/// parallel: every row formed once into its task's part, the parts then concatenated,
+/// so the result is held twice while they are copied. Forming every row twice instead
+/// (its length, then its entries in place) held it once, but the multigrid setup at
+/// 1e6 nodes took 7.2-7.3 s against 6.4-6.5 s now, for the same peak of the run
+/// (1.882-1.887 GB: the transfers are not its peak; BENCHMARKS.md).
 fn rows_of_products<S: Send, V: Value>(
     n: usize,
     m: usize,
@@ -72,38 +74,32 @@ fn rows_of_products<S: Send, V: Value>(
     row: impl Fn(usize, &mut S) -> &mut Accumulator + Sync + Send,
 ) -> Csr<V> {
     let tasks = n.div_ceil(ROWS_PER_TASK);
-    let rows_of = |task: usize| task * ROWS_PER_TASK..n.min((task + 1) * ROWS_PER_TASK);
-    let lengths: Vec<Vec<usize>> =
-        (0..tasks).into_par_iter().map_init(&scratch, |s, task| rows_of(task).map(|i| row(i, s).touched.len()).collect()).collect();
-    let mut offsets = Vec::with_capacity(n + 1);
-    offsets.push(0usize);
-    for len in lengths.iter().flatten() {
-        offsets.push(offsets[offsets.len() - 1] + len);
-    }
-    drop(lengths);
-    let nnz = offsets[n];
-    let (mut cols, mut vals) = (vec![0u32; nnz], vec![V::default(); nnz]);
-    // Each task's slice of the result.
-    let mut slices = Vec::with_capacity(tasks);
-    let (mut rest_c, mut rest_v) = (cols.as_mut_slice(), vals.as_mut_slice());
-    for task in 0..tasks {
-        let rows = rows_of(task);
-        let len = offsets[rows.end] - offsets[rows.start];
-        let (c, rc) = rest_c.split_at_mut(len);
-        let (v, rv) = rest_v.split_at_mut(len);
-        slices.push((rows, c, v));
-        (rest_c, rest_v) = (rc, rv);
-    }
-    slices.into_par_iter().for_each_init(&scratch, |s, (rows, c, v)| {
-        let base = offsets[rows.start];
-        for i in rows {
-            let start = offsets[i] - base;
-            for (k, (j, x)) in row(i, s).sorted().enumerate() {
-                c[start + k] = j as u32;
-                v[start + k] = V::from_f64(x);
+    let parts: Vec<(Vec<usize>, Vec<u32>, Vec<V>)> = (0..tasks)
+        .into_par_iter()
+        .map_init(&scratch, |s, task| {
+            let rows = task * ROWS_PER_TASK..n.min((task + 1) * ROWS_PER_TASK);
+            let (mut lengths, mut cols, mut vals) = (Vec::with_capacity(rows.len()), Vec::new(), Vec::new());
+            for i in rows {
+                let before = cols.len();
+                for (j, x) in row(i, s).sorted() {
+                    cols.push(j as u32);
+                    vals.push(V::from_f64(x));
+                }
+                lengths.push(cols.len() - before);
             }
+            (lengths, cols, vals)
+        })
+        .collect();
+    let nnz = parts.iter().map(|p| p.1.len()).sum();
+    let (mut offsets, mut cols, mut vals) = (Vec::with_capacity(n + 1), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+    offsets.push(0usize);
+    for (lengths, c, v) in parts {
+        for len in lengths {
+            offsets.push(offsets[offsets.len() - 1] + len);
         }
-    });
+        cols.extend(c);
+        vals.extend(v);
+    }
     // Rows built sorted and without duplicates.
     Csr::from_parts(n, m, offsets, cols, vals)
 }
@@ -128,7 +124,12 @@ pub fn product(a: &Csr, b: &Csr) -> Csr {
 /// `base + scale (A B) C` (no base: `scale (A B) C`), rows in parallel, each row of
 /// `A B` formed in one accumulator and at once multiplied into `C`, the sums in double
 /// and stored as `V`.
-fn plus_triple<V: Value, VB: Value, VA: Value, VC: Value>(base: Option<&Csr<VB>>, scale: f64, a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr<V> {
+fn plus_triple<V: Value, VB: Value, VA: Value, VC: Value>(
+    (base, scale): (Option<&Csr<VB>>, f64),
+    a: &Csr<VA>,
+    b: &Csr,
+    c: &Csr<VC>,
+) -> Csr<V> {
     assert_eq!(a.ncols(), b.nrows(), "sparse product of a {}x{} and a {}x{} matrix", a.nrows(), a.ncols(), b.nrows(), b.ncols());
     assert_eq!(b.ncols(), c.nrows(), "sparse product of a {}x{} and a {}x{} matrix", b.nrows(), b.ncols(), c.nrows(), c.ncols());
     if let Some(base) = base {
@@ -167,7 +168,7 @@ fn plus_triple<V: Value, VB: Value, VA: Value, VC: Value>(base: Option<&Csr<VB>>
 /// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md). `A` and `C` may be
 /// stored in single precision (the multigrid's transfers); the sums are in double.
 pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr {
-    plus_triple(None::<&Csr>, 1.0, a, b, c)
+    plus_triple((None::<&Csr>, 1.0), a, b, c)
 }
 
 /// `base − ω (A B C)` in single precision, without holding `A B`, `A B C` or any
@@ -178,7 +179,7 @@ pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -
 /// they held `A T`, `D⁻¹ A T` and `P` in double at once, 0.4-0.5 GB at 1e6 nodes and
 /// the peak of the run (BENCHMARKS.md).
 pub fn smoothed<VB: Value>(base: &Csr<VB>, omega: f64, a: &Csr, b: &Csr, c: &Csr) -> Csr<f32> {
-    plus_triple(Some(base), -omega, a, b, c)
+    plus_triple((Some(base), -omega), a, b, c)
 }
 
 #[cfg(test)]
