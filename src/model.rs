@@ -41,7 +41,10 @@ pub fn solve(
             let params = problem.peridynamics.as_ref().expect("validated: the peridynamic model has a [peridynamics] table");
             match &case.dynamics {
                 None => peridynamics::solve(case, params, progress).map(Outcome::PdStatic),
-                Some(d) => peridynamics::simulate(case, params, d, progress, snapshot).map(Outcome::PdDynamic),
+                Some(d) => {
+                    let keep = problem.navier.estimate.method.peridynamics_estimates();
+                    peridynamics::simulate_sampled(case, params, d, progress, keep, snapshot).map(Outcome::PdDynamic)
+                }
             }
         }
     }

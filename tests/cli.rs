@@ -964,7 +964,12 @@ fn dynamic_run_writes_series_energies_and_summary() {
     let first = mlsm::output::read_vtu(&res.join(files[0])).unwrap();
     let last = mlsm::output::read_vtu(&res.join(files[files.len() - 1])).unwrap();
     assert_ne!(first.fields["velocity"].1, last.fields["velocity"].1);
-    // The final solution carries the estimate's per-node indicator, the snapshots not.
+    // The local-model estimate compares the history (8 states, each against the Navier
+    // model's at the same time), and the final solution carries its per-node
+    // indicator, the snapshots not.
+    let est = &s["estimated_errors"];
+    assert!(est["reference"].as_str().unwrap().contains("compared at 8 states"), "{est}");
+    assert!(num(est, "largest_u_time") > 0.0, "{est}");
     let solution = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
     assert!(solution.fields.contains_key("estimated_error") && !last.fields.contains_key("estimated_error"));
     let csv = std::fs::read_to_string(res.join("energies.csv")).unwrap();

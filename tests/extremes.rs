@@ -189,7 +189,7 @@ fn peridynamics_below_m_3_is_warned() {
         let params = p.peridynamics.take().expect("[peridynamics]");
         let sol = mlsm::peridynamics::solve(&p.case, &params, &Silent).unwrap_or_else(|e| panic!("m = {m}: {e}"));
         let free = &sol.nodes.positions[..sol.nodes.free];
-        let estimate = mlsm::compare::estimate::local_model(&p, free, &sol.displacement[..sol.nodes.free], sol.stress.as_ref());
+        let estimate = mlsm::compare::estimate::local_model(&p, free, (&sol.displacement[..sol.nodes.free], sol.stress.as_ref()), &[]);
         let checks = peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
         let e = sol.errors.unwrap().0.e_inf_u;
         let est = estimate.done().unwrap_or_else(|| panic!("m = {m}: no estimate: {estimate:?}")).norms.e_inf_u;

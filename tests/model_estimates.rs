@@ -26,7 +26,8 @@ fn local_model_tracks_the_peridynamic_error() {
             let params = p.peridynamics.expect("[peridynamics]");
             let sol = mlsm::peridynamics::solve(&p.case, &params, &Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
             let n = sol.nodes.free;
-            let estimate = mlsm::compare::estimate::local_model(&p, &sol.nodes.positions[..n], &sol.displacement[..n], sol.stress.as_ref());
+            let estimate =
+                mlsm::compare::estimate::local_model(&p, &sol.nodes.positions[..n], (&sol.displacement[..n], sol.stress.as_ref()), &[]);
             let est = estimate.done().unwrap_or_else(|| panic!("{name}: no estimate: {estimate:?}"));
             let e = sol.errors.expect("exact solution").0.e_inf_u;
             let own = est.reference_estimated_e_inf_u.expect("a static reference estimates itself");
@@ -51,7 +52,7 @@ fn a_coarse_local_reference_is_refined() {
     let params = p.peridynamics.expect("[peridynamics]");
     let sol = mlsm::peridynamics::solve(&p.case, &params, &Silent).unwrap();
     let n = sol.nodes.free;
-    let estimate = mlsm::compare::estimate::local_model(&p, &sol.nodes.positions[..n], &sol.displacement[..n], sol.stress.as_ref());
+    let estimate = mlsm::compare::estimate::local_model(&p, &sol.nodes.positions[..n], (&sol.displacement[..n], sol.stress.as_ref()), &[]);
     let est = estimate.done().unwrap_or_else(|| panic!("no estimate: {estimate:?}"));
     let e = sol.errors.unwrap().0.e_inf_u;
     eprintln!("coarse reference: e_inf(u) {e:.2e}, estimated {:.2e} against {}", est.norms.e_inf_u, est.reference);

@@ -169,7 +169,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         Outcome::PdStatic(mut sol) => {
             let n = sol.nodes.free;
             let free = &sol.nodes.positions[..n];
-            let estimate = peridynamics_estimate(&p, free, &sol.displacement[..n], sol.stress.as_ref(), &mut sol.timings, term);
+            let fields = (&sol.displacement[..n], sol.stress.as_ref());
+            let estimate = peridynamics_estimate(&p, free, (fields, &[]), &mut sol.timings, term);
             let seconds = clock();
             let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
             checks.warnings.extend(warnings::memory(&p));
@@ -198,7 +199,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
-            let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], &sim.u, None, &mut sim.timings, term);
+            let run = ((sim.u.as_slice(), None), sim.history.as_slice());
+            let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], run, &mut sim.timings, term);
             let seconds = clock();
             series.finish(&sim.energies, &nodes.positions[..nodes.free], (&sim.u, &sim.v), &estimate)?;
             sim.timings.record(OUTPUT, seconds());
@@ -366,14 +368,16 @@ fn print_estimate(estimate: &Estimate) {
     }
 }
 
+/// A peridynamic run's fields for its estimate: `((displacement, stress), history)`.
+type PdFields<'a> = ((&'a [[f64; 2]], Option<&'a crate::elasticity::stress::StressField>), &'a [(f64, Vec<[f64; 2]>)]);
+
 /// The `local-model` estimate of a peridynamic run whose free nodes `positions` carry
-/// `displacement` (and `stress`), timed as the estimate stage; off for
-/// `estimate.method = "none"`.
+/// `displacement` (and `stress`; a dynamic run's kept `history`), timed as the
+/// estimate stage; off for `estimate.method = "none"`.
 fn peridynamics_estimate(
     p: &Problem,
     positions: &[crate::domain::Point],
-    displacement: &[[f64; 2]],
-    stress: Option<&crate::elasticity::stress::StressField>,
+    (fields, history): PdFields,
     timings: &mut crate::pipeline::StageTimings,
     term: &Terminal,
 ) -> Estimate {
@@ -381,7 +385,7 @@ fn peridynamics_estimate(
         return Estimate::Off;
     }
     let t = Instant::now();
-    let estimate = crate::compare::estimate::local_model(p, positions, displacement, stress);
+    let estimate = crate::compare::estimate::local_model(p, positions, fields, history);
     let seconds = t.elapsed().as_secs_f64();
     timings.record(ESTIMATE, seconds);
     term.line(ESTIMATE, seconds, &estimate.note());

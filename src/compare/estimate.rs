@@ -21,7 +21,7 @@ use crate::domain::Point;
 use crate::elasticity::stress::StressField;
 use crate::mlsm::interpolate::mls_values_of_degree;
 use crate::model::{self, Outcome};
-use crate::navier::{ErrorEstimate, Estimate, EstimateMethod};
+use crate::navier::{self, ErrorEstimate, Estimate, EstimateMethod, Sampling};
 use crate::pipeline::Silent;
 use crate::post::ExactFields;
 use crate::problem::Problem;
@@ -37,12 +37,23 @@ pub const MAX_REFINEMENTS: usize = 3;
 
 /// The `local-model` estimate of the peridynamic run of `problem` whose free nodes
 /// `positions` carry `displacement` (and `stress`, when computed), against the Navier
-/// run of [`Problem::local_reference`], refined as [`MAX_REFINEMENTS`] says.
-pub fn local_model(problem: &Problem, positions: &[Point], displacement: &[[f64; 2]], stress: Option<&StressField>) -> Estimate {
+/// run of [`Problem::local_reference`], refined as [`MAX_REFINEMENTS`] says. A dynamic
+/// run's `history` (its kept states) is compared over the history, state by state
+/// with the Navier run's at the same times ([`ErrorEstimate::over_history`]).
+pub fn local_model(
+    problem: &Problem,
+    positions: &[Point],
+    (displacement, stress): (&[[f64; 2]], Option<&StressField>),
+    history: &[(f64, Vec<[f64; 2]>)],
+) -> Estimate {
     let t0 = Instant::now();
     let mut navier = problem.local_reference();
     for refinement in 0.. {
-        let mut e = match against_navier(&navier, positions, displacement, stress) {
+        let compared = match (&navier.case.dynamics, history.is_empty()) {
+            (Some(d), false) => over_history(&navier, d, positions, history),
+            _ => against_navier(&navier, positions, displacement, stress),
+        };
+        let mut e = match compared {
             Ok(e) => e,
             Err(why) => return Estimate::Unavailable(EstimateMethod::LocalModel.name(), why),
         };
@@ -62,6 +73,39 @@ pub fn local_model(problem: &Problem, positions: &[Point], displacement: &[[f64;
         }
     }
     unreachable!("the loop returns")
+}
+
+/// The estimate of a dynamic peridynamic run's `history` at `positions` against the
+/// states of the Navier problem `navier` (with `dynamics`) at the same times, or why
+/// there is none.
+fn over_history(
+    navier: &Problem,
+    dynamics: &crate::dynamics::DynamicsParams,
+    positions: &[Point],
+    history: &[(f64, Vec<[f64; 2]>)],
+) -> Result<Box<ErrorEstimate>, String> {
+    let t0 = Instant::now();
+    crate::resources::check(navier).map_err(|e| format!("the Navier model's run does not fit: {}", e.reason))?;
+    let times: Vec<f64> = history.iter().map(|h| h.0).collect();
+    let sim = navier::simulate_sampled(&navier.case, &navier.navier, dynamics, &Silent, Sampling::Times(&times), |_| Ok(()))
+        .map_err(|e| format!("the Navier model's run failed: {e}"))?;
+    let description = format!(
+        "MLSM elastodynamics ({} nodes, spacing {:.3e}, {} steps of {:.3e} s); compared at {}",
+        sim.positions.len(),
+        navier.navier.fill.spacing,
+        sim.report.steps,
+        sim.report.time_step,
+        navier::estimate::compared_states(history)
+    );
+    let degree = navier.navier.approximation.basis.polynomial_degree().max(2);
+    let interpolate = |u: &[[f64; 2]]| mls_values_of_degree(&sim.positions, u, positions, degree);
+    let e = ErrorEstimate::over_history(EstimateMethod::LocalModel, description, positions, history, &sim.history, interpolate, t0)
+        .map_err(|e| format!("the Navier solution could not be interpolated to the peridynamic nodes: {e}"))?;
+    Ok(Box::new(ErrorEstimate {
+        reference_degree: navier.navier.approximation.basis.polynomial_degree(),
+        reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
+        ..e
+    }))
 }
 
 /// The estimate of `(displacement, stress)` at `positions` against the run of the

@@ -9,6 +9,7 @@
 //! seed's table 4.3.1).
 
 pub mod driver;
+pub mod history;
 pub mod integrators;
 pub mod params;
 pub mod rod;

@@ -27,7 +27,8 @@ use super::system::System;
 use super::NavierParams;
 use crate::case::{Case, Loads};
 use crate::domain::cells::{cells_inside, nodal_areas};
-use crate::dynamics::driver::{history_steps, integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::dynamics::history::TimeSamples;
 use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
@@ -37,6 +38,7 @@ use crate::exact::{self, ExactSolution};
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
 use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
 use std::borrow::Cow;
+use std::collections::BTreeMap;
 
 /// The condensed MLSM system of one discretisation.
 pub struct NavierDynamics<'a> {
@@ -310,11 +312,12 @@ fn energies(
 /// The states a simulation keeps in [`Simulation::history`].
 #[derive(Debug, Clone, Copy)]
 pub enum Sampling<'a> {
-    /// Those of its own error estimate ([`history_steps`]), when `estimate.method`
+    /// Those of its own error estimate ([`crate::dynamics::driver::history_steps`]), when `estimate.method`
     /// makes one.
     Estimate,
-    /// The steps whose time is one of these (a run's history, for its reference):
-    /// `k = round(t / dt)`, kept when `k dt` equals `t` to 1e-9 of the end time.
+    /// The states at these times (a run's history, for its reference): a step's own
+    /// where its time equals `t` to 1e-9 of the end time, else interpolated between
+    /// the two steps around `t` ([`TimeSamples`]).
     Times(&'a [f64]),
 }
 
@@ -373,32 +376,26 @@ pub fn simulate_sampled(
     let body = (&case.body_force, exact.as_deref());
     let energy = |s: &State| energies(&system, &disc, body, &areas, case.material.lame(), dynamics.density, s);
     let method = params.estimate.method;
-    let samples: Vec<usize> = match sampling {
-        Sampling::Estimate if method.dynamic_navier_estimates() => history_steps(grid.steps),
-        Sampling::Estimate => Vec::new(),
-        Sampling::Times(times) => {
-            let mut k: Vec<usize> = times
-                .iter()
-                .map(|&t| ((t / grid.dt).round(), t))
-                .filter(|&(k, t)| k >= 1.0 && k <= grid.steps as f64 && (k * grid.dt - t).abs() <= 1e-9 * dynamics.end_time)
-                .map(|(k, _)| k as usize)
-                .collect();
-            k.dedup();
-            k
-        }
+    let samples = match sampling {
+        Sampling::Estimate if method.dynamic_navier_estimates() => TimeSamples::own(grid.steps, grid.dt),
+        Sampling::Estimate => TimeSamples::none(),
+        Sampling::Times(times) => TimeSamples::at_times(times, grid.dt, grid.steps, 1e-9 * dynamics.end_time),
     };
-    let mut history = Vec::with_capacity(samples.len());
-    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples), dynamics, &mut timer, |step, s| {
+    let mut kept = BTreeMap::new();
+    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
+        let (keep, write) = (samples.keeps(step), is_snapshot(step, grid.steps, dynamics));
         let u = nodal(&system.expand(s.t, &s.u, false));
-        if samples.binary_search(&step).is_ok() {
-            history.push((s.t, u.clone()));
+        let v = if keep || write { nodal(&system.expand(s.t, &s.v, true)) } else { Vec::new() };
+        if write {
+            snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })?;
         }
-        if !is_snapshot(step, grid.steps, dynamics) {
-            return Ok(());
+        if keep {
+            kept.insert(step, (s.t, u, v));
         }
-        let v = nodal(&system.expand(s.t, &s.v, true));
-        snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })
+        Ok(())
     })?;
+    let history = samples.states(&kept);
+    drop(kept);
     let u = nodal(&system.expand(state.t, &state.u, false));
     let estimate = estimate::stage(method, method.dynamic_navier_estimates(), &mut timer, || {
         estimate::refined_dynamic(case, params, dynamics, report.time_step, points, &history)

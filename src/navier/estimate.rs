@@ -292,9 +292,6 @@ pub fn higher_degree(
     }))
 }
 
-/// A time and the run's and the reference's displacement then.
-type StatePair<'a> = (f64, &'a [[f64; 2]], &'a [[f64; 2]]);
-
 /// The `refined` estimate of a dynamic run over its history: the scene integrated
 /// again with the run's approximation on nodes at half the spacing
 /// ([`crate::domain::FillParams::scaled`]) and the run's `time_step` divided by
@@ -302,19 +299,19 @@ type StatePair<'a> = (f64, &'a [[f64; 2]], &'a [[f64; 2]]);
 /// the reference's own stable step when the finer nodes need a smaller one), so that
 /// both the reference's spatial error (order >= 2 in h) and its time error are at most
 /// a quarter of the run's. At each of the run's `history` states
-/// ([`crate::dynamics::driver::history_steps`]) that the reference also reaches (every
-/// one unless the reference had to take its own stable step), the reference's
-/// displacement is interpolated to the run's `positions` by moving least squares; the
-/// estimate is the space-time difference over those states,
+/// ([`crate::dynamics::driver::history_steps`]) the reference's state at the same time
+/// (its own step's, or interpolated between its two steps around it,
+/// [`crate::dynamics::history`]: only when it had to take its own stable step) is
+/// interpolated to the run's `positions` by moving least squares; the estimate is the
+/// space-time difference over those states ([`ErrorEstimate::over_history`]),
 ///
 /// ```text
 /// est e_inf(u)  = max_{t,i,c} |u - u_ref| / max_{t,i,c} |u_ref|
 /// est rel_l2(u) = sqrt(sum_{t,i} |u - u_ref|^2 / sum_{t,i} |u_ref|^2)
 /// ```
 ///
-/// which is 0.75 to 1 times the run's error (space and time together). Without a
-/// common state the final states are compared, and the description says at which
-/// times. The per-node indicator is the largest over the states.
+/// which is 0.75 to 1 times the run's error (space and time together). The per-node
+/// indicator is the largest over the states.
 ///
 /// Why not a higher degree on the same nodes as for static runs: the PHS stencils
 /// of the reference have growing modes in explicit elastodynamics (both shipped
@@ -330,7 +327,9 @@ pub fn refined_dynamic(
 ) -> Estimate {
     let t0 = Instant::now();
     let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::Refined.name(), why);
-    let Some(last) = history.last() else { return unavailable("the run kept no state to compare".into()) };
+    if history.is_empty() {
+        return unavailable("the run kept no state to compare".into());
+    }
     let estimate = EstimateParams { method: EstimateMethod::None, ..params.estimate };
     let reference_params = NavierParams { fill: params.fill.scaled(0.5), keep_system: false, estimate, ..params.clone() };
     let divisor = f64::from(1u32 << 2u32.div_ceil(dynamics.integrator.order()));
@@ -346,50 +345,65 @@ pub fn refined_dynamic(
         Ok(s) => s,
         Err(e) => return unavailable(format!("the reference at half the spacing failed: {e}")),
     };
-    let same_time = |a: f64, b: f64| (a - b).abs() <= 1e-9 * dynamics.end_time;
-    let mut pairs: Vec<StatePair> = history
-        .iter()
-        .filter_map(|(t, u)| sim.history.iter().find(|(r, _)| same_time(*r, *t)).map(|(_, r)| (*t, u.as_slice(), r.as_slice())))
-        .collect();
     let r = &sim.report;
-    let reference_end = r.time_step * r.steps as f64;
-    let compared = if pairs.is_empty() {
-        pairs.push((last.0, &last.1, &sim.u));
-        format!("the final states only (t = {:.4e} s and {reference_end:.4e} s: the reference's steps miss the run's)", last.0)
-    } else {
-        format!("{} states from t = {:.4e} to {:.4e} s", pairs.len(), pairs[0].0, pairs[pairs.len() - 1].0)
-    };
-    let mut u_ref = Vec::with_capacity(pairs.len() * positions.len());
-    for (_, _, r) in &pairs {
-        match mls_values(&sim.positions, r, positions) {
-            Ok(u) => u_ref.extend(u),
-            Err(e) => return unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
-        }
-    }
-    let u: Vec<[f64; 2]> = pairs.iter().flat_map(|(_, u, _)| u.iter().copied()).collect();
-    let at: Vec<Point> = pairs.iter().flat_map(|_| positions.iter().copied()).collect();
     let description = format!(
-        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({}); compared at {compared}",
+        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({}); compared at {}",
         sim.positions.len(),
         reference_params.fill.spacing,
         r.steps,
         r.time_step,
-        dynamics.integrator.name()
+        dynamics.integrator.name(),
+        compared_states(history)
     );
-    let reference = ExactFields { displacement: u_ref, stress: None };
-    let mut e = ErrorEstimate::between(EstimateMethod::Refined, description, &at, &u, None, &reference, t0);
-    // Over the states: the time of the largest difference, and each node's largest.
-    let n = positions.len();
-    e.largest_u_time = Some(pairs[argmax(&e.per_node_u) / n].0);
-    e.per_node_u = (0..n).map(|i| e.per_node_u.iter().skip(i).step_by(n).fold(0.0, |m: f64, &v| m.max(v))).collect();
-    Estimate::Done(Box::new(ErrorEstimate {
-        reference_degree: params.approximation.basis.polynomial_degree(),
-        reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
-        ..e
-    }))
+    let interpolate = |u: &[[f64; 2]]| mls_values(&sim.positions, u, positions);
+    match ErrorEstimate::over_history(EstimateMethod::Refined, description, positions, history, &sim.history, interpolate, t0) {
+        Ok(e) => Estimate::Done(Box::new(ErrorEstimate {
+            reference_degree: params.approximation.basis.polynomial_degree(),
+            reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
+            ..e
+        })),
+        Err(e) => unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
+    }
+}
+
+/// `"8 states from t = .. to .. s"`, for an estimate's reference text.
+pub fn compared_states(history: &[(f64, Vec<[f64; 2]>)]) -> String {
+    match (history.first(), history.last()) {
+        (Some(a), Some(b)) => format!("{} states from t = {:.4e} to {:.4e} s", history.len(), a.0, b.0),
+        _ => "no state".into(),
+    }
 }
 
 impl ErrorEstimate {
+    /// The estimate of a dynamic run's `history` against the `reference` states at the
+    /// same times (same order, on the reference's own nodes, brought to the run's by
+    /// `interpolate`): the space-time norms of the differences over all the states
+    /// together, the time of the largest, and each node's largest difference as its
+    /// indicator. The reference's degree, unknowns and nonzeros are left 0.
+    pub fn over_history<E>(
+        method: EstimateMethod,
+        reference_description: String,
+        positions: &[Point],
+        history: &[(f64, Vec<[f64; 2]>)],
+        reference: &[(f64, Vec<[f64; 2]>)],
+        interpolate: impl Fn(&[[f64; 2]]) -> Result<Vec<[f64; 2]>, E>,
+        t0: Instant,
+    ) -> Result<ErrorEstimate, E> {
+        debug_assert_eq!(history.len(), reference.len(), "a reference state per state of the run");
+        let mut u_ref = Vec::with_capacity(history.len() * positions.len());
+        for (_, r) in reference {
+            u_ref.extend(interpolate(r)?);
+        }
+        let u: Vec<[f64; 2]> = history.iter().flat_map(|(_, u)| u.iter().copied()).collect();
+        let at: Vec<Point> = history.iter().flat_map(|_| positions.iter().copied()).collect();
+        let reference = ExactFields { displacement: u_ref, stress: None };
+        let mut e = ErrorEstimate::between(method, reference_description, &at, &u, None, &reference, t0);
+        let n = positions.len();
+        e.largest_u_time = Some(history[argmax(&e.per_node_u) / n].0);
+        e.per_node_u = (0..n).map(|i| e.per_node_u.iter().skip(i).step_by(n).fold(0.0, |m: f64, &v| m.max(v))).collect();
+        Ok(e)
+    }
+
     /// The estimate of the run `(displacement, stress)` at `positions` by its
     /// difference to `reference` at the same points, computed by `method` since `t0`
     /// (the reference's degree, unknowns and nonzeros left 0 for the caller).

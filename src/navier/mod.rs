@@ -37,7 +37,7 @@ use crate::linalg::SolverParams;
 use crate::mlsm::Approximation;
 
 pub use discrete::Discretisation;
-pub use dynamics::{simulate, Simulation};
+pub use dynamics::{simulate, simulate_sampled, Sampling, Simulation};
 pub use estimate::{ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
 pub use formulation::Formulation;
 pub use solve::{solve, Solution};

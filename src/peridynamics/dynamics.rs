@@ -24,7 +24,8 @@ use super::operator::Bonds;
 use super::solve::Discretisation;
 use super::{BondForce, PdParams};
 use crate::case::Case;
-use crate::dynamics::driver::{integrate, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::dynamics::history::TimeSamples;
 use crate::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::elasticity::conditions::Value;
 use crate::elasticity::dofs::DofMap;
@@ -32,6 +33,7 @@ use crate::exact::{self, ExactSolution};
 use crate::pipeline::{Progress, RunError, StageTimer, StageTimings};
 use rayon::prelude::*;
 use std::borrow::Cow;
+use std::collections::BTreeMap;
 
 /// The semi-discrete peridynamic system of one discretisation.
 pub struct PdDynamics<'a> {
@@ -248,6 +250,9 @@ pub struct Simulation {
     pub energies: Vec<EnergyRow>,
     /// Bond updates per second per thread in the time loop.
     pub bond_updates_per_second_per_thread: f64,
+    /// The states kept for an error estimate, `(t, displacement of the free nodes)`
+    /// ([`crate::dynamics::driver::history_steps`]); empty unless asked for.
+    pub history: Vec<(f64, Vec<[f64; 2]>)>,
     /// Stage timings.
     pub timings: StageTimings,
 }
@@ -259,6 +264,19 @@ pub fn simulate(
     params: &PdParams,
     dynamics: &DynamicsParams,
     progress: &dyn Progress,
+    snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
+    simulate_sampled(case, params, dynamics, progress, false, snapshot)
+}
+
+/// [`simulate`], keeping the states of its history for an error estimate when
+/// `keep_history`.
+pub fn simulate_sampled(
+    case: &Case,
+    params: &PdParams,
+    dynamics: &DynamicsParams,
+    progress: &dyn Progress,
+    keep_history: bool,
     mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
     let mut timer = StageTimer::new(progress);
@@ -277,11 +295,31 @@ pub fn simulate(
     let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
     let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
     let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
-    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &[]), dynamics, &mut timer, |step, s| {
-        snapshot(Snapshot { step, t: s.t, positions: free, u: &nodal(&s.u), v: &nodal(&s.v) })
+    let samples = if keep_history { TimeSamples::own(grid.steps, grid.dt) } else { TimeSamples::none() };
+    let mut kept = BTreeMap::new();
+    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
+        let (u, v) = (nodal(&s.u), nodal(&s.v));
+        if is_snapshot(step, grid.steps, dynamics) {
+            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v })?;
+        }
+        if samples.keeps(step) {
+            kept.insert(step, (s.t, u, v));
+        }
+        Ok(())
     })?;
+    let history = samples.states(&kept);
+    drop(kept);
     let throughput =
         report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
     let (u, v) = (nodal(&state.u), nodal(&state.v));
-    Ok(Simulation { discretisation: disc, u, v, report, energies, bond_updates_per_second_per_thread: throughput, timings: timer.finish() })
+    Ok(Simulation {
+        discretisation: disc,
+        u,
+        v,
+        report,
+        energies,
+        bond_updates_per_second_per_thread: throughput,
+        history,
+        timings: timer.finish(),
+    })
 }

@@ -33,7 +33,7 @@ pub mod solve;
 pub mod strain;
 pub mod weights;
 
-pub use dynamics::{simulate, Simulation};
+pub use dynamics::{simulate, simulate_sampled, Simulation};
 pub use kernel::{Kernel, KernelKind, Micromodulus};
 pub use params::{BondForce, PdParams, Quadrature, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
