@@ -27,7 +27,7 @@ use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 pub use super::csr::product;
 use super::csr::Csr;
 use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
-use super::smoother::{gauss_seidel, inverse_diagonal_blocks};
+use super::smoother::{gauss_seidel, inverse_diagonal_blocks, Sweep};
 use super::SparseMatrix;
 use super::{gmres, spgemm, vector_state};
 use nalgebra::DMatrix;
@@ -319,23 +319,23 @@ impl Amg {
         fc.resize(level.r.nrows(), 0.0);
         zc.resize(level.r.nrows(), 0.0);
         z.fill(0.0);
-        level.gauss_seidel(f, z, true, copies);
-        level.gauss_seidel(f, z, false, copies);
+        level.gauss_seidel(f, z, Sweep::ForwardFromZero, copies);
+        level.gauss_seidel(f, z, Sweep::Backward, copies);
         product(&level.a, z, r);
         r.iter_mut().zip(f).for_each(|(r, f)| *r = f - *r);
         product(&level.r, r, fc);
         self.cycle(l + 1, fc, zc, coarser);
         product(&level.p, zc, r);
         z.iter_mut().zip(r.iter()).for_each(|(z, c)| *z += c);
-        level.gauss_seidel(f, z, true, copies);
-        level.gauss_seidel(f, z, false, copies);
+        level.gauss_seidel(f, z, Sweep::Forward, copies);
+        level.gauss_seidel(f, z, Sweep::Backward, copies);
     }
 }
 
 impl Level {
     /// One block Gauss–Seidel sweep of this level ([`gauss_seidel`]).
-    fn gauss_seidel(&self, f: &[f64], z: &mut [f64], forward: bool, copies: &mut Vec<Vec<f64>>) {
-        gauss_seidel(&self.a, self.blocks, &self.inv_diag, f, z, forward, copies);
+    fn gauss_seidel(&self, f: &[f64], z: &mut [f64], direction: Sweep, copies: &mut Vec<Vec<f64>>) {
+        gauss_seidel(&self.a, self.blocks, &self.inv_diag, f, z, direction, copies);
     }
 }
 

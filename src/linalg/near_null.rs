@@ -95,7 +95,7 @@ pub(super) fn left_near_null(a: &Csr, blocks: Blocks, inv_diag: &[f64], null: &[
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::linalg::smoother::{gauss_seidel, inverse_diagonal_blocks};
+    use crate::linalg::smoother::{gauss_seidel, inverse_diagonal_blocks, Sweep};
 
     #[test]
     fn rigid_body_modes_are_centred_translations_and_a_rotation() {
@@ -149,8 +149,8 @@ mod tests {
         for c in 0..k {
             let mut z: Vec<f64> = (0..2 * nodes).map(|row| null[row * k + c]).collect();
             let before = product_norm(&z);
-            for forward in [true, false, true, false] {
-                gauss_seidel(&at, blocks, &inv_t, &zero, &mut z, forward, &mut copies);
+            for direction in [Sweep::Forward, Sweep::Backward, Sweep::Forward, Sweep::Backward] {
+                gauss_seidel(&at, blocks, &inv_t, &zero, &mut z, direction, &mut copies);
             }
             let ours: Vec<f64> = (0..2 * nodes).map(|row| y[row * k + c]).collect();
             let worst = z.iter().zip(&ours).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
