@@ -100,7 +100,15 @@ pub(super) enum Sweep {
 /// sweep and its own as they are updated, so that the inner loop reads one array
 /// without testing where a column lies (the test was 40 % of the sweep's samples);
 /// the ranges are then copied back.
-pub(super) fn gauss_seidel(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], z: &mut [f64], direction: Sweep, copies: &mut Vec<Vec<f64>>) {
+pub(super) fn gauss_seidel(
+    a: &Csr,
+    blocks: Blocks,
+    inv_diag: &[f64],
+    f: &[f64],
+    z: &mut [f64],
+    direction: Sweep,
+    copies: &mut Vec<Vec<f64>>,
+) {
     let nodes = blocks.nodes;
     let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
     if parts == 1 {
@@ -167,7 +175,15 @@ mod tests {
         for i in 0..nodes {
             for j in i.saturating_sub(3)..(i + 4).min(nodes) {
                 for (r, c) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-                    let v = if i == j { if r == c { 8.0 } else { 0.5 } } else { -0.3 - 0.1 * ((i + 2 * j + r + c) % 5) as f64 };
+                    let v = if i == j {
+                        if r == c {
+                            8.0
+                        } else {
+                            0.5
+                        }
+                    } else {
+                        -0.3 - 0.1 * ((i + 2 * j + r + c) % 5) as f64
+                    };
                     t.push((2 * i + r, 2 * j + c, v));
                 }
             }
