@@ -94,8 +94,9 @@ impl System<'_> {
     /// Right-hand sides `(row, value)` of node `i` under `loads`: the prescribed
     /// value of each boundary row (in the rows of its ghost, if any), `-f` in the
     /// Navier rows (`L u = -f`); the continuity row that of its stabilisation
-    /// ([`RowWriter::continuity_load`]), zero under a constant body force.
-    fn node_loads(&self, writer: &RowWriter, loads: &Loads, i: usize) -> NodeLoads {
+    /// ([`RowWriter::continuity_load`]) from `forces`, the body force at every node
+    /// and ghost ([`Self::continuity_forces`]), when there is one.
+    fn node_loads(&self, writer: &RowWriter, loads: &Loads, forces: Option<&[[f64; 2]]>, i: usize) -> NodeLoads {
         let (disc, dofs) = (self.disc, self.disc.dofs);
         let mut rhs = NodeLoads::default();
         if disc.nodes.is_boundary(i) {
@@ -115,14 +116,27 @@ impl System<'_> {
                 }
             }
         }
-        if dofs.unknowns() == Unknowns::DisplacementPressure && !matches!(loads.body_force, Value::Constant(_)) {
-            let f_at = |j: usize| {
-                let p = if j < disc.nodes.len() { disc.nodes.positions[j] } else { disc.ghost_positions[j - disc.nodes.len()] };
-                exact::value(&loads.body_force, p, self.exact, |e| e.body_force(p))
-            };
-            rhs.push(dofs.dof(i, PRESSURE), writer.continuity_load(i, f_at));
+        if let Some(forces) = forces {
+            rhs.push(dofs.dof(i, PRESSURE), writer.continuity_load(i, |j| forces[j]));
         }
         rhs
+    }
+
+    /// The body force of `loads` at every node and ghost, which the stabilised
+    /// continuity rows differentiate (each over its support, so evaluated once here);
+    /// `None` outside the displacement-pressure form and under a constant body force,
+    /// whose divergence is zero.
+    fn continuity_forces(&self, loads: &Loads) -> Option<Vec<[f64; 2]>> {
+        let disc = self.disc;
+        (disc.dofs.unknowns() == Unknowns::DisplacementPressure && !matches!(loads.body_force, Value::Constant(_))).then(|| {
+            (0..disc.dofs.nodes())
+                .into_par_iter()
+                .map(|j| {
+                    let p = disc.point(j);
+                    exact::value(&loads.body_force, p, self.exact, |e| e.body_force(p))
+                })
+                .collect()
+        })
     }
 
     /// The right-hand side of every row this rank owns under `loads` (the case's own,
@@ -138,8 +152,8 @@ impl System<'_> {
     /// Overwrite the right-hand sides of the rows of `nodes` in `rhs` with those of
     /// `loads` (a time-dependent run rewrites only the nodes whose loads vary).
     pub fn update_right_hand_side(&self, loads: &Loads, nodes: &[usize], rhs: &mut [f64]) -> Result<(), RunError> {
-        let writer = self.writer();
-        let per_node: Vec<NodeLoads> = nodes.par_iter().map(|&i| self.node_loads(&writer, loads, i)).collect();
+        let (writer, forces) = (self.writer(), self.continuity_forces(loads));
+        let per_node: Vec<NodeLoads> = nodes.par_iter().map(|&i| self.node_loads(&writer, loads, forces.as_deref(), i)).collect();
         for (&i, r) in nodes.iter().zip(&per_node) {
             let r = &r.entries[..r.len];
             if r.iter().any(|v| !v.1.is_finite()) {
