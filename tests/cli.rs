@@ -432,7 +432,12 @@ fn invalid_scenes_exit_2_naming_the_field() {
         (
             "negative pressure stabilisation",
             Some(scene(&[("support = 9", "support = 9\npressure_stabilisation = -0.1")])),
-            &["approximation.pressure_stabilisation", ">= 0"],
+            &["approximation.pressure_stabilisation", "[0, 1]"],
+        ),
+        (
+            "pressure stabilisation beyond its measured range",
+            Some(scene(&[("support = 9", "support = 9\npressure_stabilisation = 10.0")])),
+            &["approximation.pressure_stabilisation", "drowns the continuity"],
         ),
         // Degree 1 has no second derivatives: the Navier rows would vanish (this used
         // to pass validation and end in a singular matrix, exit 3).

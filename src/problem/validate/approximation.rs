@@ -7,7 +7,7 @@ use crate::domain::{Domain, FillKind, FillParams, Primitive, Refinement};
 use crate::elasticity::dofs::Unknowns;
 use crate::elasticity::material::Material;
 use crate::mlsm::{default_rbf_fd_support, default_support, Approximation, Basis, BasisKind, Radial, Weight, WeightKind};
-use crate::navier::formulation::PRESSURE_STABILISATION;
+use crate::navier::formulation::{MAX_PRESSURE_STABILISATION, PRESSURE_STABILISATION};
 use crate::navier::Formulation;
 use crate::problem::spec::{ApproximationSpec, NodesSpec, RefineSpec};
 use crate::problem::ProblemError;
@@ -246,15 +246,20 @@ pub(super) fn check_node_count(
     Ok(())
 }
 
-/// `approximation.pressure_stabilisation`: `tau >= 0` (0 turns the stabilisation
-/// off), default [`PRESSURE_STABILISATION`] (`navier::formulation`).
+/// `approximation.pressure_stabilisation`: `tau` in [0, [`MAX_PRESSURE_STABILISATION`]]
+/// (0 turns the stabilisation off), default [`PRESSURE_STABILISATION`]
+/// (`navier::formulation`).
 pub(super) fn pressure_stabilisation(c: &Ctx, s: &ApproximationSpec) -> Result<f64, ProblemError> {
     match s.pressure_stabilisation {
         None => Ok(PRESSURE_STABILISATION),
-        Some(tau) if tau.is_finite() && tau >= 0.0 => Ok(tau),
-        Some(tau) => {
-            c.err("approximation.pressure_stabilisation", format!("{tau} is not a finite number >= 0 (0 turns the stabilisation off)"))
-        }
+        Some(tau) if (0.0..=MAX_PRESSURE_STABILISATION).contains(&tau) => Ok(tau),
+        Some(tau) => c.err(
+            "approximation.pressure_stabilisation",
+            format!(
+                "{tau} must lie in [0, {MAX_PRESSURE_STABILISATION}] (0 turns the stabilisation off): above it the pressure Laplacian \
+                 drowns the continuity equation (Lame at nu = 0.5, tau = 10: e_inf(u) 9.4e-3 against 8.1e-5 at 0.1)"
+            ),
+        ),
     }
 }
 
