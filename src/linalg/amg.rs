@@ -24,8 +24,9 @@
 //! size), and which alternatives fail.
 
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
+use super::blocks::Transfer;
 pub use super::csr::product;
-use super::csr::Csr;
+use super::csr::{Csr, RowsRef};
 use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
 use super::smoother::{gauss_seidel, inverse_diagonal_blocks, Sweep};
 use super::SparseMatrix;
@@ -73,18 +74,72 @@ impl Default for AmgParams {
     }
 }
 
+/// What a hierarchy keeps of its finest operator once it is built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Finest {
+    /// The system the Krylov method solves: its rows stay in double precision for the
+    /// method's products ([`Amg::fine_operator`]).
+    System,
+    /// An operator that only preconditions (a low-order operator, a saddle point's
+    /// displacement block, rows the Krylov method holds elsewhere): single precision.
+    PreconditionerOnly,
+}
+
+/// A level's operator as the cycle applies it, its values in single precision: the
+/// cycle need only be a fixed linear map, and the smoother and residual passes are
+/// memory-bound (an entry in 8 bytes instead of 12). Measured with the block-stored
+/// transfers (BENCHMARKS.md, "Single-precision cycle"): the cantilever at 1e6 nodes
+/// iterates in 0.91x the time; a low-order operator that only preconditions is held
+/// once, in single precision (Kirsch at 3e5 nodes: peak 1.21 -> 1.10 GB).
+#[derive(Debug)]
+enum LevelOperator {
+    /// The level's operator rounded to single precision.
+    Single(Csr<f32>),
+    /// The system's rows ([`Finest::System`]) and their values rounded to single
+    /// precision, which share the rows' structure.
+    System { rows: Csr, single: Vec<f32> },
+}
+
+impl LevelOperator {
+    fn new(a: Csr, keep: Finest) -> Self {
+        match keep {
+            Finest::System => {
+                let single = a.values().par_iter().with_min_len(4096).map(|&v| v as f32).collect();
+                LevelOperator::System { rows: a, single }
+            }
+            Finest::PreconditionerOnly => LevelOperator::Single(a.into_single()),
+        }
+    }
+
+    /// The operator the cycle applies.
+    fn cycle(&self) -> RowsRef<'_, f32> {
+        match self {
+            LevelOperator::Single(a) => a.into(),
+            LevelOperator::System { rows, single } => rows.with_values(single),
+        }
+    }
+
+    fn nnz(&self) -> usize {
+        match self {
+            LevelOperator::Single(a) => a.nnz(),
+            LevelOperator::System { rows, .. } => rows.nnz(),
+        }
+    }
+}
+
 /// One level: its operator, the inverses of its diagonal blocks, and the transfers to
 /// the next coarser level.
 #[derive(Debug)]
 struct Level {
-    a: Csr,
+    a: LevelOperator,
     blocks: Blocks,
     /// Pseudo-inverse of each diagonal block, row-major, `block²` per node.
     inv_diag: Vec<f64>,
     /// The transfers in single precision: a fixed linear map is all the cycle needs of
-    /// them, and they are the largest part of the hierarchy (at 1e6 nodes 0.17 GB less).
-    p: Csr<f32>,
-    r: Csr<f32>,
+    /// them, and they are the largest part of the hierarchy (at 1e6 nodes 0.17 GB less);
+    /// stored by aggregate ([`Transfer`]).
+    p: Transfer,
+    r: Transfer,
 }
 
 /// The coarsest level, factored.
@@ -94,13 +149,13 @@ struct Coarsest {
     n: usize,
 }
 
-/// A smoothed-aggregation hierarchy; [`Amg::apply`] is one V-cycle from a zero guess.
+/// A smoothed-aggregation hierarchy; [`Amg::solve_into`] is one V-cycle from a zero guess.
 #[derive(Debug)]
 pub struct Amg {
     levels: Vec<Level>,
     coarsest: Coarsest,
     /// The operator itself when the hierarchy has one level (it was small enough to
-    /// factor directly), so that [`Amg::fine_operator`] always has it.
+    /// factor directly) and it is the system ([`Finest::System`]).
     single: Option<Csr>,
     /// Unknowns per level, finest first (the coarsest included).
     sizes: Vec<usize>,
@@ -180,12 +235,10 @@ fn spectral_radius(a: &Csr, inv_diag: &Csr) -> f64 {
         product(a, &v[j], &mut tmp);
         let mut w = vec![0.0; n];
         product(inv_diag, &tmp, &mut w);
-        for (i, vi) in v.iter().enumerate() {
-            let d = gmres::dot(vi, &w);
+        let (projections, norm) = gmres::orthogonalise(&v, &mut w);
+        for (i, d) in projections.into_iter().enumerate() {
             h[(i, j)] = d;
-            w.par_iter_mut().zip(vi).with_min_len(4096).for_each(|(w, v)| *w -= d * v);
         }
-        let norm = gmres::norm(&w);
         h[(j + 1, j)] = norm;
         m = j + 1;
         if norm <= 1e-12 * h.column(j).norm() {
@@ -200,14 +253,15 @@ fn spectral_radius(a: &Csr, inv_diag: &Csr) -> f64 {
 
 impl Amg {
     /// The hierarchy of `a` (the system as solved, row-equilibrated) with the rigid-body
-    /// modes of `layout` as near-null space.
+    /// modes of `layout` as near-null space; the Krylov method keeps `a` itself, so the
+    /// hierarchy keeps only the single-precision copy its cycle applies.
     pub fn build(a: &SparseMatrix, layout: Option<NodeLayout>, params: AmgParams) -> Result<Self, super::SolveError> {
-        Ok(Self::build_from_rows(to_csr(a), layout, params))
+        Ok(Self::build_from_rows(to_csr(a), layout, params, Finest::PreconditionerOnly))
     }
 
     /// [`Amg::build`] from the operator in compressed rows, which the hierarchy keeps
-    /// as its finest level.
-    pub fn build_from_rows(a: Csr, layout: Option<NodeLayout>, params: AmgParams) -> Self {
+    /// as its finest level as `keep` says.
+    pub fn build_from_rows(a: Csr, layout: Option<NodeLayout>, params: AmgParams, keep: Finest) -> Self {
         let n = a.nrows();
         let (mut null, k) = rigid_body_modes(n, layout);
         // The left near-null space of the finest level, relaxed from the rigid-body
@@ -248,7 +302,9 @@ impl Amg {
             };
             drop(d);
             let coarse = spgemm::triple_product(&r, &current, &p);
-            levels.push(Level { a: current, blocks, inv_diag, p, r });
+            let (p, r) = (Transfer::new(p, (1, k)), Transfer::new(r, (k, 1)));
+            let a = LevelOperator::new(current, if levels.is_empty() { keep } else { Finest::PreconditionerOnly });
+            levels.push(Level { a, blocks, inv_diag, p, r });
             sizes.push(coarse.nrows());
             current = coarse;
             null = coarse_null;
@@ -259,7 +315,7 @@ impl Amg {
         let nonzeros = levels.iter().map(|l| l.a.nnz() + l.p.nnz() + l.r.nnz()).sum::<usize>() + current.nnz();
         let fine = levels.first().map_or(current.nnz(), |l| l.a.nnz()) as f64;
         let operator_complexity = (levels.iter().map(|l| l.a.nnz()).sum::<usize>() + current.nnz()) as f64 / fine;
-        let single = levels.is_empty().then_some(current);
+        let single = (levels.is_empty() && keep == Finest::System).then_some(current);
         let work = Workspace { input: Vec::new(), levels: levels.iter().map(|_| LevelWork::default()).collect() };
         Amg { levels, coarsest, single, sizes, nonzeros, operator_complexity, work: std::sync::Mutex::new(work) }
     }
@@ -279,17 +335,24 @@ impl Amg {
         self.operator_complexity
     }
 
-    /// The finest operator (the system as solved) in compressed rows.
-    pub fn fine_operator(&self) -> &Csr {
-        self.levels.first().map_or_else(|| self.single.as_ref().expect("a one-level hierarchy keeps its operator"), |l| &l.a)
+    /// The finest operator (the system as solved) in compressed rows, kept when the
+    /// hierarchy was built with [`Finest::System`].
+    pub fn fine_operator(&self) -> Option<&Csr> {
+        match self.levels.first() {
+            Some(Level { a: LevelOperator::System { rows, .. }, .. }) => Some(rows),
+            Some(_) => None,
+            None => self.single.as_ref(),
+        }
     }
 
-    /// The finest operator, the rest of the hierarchy dropped (a solver that gives up
-    /// on the multigrid frees its memory before it tries another method).
-    pub fn into_fine_operator(self) -> Csr {
+    /// The finest operator ([`Amg::fine_operator`]), the rest of the hierarchy dropped
+    /// (a solver that gives up on the multigrid frees its memory before it tries
+    /// another method).
+    pub fn into_fine_operator(self) -> Option<Csr> {
         match self.levels.into_iter().next() {
-            Some(level) => level.a,
-            None => self.single.expect("a one-level hierarchy keeps its operator"),
+            Some(Level { a: LevelOperator::System { rows, .. }, .. }) => Some(rows),
+            Some(_) => None,
+            None => self.single,
         }
     }
 
@@ -309,6 +372,13 @@ impl Amg {
         self.cycle(0, input, x, levels);
     }
 
+    /// `z = M⁻¹ f`: one V-cycle for `A z = f` from `z = 0` ([`Amg::solve_in_place`]
+    /// without the copy of `f`).
+    pub fn solve_into(&self, f: &[f64], z: &mut [f64]) {
+        let mut work = self.work.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        self.cycle(0, f, z, &mut work.levels);
+    }
+
     fn cycle(&self, l: usize, f: &[f64], z: &mut [f64], work: &mut [LevelWork]) {
         let (Some(level), Some((own, coarser))) = (self.levels.get(l), work.split_first_mut()) else {
             self.coarsest.solve(f, z);
@@ -321,11 +391,11 @@ impl Amg {
         z.fill(0.0);
         level.gauss_seidel(f, z, Sweep::ForwardFromZero, copies);
         level.gauss_seidel(f, z, Sweep::Backward, copies);
-        product(&level.a, z, r);
+        product(level.a.cycle(), z, r);
         r.iter_mut().zip(f).for_each(|(r, f)| *r = f - *r);
-        product(&level.r, r, fc);
+        level.r.product(r, fc);
         self.cycle(l + 1, fc, zc, coarser);
-        product(&level.p, zc, r);
+        level.p.product(zc, r);
         z.iter_mut().zip(r.iter()).for_each(|(z, c)| *z += c);
         level.gauss_seidel(f, z, Sweep::Forward, copies);
         level.gauss_seidel(f, z, Sweep::Backward, copies);
@@ -335,7 +405,7 @@ impl Amg {
 impl Level {
     /// One block Gauss–Seidel sweep of this level ([`gauss_seidel`]).
     fn gauss_seidel(&self, f: &[f64], z: &mut [f64], direction: Sweep, copies: &mut Vec<Vec<f64>>) {
-        gauss_seidel(&self.a, self.blocks, &self.inv_diag, f, z, direction, copies);
+        gauss_seidel(self.a.cycle(), self.blocks, &self.inv_diag, f, z, direction, copies);
     }
 }
 
@@ -461,16 +531,40 @@ mod tests {
             let (a, d) = scaling::equilibrate_rows(&to_csr(&a)).unwrap();
             let b: Vec<f64> = (0..a.nrows()).map(|i| if (i / 2) % m == 0 { 0.0 } else { 1.0 }).collect();
             let b = scaling::scale_rhs(&b, &d);
-            let amg = Amg::build_from_rows(a, Some(NodeLayout { per_node: 2, positions: &positions }), AmgParams::default());
+            let amg =
+                Amg::build_from_rows(a, Some(NodeLayout { per_node: 2, positions: &positions }), AmgParams::default(), Finest::System);
             assert!(amg.sizes().len() >= 2, "{:?}", amg.sizes());
             // Five-node aggregates of a 5-point stencil carry 3 coarse unknowns for 10
             // fine ones, and the coarse stencils widen: measured 3.3.
             assert!(amg.operator_complexity() < 4.0, "{}", amg.operator_complexity());
-            let out = gmres::solve_gmres(amg.fine_operator(), &b, |v| amg.solve_in_place(v), 1e-10, 200, 30, None);
+            let out = gmres::solve_gmres(amg.fine_operator().expect("kept"), &b, |v, z| amg.solve_into(v, z), 1e-10, 200, 30, None);
             assert_eq!(out.status, gmres::Status::Converged, "{m}: {:?}", out.history);
             counts.push(out.iterations);
         }
         eprintln!("GMRES+AMG iterations on 33², 65², 129² nodes: {counts:?}");
         assert!(counts.iter().all(|&c| c <= 20), "{counts:?}");
+    }
+
+    /// A hierarchy that only preconditions keeps no double-precision copy of its
+    /// finest operator, and its cycle is the same linear map as one that keeps the
+    /// system: both apply the finest rows rounded to single precision, so the
+    /// preconditioned vectors agree bit for bit and GMRES takes the same iterations.
+    #[test]
+    fn a_preconditioner_only_hierarchy_applies_the_same_cycle() {
+        let (a, positions) = vector_laplacian(65);
+        let (a, d) = scaling::equilibrate_rows(&to_csr(&a)).unwrap();
+        let b = scaling::scale_rhs(&(0..a.nrows()).map(|i| 1.0 + (i % 7) as f64).collect::<Vec<_>>(), &d);
+        let layout = Some(NodeLayout { per_node: 2, positions: &positions });
+        let kept = Amg::build_from_rows(a.clone(), layout, AmgParams::default(), Finest::System);
+        let only = Amg::build_from_rows(a.clone(), layout, AmgParams::default(), Finest::PreconditionerOnly);
+        assert!(kept.fine_operator().is_some() && only.fine_operator().is_none());
+        let (mut z1, mut z2) = (vec![0.0; b.len()], vec![1.0; b.len()]);
+        kept.solve_into(&b, &mut z1);
+        only.solve_into(&b, &mut z2);
+        assert_eq!(z1, z2);
+        let run = |amg: &Amg| gmres::solve_gmres(&a, &b, |v, z| amg.solve_into(v, z), 1e-10, 200, 30, None);
+        let (o1, o2) = (run(&kept), run(&only));
+        assert_eq!(o1.status, gmres::Status::Converged);
+        assert_eq!(o1.iterations, o2.iterations);
     }
 }

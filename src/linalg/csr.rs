@@ -261,9 +261,45 @@ pub fn transposed(ncols: usize, offsets: &[usize], cols: &[u32], mut place: impl
     out
 }
 
+/// Compressed rows by reference: the structure of a [`Csr`] with values of any
+/// precision, so that the multigrid's finest level can apply the system's rows with
+/// their values rounded to single precision without a second copy of the structure.
+#[derive(Clone, Copy, Debug)]
+pub struct RowsRef<'a, V = f64> {
+    offsets: &'a [usize],
+    cols: &'a [u32],
+    vals: &'a [V],
+}
+
+impl<'a, V: Value> RowsRef<'a, V> {
+    /// Rows.
+    pub fn nrows(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// Row offsets, column indices and values of all rows.
+    pub fn parts(&self) -> (&'a [usize], &'a [u32], &'a [V]) {
+        (self.offsets, self.cols, self.vals)
+    }
+}
+
+impl<'a, V: Value> From<&'a Csr<V>> for RowsRef<'a, V> {
+    fn from(a: &'a Csr<V>) -> Self {
+        RowsRef { offsets: &a.offsets, cols: &a.cols, vals: &a.vals }
+    }
+}
+
+impl<V: Value> Csr<V> {
+    /// This matrix's rows with `vals` in place of its values (one per stored entry).
+    pub fn with_values<'a, W: Value>(&'a self, vals: &'a [W]) -> RowsRef<'a, W> {
+        assert_eq!(vals.len(), self.nnz(), "one value per stored entry");
+        RowsRef { offsets: &self.offsets, cols: &self.cols, vals }
+    }
+}
+
 /// `y = A x`, rows in parallel, in double precision whatever `A` stores.
-pub fn product<V: Value>(a: &Csr<V>, x: &[f64], y: &mut [f64]) {
-    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
+pub fn product<'a, V: Value>(a: impl Into<RowsRef<'a, V>>, x: &[f64], y: &mut [f64]) {
+    let (ptr, idx, val) = a.into().parts();
     y.par_iter_mut().enumerate().with_min_len(256).for_each(|(r, y)| {
         let entries = ptr[r]..ptr[r + 1];
         *y = row_dot(&idx[entries.clone()], &val[entries], x);

@@ -62,6 +62,50 @@ pub(super) fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// Rows per task of [`orthogonalise`]: a piece of `w` stays in cache while every basis
+/// vector is read against it.
+const ORTHOGONALISE_ROWS: usize = 4096;
+
+/// `h = Vᵀ w`, `w ← w − V h` in one pass for the dot products and one for the update
+/// (classical Gram–Schmidt), repeated once when `w` lost more than `1 − 1/√2` of its
+/// norm (Daniel, Gragg, Kaufman & Stewart, *Math. Comp.* 30 (1976) 772–795: "twice is
+/// enough"). Returns `h` and `‖w‖` after. Modified Gram–Schmidt reads every basis
+/// vector twice and `w` three times per vector; here each pass reads every basis
+/// vector once against a piece of `w` held in cache. The partial sums are added in a
+/// fixed order: the same `h` on every run.
+pub(super) fn orthogonalise(basis: &[Vec<f64>], w: &mut [f64]) -> (Vec<f64>, f64) {
+    let project = |w: &mut [f64]| -> Vec<f64> {
+        let k = basis.len();
+        let parts: Vec<Vec<f64>> = w
+            .par_chunks(ORTHOGONALISE_ROWS)
+            .enumerate()
+            .map(|(c, w)| {
+                let first = c * ORTHOGONALISE_ROWS;
+                basis.iter().map(|v| v[first..first + w.len()].iter().zip(w).map(|(v, w)| v * w).sum()).collect()
+            })
+            .collect();
+        let mut h = vec![0.0; k];
+        for part in &parts {
+            h.iter_mut().zip(part).for_each(|(h, p)| *h += p);
+        }
+        w.par_chunks_mut(ORTHOGONALISE_ROWS).enumerate().for_each(|(c, w)| {
+            let rows = c * ORTHOGONALISE_ROWS..c * ORTHOGONALISE_ROWS + w.len();
+            for (v, &h) in basis.iter().zip(&h) {
+                w.iter_mut().zip(&v[rows.clone()]).for_each(|(w, v)| *w -= h * v);
+            }
+        });
+        h
+    };
+    let before = norm(w);
+    let mut h = project(w);
+    let mut after = norm(w);
+    if after < before * std::f64::consts::FRAC_1_SQRT_2 {
+        project(w).iter().zip(h.iter_mut()).for_each(|(again, h)| *h += again);
+        after = norm(w);
+    }
+    (h, after)
+}
+
 fn true_residual(a: &Csr, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
     product(a, x, r);
     r.par_iter_mut().zip(b).with_min_len(4096).for_each(|(r, b)| *r = b - *r);
@@ -92,7 +136,7 @@ pub struct OriginalResidual<'a> {
 pub fn solve_gmres(
     a: &Csr,
     b: &[f64],
-    precondition: impl Fn(&mut [f64]),
+    precondition: impl Fn(&[f64], &mut [f64]),
     tolerance: f64,
     max_iterations: usize,
     restart: usize,
@@ -112,15 +156,15 @@ pub fn solve_gmres(
         out.relative_residual = 0.0;
         return out;
     }
-    let mut r = vec![0.0; n];
-    let mut beta = true_residual(a, &x, b, &mut r);
-    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
+    // `w` holds the residual between cycles and `A M⁻¹ v` within one.
     let (mut w, mut z) = (vec![0.0; n], vec![0.0; n]);
+    let mut beta = true_residual(a, &x, b, &mut w);
+    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
     loop {
         let relative = beta / b_norm;
         out.relative_residual = relative;
         if relative <= tolerance {
-            match original.as_ref().map(|o| ((o.residual)(&r), o.target)) {
+            match original.as_ref().map(|o| ((o.residual)(&w), o.target)) {
                 Some((r0, target)) if r0 > target && relative > 0.0 => tolerance = relative * target / r0,
                 _ => {
                     out.status = Status::Converged;
@@ -134,7 +178,7 @@ pub fn solve_gmres(
         }
         // One cycle: Arnoldi on A M⁻¹ from r / β.
         basis.clear();
-        basis.push(r.iter().map(|v| v / beta).collect());
+        basis.push(w.iter().map(|v| v / beta).collect());
         let mut h = vec![vec![0.0f64; m]; m + 1];
         let (mut cs, mut sn) = (vec![0.0f64; m], vec![0.0f64; m]);
         let mut g = vec![0.0f64; m + 1];
@@ -144,15 +188,12 @@ pub fn solve_gmres(
             if out.iterations >= max_iterations {
                 break;
             }
-            z.copy_from_slice(&basis[j]);
-            precondition(&mut z);
+            precondition(&basis[j], &mut z);
             product(a, &z, &mut w);
-            for (i, v) in basis.iter().enumerate() {
-                let d = dot(&w, v);
+            let (projections, wn) = orthogonalise(&basis, &mut w);
+            for (i, d) in projections.into_iter().enumerate() {
                 h[i][j] = d;
-                w.par_iter_mut().zip(v).with_min_len(4096).for_each(|(w, v)| *w -= d * v);
             }
-            let wn = norm(&w);
             h[j + 1][j] = wn;
             for i in 0..j {
                 let t = cs[i] * h[i][j] + sn[i] * h[i + 1][j];
@@ -179,14 +220,14 @@ pub fn solve_gmres(
             let s: f64 = (i + 1..steps).map(|k| h[i][k] * y[k]).sum();
             y[i] = if h[i][i] != 0.0 { (g[i] - s) / h[i][i] } else { 0.0 };
         }
-        // The update in `z` (free until the next cycle): no vector more at the peak.
-        let update = &mut z;
-        update.fill(0.0);
+        // The update `M⁻¹ V y`, `V y` in `w` (free until the next cycle): no vector more
+        // at the peak.
+        w.fill(0.0);
         for (yi, v) in y.iter().zip(&basis) {
-            update.par_iter_mut().zip(v).with_min_len(4096).for_each(|(u, v)| *u += yi * v);
+            w.par_iter_mut().zip(v).with_min_len(4096).for_each(|(u, v)| *u += yi * v);
         }
-        precondition(update);
-        x.par_iter_mut().zip(&*update).with_min_len(4096).for_each(|(x, u)| *x += u);
+        precondition(&w, &mut z);
+        x.par_iter_mut().zip(&z).with_min_len(4096).for_each(|(x, u)| *x += u);
         out.restarts += 1;
         if x.iter().any(|v| !v.is_finite()) {
             out.status = Status::Breakdown;
@@ -194,7 +235,7 @@ pub fn solve_gmres(
             break;
         }
         let previous = beta;
-        beta = true_residual(a, &x, b, &mut r);
+        beta = true_residual(a, &x, b, &mut w);
         out.history.push(beta / b_norm);
         if beta / b_norm > tolerance && beta > STAGNATION * previous {
             out.status = if beta / b_norm <= asked { Status::Converged } else { Status::Stalled };
@@ -225,11 +266,44 @@ mod tests {
         Csr::from_triplets(n, n, &entries)
     }
 
+    /// Classical Gram–Schmidt with one reorthogonalisation: `w` ends orthogonal to the
+    /// basis to round-off, `h` holds its projections, and `‖w‖` is returned, also when
+    /// `w` lies almost in the basis' span (the case that needs the second pass).
+    #[test]
+    fn orthogonalise_projects_out_the_basis_to_round_off() {
+        let n = 10_000;
+        let mut basis: Vec<Vec<f64>> = Vec::new();
+        for k in 0..6 {
+            let mut v: Vec<f64> = (0..n).map(|i| ((i * (k + 3) * 7919) % 1009) as f64 / 1009.0 - 0.5).collect();
+            let (_, norm) = orthogonalise(&basis, &mut v);
+            v.iter_mut().for_each(|x| *x /= norm);
+            basis.push(v);
+        }
+        for tilt in [1.0, 1e-8] {
+            // w = V c + tilt * e, e a vector outside the span.
+            let c = [0.3, -1.2, 0.7, 2.0, -0.4, 0.9];
+            let mut e: Vec<f64> = (0..n).map(|i| ((i * 104729) % 997) as f64 / 997.0 - 0.5).collect();
+            let (_, en) = orthogonalise(&basis, &mut e);
+            let mut w: Vec<f64> = (0..n).map(|i| tilt * e[i] / en + basis.iter().zip(c).map(|(v, c)| c * v[i]).sum::<f64>()).collect();
+            let (h, wn) = orthogonalise(&basis, &mut w);
+            for (hk, ck) in h.iter().zip(c) {
+                assert!((hk - ck).abs() < 1e-13, "tilt {tilt}: {hk} against {ck}");
+            }
+            assert!((wn - tilt).abs() < 1e-6 * tilt, "tilt {tilt}: norm {wn}");
+            assert!((wn - norm(&w)).abs() <= 1e-15 * wn.max(1e-300) + 1e-300);
+            // Orthogonal relative to what is left of `w`: one pass leaves about
+            // `eps ‖w₀‖ / ‖w‖` = 1e-8 at tilt 1e-8, the second pass round-off.
+            for v in &basis {
+                assert!(dot(v, &w).abs() < 1e-13 * wn, "tilt {tilt}: left {:.1e} of {wn:.1e}", dot(v, &w));
+            }
+        }
+    }
+
     #[test]
     fn converges_on_a_nonsymmetric_system_and_reports_the_true_residual() {
         let a = convection(200);
         let b: Vec<f64> = (0..200).map(|i| (i as f64 * 0.1).sin()).collect();
-        let out = solve_gmres(&a, &b, |_| {}, 1e-12, 1000, 20, None);
+        let out = solve_gmres(&a, &b, |v, z| z.copy_from_slice(v), 1e-12, 1000, 20, None);
         assert_eq!(out.status, Status::Converged);
         let mut r = vec![0.0; 200];
         let res = true_residual(&a, &out.x, &b, &mut r) / norm(&b);
@@ -243,9 +317,9 @@ mod tests {
         let a = convection(50);
         let b = vec![1.0; 50];
         // M = A: solve by running GMRES itself to round-off.
-        let exact = |v: &mut [f64]| {
-            let inner = solve_gmres(&a, v, |_| {}, 1e-15, 500, 50, None);
-            v.copy_from_slice(&inner.x);
+        let exact = |v: &[f64], z: &mut [f64]| {
+            let inner = solve_gmres(&a, v, |v, z| z.copy_from_slice(v), 1e-15, 500, 50, None);
+            z.copy_from_slice(&inner.x);
         };
         let out = solve_gmres(&a, &b, exact, 1e-10, 100, 10, None);
         assert_eq!(out.status, Status::Converged);
@@ -267,11 +341,11 @@ mod tests {
         let original = |r: &[f64]| r.iter().zip(&weights).map(|(r, w)| (r * w).powi(2)).sum::<f64>().sqrt() / b_original;
         let mut r = vec![0.0; n];
         let target = 1e-7;
-        let plain = solve_gmres(&a, &b, |_| {}, 1e-8, 1000, 5, None);
+        let plain = solve_gmres(&a, &b, |v, z| z.copy_from_slice(v), 1e-8, 1000, 5, None);
         true_residual(&a, &plain.x, &b, &mut r);
         assert!(original(&r) > 10.0 * target, "the plain run already meets the target: {:.1e}", original(&r));
         let checked = OriginalResidual { residual: &original, target };
-        let out = solve_gmres(&a, &b, |_| {}, 1e-8, 1000, 5, Some(checked));
+        let out = solve_gmres(&a, &b, |v, z| z.copy_from_slice(v), 1e-8, 1000, 5, Some(checked));
         assert_eq!(out.status, Status::Converged);
         true_residual(&a, &out.x, &b, &mut r);
         assert!(original(&r) <= target, "original residual {:.1e}", original(&r));
@@ -282,7 +356,7 @@ mod tests {
     fn a_stall_is_reported_with_its_residual() {
         // The 2x2 rotation [[0, 1], [-1, 0]]: GMRES(1) makes no progress on it.
         let a = Csr::from_triplets(2, 2, &[(0, 1, 1.0), (1, 0, -1.0)]);
-        let out = solve_gmres(&a, &[1.0, 0.0], |_| {}, 1e-10, 100, 1, None);
+        let out = solve_gmres(&a, &[1.0, 0.0], |v, z| z.copy_from_slice(v), 1e-10, 100, 1, None);
         assert_eq!(out.status, Status::Stalled);
         assert!((out.relative_residual - 1.0).abs() < 1e-12);
         assert!(out.iterations < 100);

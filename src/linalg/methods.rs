@@ -237,12 +237,13 @@ pub(super) fn solve_gmres_multigrid(
         Some(aux) => (aux, Some(rows)),
         None => (rows, None),
     };
-    let pc = precond::BuiltPreconditioner::Amg(Box::new(amg::Amg::build_from_rows(finest, layout, amg::AmgParams::default())));
+    let keep = if system.is_some() { amg::Finest::PreconditionerOnly } else { amg::Finest::System };
+    let pc = precond::BuiltPreconditioner::Amg(Box::new(amg::Amg::build_from_rows(finest, layout, amg::AmgParams::default(), keep)));
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
     run_gmres(rows, &pc, rhs, &start, settings).map_err(|e| {
         let rows = system.unwrap_or_else(|| {
             let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
-            amg.into_fine_operator()
+            amg.into_fine_operator().expect("kept as the system")
         });
         Box::new((e, Leftover::Rows(rows)))
     })
@@ -298,7 +299,7 @@ pub(super) fn run_gmres(
     let t_solve = Instant::now();
     let original_of = |r: &[f64]| rhs.residuals(r).1;
     let original = rhs.scales.is_some().then_some(gmres::OriginalResidual { residual: &original_of, target: ORIGINAL_RESIDUAL_TARGET });
-    let out = gmres::solve_gmres(rows, &rhs.solved, |v| pc.solve_in_place(v), tolerance, max_iterations, restart, original);
+    let out = gmres::solve_gmres(rows, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart, original);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
     let (_, original_relative_residual) = rhs.residuals(&row_residual(rows, &out.x, &rhs.solved));

@@ -22,6 +22,7 @@
 pub mod aggregation;
 pub mod amg;
 pub mod bicgstab;
+pub mod blocks;
 pub mod csr;
 pub mod distributed;
 pub mod gmres;

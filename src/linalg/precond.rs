@@ -138,7 +138,7 @@ impl BuiltPreconditioner {
     /// finest level).
     pub fn fine_operator(&self) -> Option<&super::csr::Csr> {
         match self {
-            BuiltPreconditioner::Amg(p) => Some(p.fine_operator()),
+            BuiltPreconditioner::Amg(p) => p.fine_operator(),
             _ => None,
         }
     }
@@ -161,6 +161,17 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Ilut(p) => p.dim(),
             BuiltPreconditioner::Amg(p) => p.dim(),
             BuiltPreconditioner::SaddlePoint(p) => p.dim(),
+        }
+    }
+
+    /// `z = M⁻¹ v` for one vector.
+    pub fn solve_into(&self, v: &[f64], z: &mut [f64]) {
+        match self {
+            BuiltPreconditioner::Amg(p) => p.solve_into(v, z),
+            _ => {
+                z.copy_from_slice(v);
+                self.solve_in_place(z);
+            }
         }
     }
 

@@ -24,7 +24,7 @@
 //! complement has eigenvalues 0.015 to 4 against its diagonal there, two with a
 //! negative real part: the equal-order pressure's weak modes).
 
-use super::amg::{Amg, AmgParams, NodeLayout};
+use super::amg::{Amg, AmgParams, Finest, NodeLayout};
 use super::csr::Csr;
 use std::sync::Mutex;
 
@@ -108,7 +108,7 @@ impl SaddlePoint {
         let inverse_schur = simple_inverse_schur(a, &gradient, &continuity);
         drop(continuity);
         let layout = NodeLayout { per_node: 2, positions: layout.positions };
-        let displacement = Amg::build_from_rows(displacement, Some(layout), AmgParams::default());
+        let displacement = Amg::build_from_rows(displacement, Some(layout), AmgParams::default(), Finest::PreconditionerOnly);
         Some(SaddlePoint { displacement, gradient, inverse_schur, work: Mutex::new((Vec::new(), Vec::new())) })
     }
 

@@ -2,7 +2,7 @@
 //! blocks of a level, with the (pseudo-)inverses of its diagonal blocks.
 
 use super::aggregation::Blocks;
-use super::csr::{row_dot, Csr};
+use super::csr::{row_dot, Csr, RowsRef, Value};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
@@ -95,13 +95,14 @@ pub(super) enum Sweep {
 /// nodes couple only through their edges, so the sweep stays a Gauss–Seidel sweep
 /// almost everywhere.
 ///
-/// Each range is swept in a private copy of the whole iterate (`copies`, kept by the
-/// caller between sweeps), which holds the values of the other ranges from before the
-/// sweep and its own as they are updated, so that the inner loop reads one array
-/// without testing where a column lies (the test was 40 % of the sweep's samples);
-/// the ranges are then copied back.
-pub(super) fn gauss_seidel(
-    a: &Csr,
+/// Each range but the first is swept in a private copy of the whole iterate (`copies`,
+/// kept by the caller between sweeps), which holds the values of the other ranges from
+/// before the sweep and its own as they are updated, so that the inner loop reads one
+/// array without testing where a column lies (the test was 40 % of the sweep's
+/// samples); the first range is swept in the iterate itself, which no other range
+/// writes, and the other ranges are then copied back.
+pub(super) fn gauss_seidel<'a, V: Value>(
+    a: impl Into<RowsRef<'a, V>>,
     blocks: Blocks,
     inv_diag: &[f64],
     f: &[f64],
@@ -109,6 +110,7 @@ pub(super) fn gauss_seidel(
     direction: Sweep,
     copies: &mut Vec<Vec<f64>>,
 ) {
+    let a = a.into();
     let nodes = blocks.nodes;
     let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
     if parts == 1 {
@@ -117,23 +119,38 @@ pub(super) fn gauss_seidel(
     }
     let (b, per_part) = (blocks.block, nodes.div_ceil(parts));
     let range_of = |part: usize| part * per_part..nodes.min((part + 1) * per_part);
-    copies.resize_with(parts, Vec::new);
-    copies.par_iter_mut().enumerate().for_each(|(part, copy)| {
+    // The first range is swept in `z` itself: the others write only their copies.
+    copies.resize_with(parts - 1, Vec::new);
+    copies.par_iter_mut().for_each(|copy| {
         copy.clear();
         copy.extend_from_slice(z);
-        sweep(a, blocks, inv_diag, f, copy, range_of(part), direction);
     });
-    z.par_chunks_mut(per_part * b).enumerate().for_each(|(part, own)| {
+    let own: Vec<&mut Vec<f64>> = copies.iter_mut().collect();
+    rayon::scope(|s| {
+        for (part, copy) in own.into_iter().enumerate() {
+            s.spawn(move |_| sweep(a, blocks, inv_diag, f, copy, range_of(part + 1), direction));
+        }
+        sweep(a, blocks, inv_diag, f, z, range_of(0), direction);
+    });
+    z.par_chunks_mut(per_part * b).enumerate().skip(1).for_each(|(part, own)| {
         let first = range_of(part).start * b;
-        own.copy_from_slice(&copies[part][first..first + own.len()]);
+        own.copy_from_slice(&copies[part - 1][first..first + own.len()]);
     });
 }
 
 /// One Gauss–Seidel sweep over the nodes of `range` of the iterate `x`, in the order
 /// of `direction`: `x_I += D_I⁺ (f − A x)_I`.
-fn sweep(a: &Csr, blocks: Blocks, inv_diag: &[f64], f: &[f64], x: &mut [f64], range: std::ops::Range<usize>, direction: Sweep) {
+fn sweep<V: Value>(
+    a: RowsRef<V>,
+    blocks: Blocks,
+    inv_diag: &[f64],
+    f: &[f64],
+    x: &mut [f64],
+    range: std::ops::Range<usize>,
+    direction: Sweep,
+) {
     let b = blocks.block;
-    let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());
+    let (ptr, idx, val) = a.parts();
     let mut s = [0.0f64; MAX_BLOCK];
     let mut update = |node: usize| {
         for (m, sm) in s.iter_mut().enumerate().take(b) {
