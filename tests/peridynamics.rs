@@ -332,3 +332,38 @@ fn free_edges_converge_at_first_order() {
     assert!(order > 0.8, "{order}");
     assert!(errors[2].1 < errors[0].1 / 2.0, "interior error must decrease: {errors:?}");
 }
+
+/// An MPI rank assembles only the rows of the nodes it owns
+/// (`Bonds::stiffness_rows`): the other rows are empty with a zero load, and the
+/// rows of two complementary owner sets together are the whole stiffness and load,
+/// bit for bit (the same bonds summed in the same order).
+#[test]
+fn owned_rows_of_two_ranks_make_the_whole_stiffness() {
+    let p = cubic_scene("ac", None, 0.1);
+    let d = discretise(&p);
+    let body: Vec<[f64; 2]> = (0..d.nodes.free).map(|i| [1.0 + i as f64, -0.5 * i as f64]).collect();
+    let (whole, load) = d.bonds().stiffness(&body).unwrap();
+    let owner = mlsm::linalg::partition::morton_owners(&d.nodes.positions[..d.nodes.free], 2);
+    let mut entries = Vec::new();
+    let mut joined = vec![0.0; load.len()];
+    for rank in 0..2 {
+        let (part, part_load) = d.bonds().stiffness_rows(&body, |i| owner[i] == rank).unwrap();
+        for (r, c, v) in part.entries() {
+            assert_eq!(owner[r / 2], rank, "row {r} of node {} assembled by rank {rank}", r / 2);
+            entries.push((r, c, v));
+        }
+        for (r, v) in part_load.iter().enumerate() {
+            if owner[r / 2] != rank {
+                assert_eq!(*v, 0.0, "load of row {r} on rank {rank}");
+            } else {
+                joined[r] = *v;
+            }
+        }
+    }
+    assert!(owner.contains(&0) && owner.contains(&1));
+    entries.sort_by_key(|e| (e.0, e.1));
+    let mut all: Vec<_> = whole.entries().collect();
+    all.sort_by_key(|e| (e.0, e.1));
+    assert_eq!(entries, all);
+    assert_eq!(joined, load);
+}

@@ -129,6 +129,8 @@ mod with_petsc {
         assert!(o.status.success(), "{}", describe(&o));
         let s = summary(&two);
         assert_eq!(s["solver"]["ranks"]["ranks"], 2, "{}", s["solver"]);
+        // Each rank assembled the rows of its own nodes: together, the whole stiffness.
+        assert_eq!(s["nonzeros"], summary(&one)["nonzeros"]);
         let d = displacement_difference(&one, &two);
         eprintln!("PD plate, one process vs two ranks: {d:.1e}");
         assert!(d < 1e-7, "{d:e}");

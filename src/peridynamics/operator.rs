@@ -60,6 +60,13 @@ impl Bonds<'_> {
     /// side `V_i b_i + sum_{j constrained} V_i c_ij (xi ⊗ xi) u_j`. Returns the first
     /// row holding a non-finite coefficient as an error.
     pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(Csr, Vec<f64>), usize> {
+        self.stiffness_rows(body_force, |_| true)
+    }
+
+    /// [`Bonds::stiffness`] with only the rows of the free nodes `own` accepts: the
+    /// other nodes' rows are empty and their right-hand side zero (an MPI rank
+    /// assembles the rows of the nodes it owns, [`crate::linalg::distributed`]).
+    pub fn stiffness_rows(&self, body_force: &[[f64; 2]], own: impl Fn(usize) -> bool + Sync) -> Result<(Csr, Vec<f64>), usize> {
         let free = self.nodes.free;
         let dofs = self.nodes.dofs();
         let node_cols = |i: usize| [dofs.dof(i, 0), dofs.dof(i, 1)];
@@ -69,6 +76,9 @@ impl Bonds<'_> {
         let rows: Vec<NodeRows> = (0..free)
             .into_par_iter()
             .map(|i| {
+                if !own(i) {
+                    return (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
+                }
                 let v = self.nodes.volumes[i];
                 let k = self.families.of(i).len() + 1;
                 let (mut cols, mut top, mut bottom) = (Vec::with_capacity(2 * k), Vec::with_capacity(2 * k), Vec::with_capacity(2 * k));

@@ -179,20 +179,39 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
+    // With PETSc each rank assembles the rows of the free nodes it owns (a Morton split
+    // of their positions, as for the Navier model); in one process `owner` is all 0.
+    let free_positions = &disc.nodes.positions[..disc.nodes.free];
+    let owner = matches!(params.solver.kind, linalg::SolverKind::Petsc { .. })
+        .then(|| linalg::partition::morton_owners(free_positions, crate::petsc::world().size));
+    let rank = crate::petsc::world().rank as u32;
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
-        let (m, rhs) = disc.bonds().stiffness(&b).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]))?;
-        let note = format!("{} unknowns, {} nonzeros, {layer} nodes in loaded layers", rhs.len(), m.nnz());
+        let own = |i: usize| owner.as_ref().is_none_or(|o| o[i] == rank);
+        let assembled = disc.bonds().stiffness_rows(&b, own).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
+        let (m, rhs) = linalg::distributed::agree(assembled)?;
+        let rows = if owner.is_some() { " in this rank's rows" } else { "" };
+        let note = format!("{} unknowns, {} nonzeros{rows}, {layer} nodes in loaded layers", rhs.len(), m.nnz());
         Ok(((m, rhs, b, layer), note))
     })?;
     let nonzeros = matrix.nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
-        // The unknowns are the free nodes' displacements, free nodes first.
-        let layout = linalg::NodeLayout { per_node: 2, positions: &disc.nodes.positions[..rhs.len() / 2] };
-        let (x, report) = linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?;
+        let (x, report) = match &owner {
+            Some(owner) => {
+                let dist = linalg::distributed::Distribution::new(owner.clone(), 2, crate::petsc::world());
+                linalg::distributed::solve(&dist, matrix.entries(), &rhs, free_positions, &params.solver)?
+            }
+            None => {
+                // The unknowns are the free nodes' displacements, free nodes first.
+                let layout = linalg::NodeLayout { per_node: 2, positions: free_positions };
+                linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?
+            }
+        };
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;
+    // Over ranks, the entries of every rank's rows.
+    let nonzeros = report.ranks.as_ref().map_or(nonzeros, |r| r.nonzeros.iter().sum());
     let post = timer.run(stage::POST, || {
         let post = post(case, params, &disc, exact, &x)?;
         let note = match &post.errors {
