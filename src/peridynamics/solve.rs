@@ -196,9 +196,9 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     })?;
     let nonzeros = matrix.nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
-        let (x, report) = match &owner {
+        let (x, report) = match owner {
             Some(owner) => {
-                let dist = linalg::distributed::Distribution::new(owner.clone(), 2, crate::petsc::world());
+                let dist = linalg::distributed::Distribution::new(owner, 2, crate::petsc::world());
                 linalg::distributed::solve(&dist, matrix.entries(), &rhs, free_positions, &params.solver)?
             }
             None => {
