@@ -367,3 +367,47 @@ fn owned_rows_of_two_ranks_make_the_whole_stiffness() {
     assert_eq!(entries, all);
     assert_eq!(joined, load);
 }
+
+/// A rank of a distributed run builds the families and weights of its own nodes and
+/// their halo only (`Discretisation::on_rank`): its rows are those of the whole
+/// operator bit for bit, for the compatible rule (whose symmetrisation reads the
+/// neighbours' rows) with and without the volume correction (which reads the
+/// neighbours' family volumes) and for a plain rule; the two ranks' counts add up to
+/// the whole, and each rank holds fewer bonds than the whole.
+#[test]
+fn a_rank_builds_the_rows_of_its_nodes_from_its_halo() {
+    for (rule, correction) in [("ac", "volume"), ("ac", "none"), ("full-area", "volume"), ("partial-area", "none"), ("gauss2x2", "volume")]
+    {
+        let mut p = cubic_scene(rule, None, 0.1);
+        p.peridynamics.as_mut().unwrap().correction = if correction == "volume" {
+            mlsm::peridynamics::SurfaceCorrection::Volume
+        } else {
+            mlsm::peridynamics::SurfaceCorrection::None
+        };
+        let whole = discretise(&p);
+        let body: Vec<[f64; 2]> = (0..whole.nodes.free).map(|i| [1.0 + i as f64, -0.5 * i as f64]).collect();
+        let exact = p.case.exact_solution();
+        let (mut bonds, mut complete, mut compatible) = (0, 0, 0);
+        for rank in 0..2 {
+            let params = p.peridynamics.as_ref().unwrap();
+            let part = Discretisation::on_rank(&p.case, params, exact.as_deref(), &mut StageTimer::new(&Silent), Some((2, rank))).unwrap();
+            let own = |i: usize| part.owns(i);
+            let (a, a_load) = part.bonds().stiffness_rows(&body, own).unwrap();
+            let (b, b_load) = whole.bonds().stiffness_rows(&body, own).unwrap();
+            let what = format!("{rule}, correction {correction}, rank {rank}");
+            let (a, b): (Vec<_>, Vec<_>) = (a.entries().collect(), b.entries().collect());
+            let first = a.iter().zip(&b).find(|(x, y)| x != y);
+            assert!(a.len() == b.len() && first.is_none(), "{what}: {} against {} entries, first difference {first:?}", a.len(), b.len());
+            assert_eq!(a_load, b_load, "{what}");
+            assert!(part.families.bonds() < whole.families.bonds(), "{what}: the rank holds the whole families");
+            bonds += part.bond_count;
+            complete += part.weights.complete_families;
+            compatible += part.weights.compatible_rows;
+        }
+        assert_eq!(
+            (bonds, complete, compatible),
+            (whole.bond_count, whole.weights.complete_families, whole.weights.compatible_rows),
+            "{rule}"
+        );
+    }
+}

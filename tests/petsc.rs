@@ -49,7 +49,13 @@ fn summary(out: &Path) -> serde_json::Value {
 /// relative to the largest displacement of the first.
 #[cfg(feature = "petsc")]
 fn displacement_difference(a: &Path, b: &Path) -> f64 {
-    let read = |d: &Path| mlsm::output::read_vtu(&d.join("solution.vtu")).unwrap().fields["displacement"].1.clone();
+    field_difference(a, b, "displacement")
+}
+
+/// The same for the point field `name`.
+#[cfg(feature = "petsc")]
+fn field_difference(a: &Path, b: &Path, name: &str) -> f64 {
+    let read = |d: &Path| mlsm::output::read_vtu(&d.join("solution.vtu")).unwrap().fields[name].1.clone();
     let (u, v) = (read(a), read(b));
     assert_eq!(u.len(), v.len(), "the same nodes");
     let largest = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -78,6 +84,11 @@ mod with_petsc {
         let d = displacement_difference(&one, &two);
         eprintln!("cantilever, faer LU vs 2-rank MUMPS: {d:.1e}");
         assert!(d < 1e-9, "{d:e}");
+        // Each rank found the supports and made the shapes of its own nodes only; the
+        // stresses come from the gradients of every rank's own nodes, summed.
+        let d = field_difference(&one, &two, "von_mises");
+        eprintln!("cantilever von Mises, faer LU vs 2-rank MUMPS: {d:.1e}");
+        assert!(d < 1e-8, "{d:e}");
         let s = summary(&two);
         let ranks = &s["solver"]["ranks"];
         assert_eq!(ranks["ranks"], 2);
@@ -129,11 +140,19 @@ mod with_petsc {
         assert!(o.status.success(), "{}", describe(&o));
         let s = summary(&two);
         assert_eq!(s["solver"]["ranks"]["ranks"], 2, "{}", s["solver"]);
-        // Each rank assembled the rows of its own nodes: together, the whole stiffness.
-        assert_eq!(s["nonzeros"], summary(&one)["nonzeros"]);
+        // Each rank assembled the rows of its own nodes: together, the whole stiffness;
+        // each built the families and weights of its own nodes and their halo only: the
+        // counts summed over the ranks are those of one process.
+        let whole = summary(&one);
+        assert_eq!(s["nonzeros"], whole["nonzeros"]);
+        assert_eq!((&s["bonds"], &s["weights"]), (&whole["bonds"], &whole["weights"]));
         let d = displacement_difference(&one, &two);
         eprintln!("PD plate, one process vs two ranks: {d:.1e}");
         assert!(d < 1e-7, "{d:e}");
+        // Each rank computed the nonlocal strain of its own nodes, summed over the ranks.
+        let d = field_difference(&one, &two, "von_mises");
+        eprintln!("PD plate von Mises, one process vs two ranks: {d:.1e}");
+        assert!(d < 1e-6, "{d:e}");
     }
 
     /// A KSP that stops (here at the iteration limit passed through) is a solver

@@ -223,7 +223,7 @@ impl PdDynamicPart {
         PdDynamicPart {
             model: "peridynamics",
             constrained_nodes: disc.nodes.constrained(),
-            bonds: disc.families.bonds(),
+            bonds: disc.bond_count,
             spacing: disc.nodes.spacing,
             peridynamics: p.peridynamics.expect("peridynamic run"),
             micromodulus: disc.micromodulus,

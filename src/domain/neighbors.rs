@@ -82,9 +82,20 @@ impl Supports {
     /// Find the supports of every node (module docs): at least `size` nodes each.
     /// `size` must not exceed the node count.
     pub fn nearest(positions: &[Point], size: usize) -> Supports {
+        Supports::nearest_where(positions, size, |_| true)
+    }
+
+    /// The supports of the nodes `wanted` picks, among all of `positions` (the same
+    /// as [`Supports::nearest`] gives them); the other nodes get an empty support.
+    /// A rank of a distributed run finds only its own nodes' supports, which reach
+    /// into the halo of nodes it does not own.
+    pub fn nearest_where(positions: &[Point], size: usize, wanted: impl Fn(usize) -> bool + Sync) -> Supports {
         assert!(size >= 1 && size <= positions.len(), "support size {size} for {} nodes", positions.len());
         let tree = ImmutableKdTree::<f64, 2>::new_from_slice(positions).expect("k-d tree of finite node positions");
-        let rows: Vec<Vec<u32>> = (0..positions.len()).into_par_iter().map(|i| support_of(&tree, positions, i, size)).collect();
+        let rows: Vec<Vec<u32>> = (0..positions.len())
+            .into_par_iter()
+            .map(|i| if wanted(i) { support_of(&tree, positions, i, size) } else { Vec::new() })
+            .collect();
         Supports::from_rows(size, rows)
     }
 
@@ -140,7 +151,8 @@ impl Supports {
         self.indices.len()
     }
 
-    /// Support of node `i` (node indices, `i` first).
+    /// Support of node `i` (node indices, `i` first; empty for a node
+    /// [`Supports::nearest_where`] left out).
     pub fn of(&self, i: usize) -> &[u32] {
         &self.indices[self.offsets[i]..self.offsets[i + 1]]
     }
@@ -168,6 +180,19 @@ mod tests {
             assert_eq!(s.of(14), &[14, 8, 13, 15, 20, 7, 9, 19, 21], "scale {scale}");
             assert!(s.requested() == 6 && s.largest() >= 9 && (0..36).all(|i| s.of(i).len() >= 6));
         }
+    }
+
+    /// The supports of picked nodes are those of the whole search; the others are empty.
+    #[test]
+    fn picked_supports_equal_the_whole_search() {
+        let positions: Vec<Point> = (0..300).map(|k| [((k * 37) % 101) as f64 * 0.013, ((k * 53) % 97) as f64 * 0.011]).collect();
+        let whole = Supports::nearest(&positions, 9);
+        let picked = Supports::nearest_where(&positions, 9, |i| i % 3 == 1);
+        for i in 0..positions.len() {
+            let expected: &[u32] = if i % 3 == 1 { whole.of(i) } else { &[] };
+            assert_eq!(picked.of(i), expected, "node {i}");
+        }
+        assert_eq!(picked.total(), (0..300).filter(|i| i % 3 == 1).map(|i| whole.of(i).len()).sum::<usize>());
     }
 
     /// Whole supports agree between unit systems on a rotated, shifted lattice whose

@@ -97,37 +97,50 @@ impl Discretisation {
         case.check_formulas(&nodes.positions, &on_parts)?;
         let boundary_equations: Vec<[ComponentEquation; 2]> = nodes.boundary.iter().map(|b| resolve(b, &case.conditions, exact)).collect();
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
-        let (positions, ghost, supports, (every, needs, gradient_kept), widened) = timer.run(SUPPORTS, || {
+        let world = crate::petsc::world();
+        let distributed = matches!(params.solver.kind, SolverKind::Petsc { .. });
+        let (positions, ghost, owner, supports, (every, needs, gradient_kept), widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
+            // Distributed: a rank finds the supports and makes the shapes of its own
+            // nodes and ghosts only (their supports reach into the others' halo).
+            let owner = distributed.then(|| {
+                let owner = morton_owners(&nodes.positions, world.size);
+                let ghosts: Vec<u32> = ghost_parents(&ghost, positions.len() - nodes.len()).into_iter().map(|i| owner[i]).collect();
+                [owner, ghosts].concat()
+            });
+            let own = |i: usize| owner.as_ref().is_none_or(|o| o[i] as usize == world.rank);
             // Supports are widened for every shape the run will make, the gradient's
             // included; a static least-squares run makes the gradient's shapes only
             // after its solve (`restore_gradient_shapes`), RBF-FD makes them with the
             // rows (`keeps_gradient_shapes`), explicit dynamics reads them at every snapshot.
             let gradient = case.outputs.needs_gradient();
-            let every = shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, gradient));
+            let only_own = |mut ops: Vec<OpSet>| {
+                ops.iter_mut().enumerate().filter(|(i, _)| !own(*i)).for_each(|(_, o)| *o = OpSet::EMPTY);
+                ops
+            };
+            let every = only_own(shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, gradient)));
             let (supports, widened) =
-                widen_degenerate(Supports::nearest(&positions, n_support), &positions, &params.approximation.basis, &every);
+                widen_degenerate(Supports::nearest_where(&positions, n_support, own), &positions, &params.approximation.basis, &every);
             let now = gradient && (case.dynamics.is_some() || keeps_gradient_shapes(&params.approximation.basis));
             let needs = if now == gradient {
                 every.clone()
             } else {
-                shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, now))
+                only_own(shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, now)))
             };
-            let note = format!("{n_support} nearest, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
-            Ok(((positions, ghost, supports, (every, needs, now), widened), note))
+            // Each rank widened its own nodes' supports; the count is of all of them.
+            let widened = match &owner {
+                Some(_) => {
+                    let mut count = [widened as f64];
+                    // MPI's default error handler aborts the job on a failed collective.
+                    crate::petsc::sum_over_ranks(&mut count).expect("MPI_Allreduce of the widened supports");
+                    count[0] as usize
+                }
+                None => widened,
+            };
+            let mine = if owner.is_some() { " of this rank's nodes" } else { "" };
+            let note = format!("{n_support} nearest{mine}, {} ghost nodes, {widened} supports widened", positions.len() - nodes.len());
+            Ok(((positions, ghost, owner, supports, (every, needs, now), widened), note))
         })?;
-        let world = crate::petsc::world();
-        let owner = matches!(params.solver.kind, SolverKind::Petsc { .. }).then(|| {
-            let owner = morton_owners(&nodes.positions, world.size);
-            let ghosts: Vec<u32> = ghost_parents(&ghost, positions.len() - nodes.len()).into_iter().map(|i| owner[i]).collect();
-            [owner, ghosts].concat()
-        });
-        let (mut every, mut needs) = (every, needs);
-        if let Some(owner) = &owner {
-            for ((need, all), _) in needs.iter_mut().zip(every.iter_mut()).zip(owner).filter(|(_, &o)| o as usize != world.rank) {
-                (*need, *all) = (OpSet::EMPTY, OpSet::EMPTY);
-            }
-        }
         let shapes = timer.run(SHAPES, || {
             let s = agree(compute_shapes(&positions, &supports, &params.approximation, &needs).map_err(RunError::from))?;
             let note = format!("{} shape functions", s.count());
@@ -297,13 +310,9 @@ impl Discretisation {
             })
             .collect();
         if self.owner.is_some() {
-            let mut flat: Vec<f64> = g.iter().flatten().flatten().copied().collect();
             // MPI's default error handler aborts the job on a failed collective, so this
             // cannot fail here; were it to, partial gradients must not pass as a result.
-            crate::petsc::sum_over_ranks(&mut flat).expect("MPI_Allreduce of the gradients over the ranks");
-            for (gi, v) in g.iter_mut().zip(flat.chunks_exact(4)) {
-                *gi = [[v[0], v[1]], [v[2], v[3]]];
-            }
+            crate::petsc::sum_over_ranks(g.as_flattened_mut().as_flattened_mut()).expect("MPI_Allreduce of the gradients over the ranks");
         }
         g
     }

@@ -6,7 +6,7 @@ use super::family::Families;
 use super::kernel::{fourth_moment, Micromodulus};
 use super::nodes::{self, Body, PdNodes};
 use super::operator::Bonds;
-use super::weights::{bond_coefficients, search_radius, BondWeights};
+use super::weights::{bond_coefficients, halo_layers, search_radius, BondWeights};
 use super::{loads, strain, PdParams};
 use crate::case::Case;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
@@ -86,12 +86,37 @@ pub struct Discretisation {
     pub weights: BondWeights,
     /// Calibrated micromodulus.
     pub micromodulus: Micromodulus,
+    /// Bonds of the free nodes (both directions counted), over all ranks.
+    pub bond_count: usize,
+    /// Owner rank of each free node when the solve is distributed over MPI ranks
+    /// (`solver.kind = "petsc"`, a Morton split of their positions): a rank builds the
+    /// families and weights of its own nodes and of the halo they read only
+    /// ([`halo_layers`]), and assembles its own rows.
+    pub owner: Option<Vec<u32>>,
+    /// This process's rank among the owners.
+    pub rank: u32,
 }
 
 impl Discretisation {
     /// Build the nodes, families and bond weights of `case` with `params` (`exact`:
     /// the scene's exact solution, for prescribed values), each stage timed by `timer`.
     pub fn new(case: &Case, params: &PdParams, exact: Option<&dyn ExactSolution>, timer: &mut StageTimer) -> Result<Self, RunError> {
+        let world = crate::petsc::world();
+        let ranks = matches!(params.solver.kind, linalg::SolverKind::Petsc { .. }).then_some((world.size, world.rank));
+        Self::on_rank(case, params, exact, timer, ranks)
+    }
+
+    /// The same as rank `rank` of `size` builds it (`ranks = Some((size, rank))`):
+    /// the free nodes split by [`linalg::partition::morton_owners`], the families and
+    /// weights of this rank's nodes and their halo only; the counts are summed over
+    /// the MPI ranks running (none to sum with in one process). `None`: everything.
+    pub fn on_rank(
+        case: &Case,
+        params: &PdParams,
+        exact: Option<&dyn ExactSolution>,
+        timer: &mut StageTimer,
+        ranks: Option<(usize, usize)>,
+    ) -> Result<Self, RunError> {
         let body = Body::new(&case.domain, &case.conditions, exact, params);
         let nodes = timer.run(stage::NODES, || {
             let n = nodes::generate(&body, params);
@@ -115,19 +140,49 @@ impl Discretisation {
             },
             other => other,
         })?;
-        let families = timer.run(FAMILIES, || {
-            let f = Families::within(&nodes.positions, nodes.free, search_radius(params));
-            let note = format!("{} bonds, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
-            Ok((f, note))
+        let owner = ranks.map(|(size, _)| linalg::partition::morton_owners(&nodes.positions[..nodes.free], size));
+        let rank = ranks.map_or(0, |r| r.1) as u32;
+        let own = |i: usize| owner.as_ref().is_none_or(|o| o[i] == rank);
+        let (families, layer) = timer.run(FAMILIES, || {
+            let radius = search_radius(params);
+            let (f, layer) = match owner {
+                Some(_) => {
+                    let (f, layer) = Families::around(&nodes.positions, nodes.free, radius, own, halo_layers(params).1);
+                    (f, Some(layer))
+                }
+                None => (Families::within(&nodes.positions, nodes.free, radius), None),
+            };
+            let mine = if layer.is_some() { " (this rank's nodes and halo)" } else { "" };
+            let note = format!("{} bonds{mine}, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
+            Ok(((f, layer), note))
         })?;
         let moment = fourth_moment(&case.material);
         let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
         let weights = timer.run(WEIGHTS, || {
-            let w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment);
+            let w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment, layer.as_deref());
             let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
             Ok((w, note))
         })?;
-        Ok(Discretisation { nodes, families, weights, micromodulus })
+        let mut disc = Discretisation { bond_count: families.bonds(), nodes, families, weights, micromodulus, owner: None, rank };
+        if layer.is_some() {
+            // Every rank counted its own rows; the counts are of all of them.
+            let w = &disc.weights;
+            let own_bonds = (0..disc.nodes.free).filter(|&i| own(i)).map(|i| disc.families.of(i).len()).sum::<usize>();
+            let mut counts = [own_bonds, w.complete_families, w.compatible_rows, w.compatible_failures].map(|c| c as f64);
+            // MPI's default error handler aborts the job on a failed collective.
+            crate::petsc::sum_over_ranks(&mut counts).expect("MPI_Allreduce of the bond counts");
+            let [bonds, complete, compatible, failures] = counts.map(|c| c as usize);
+            disc.bond_count = bonds;
+            (disc.weights.complete_families, disc.weights.compatible_rows, disc.weights.compatible_failures) =
+                (complete, compatible, failures);
+        }
+        disc.owner = owner;
+        Ok(disc)
+    }
+
+    /// Whether this rank assembles free node `i`'s rows (always, unless distributed).
+    pub fn owns(&self, i: usize) -> bool {
+        self.owner.as_ref().is_none_or(|o| o[i] == self.rank)
     }
 
     /// The operator `L_h` over these bonds.
@@ -161,7 +216,16 @@ fn post(case: &Case, params: &PdParams, disc: &Discretisation, exact: Option<&dy
     u.extend_from_slice(&nodes.prescribed);
     let free = &nodes.positions[..nodes.free];
     let interior = interior_flags(&case.domain, free, params.horizon);
-    let gradient = case.outputs.needs_gradient().then(|| strain::gradients(nodes, &disc.families, &u));
+    // Distributed: each rank computes its own nodes' gradients, the sum over ranks fills in the rest.
+    let gradient = case.outputs.needs_gradient().then(|| {
+        let mut g = strain::gradients(nodes, &disc.families, &u, |i| disc.owns(i));
+        if disc.owner.is_some() {
+            // MPI's default error handler aborts the job on a failed collective, so this
+            // cannot fail here; were it to, partial gradients must not pass as a result.
+            crate::petsc::sum_over_ranks(g.as_flattened_mut().as_flattened_mut()).expect("MPI_Allreduce of the gradients over the ranks");
+        }
+        g
+    });
     let stress = gradient.as_ref().map(|g| StressField::from_gradients(&case.material, g));
     let fields = NodalFields { positions: free, displacement: &u[..nodes.free], stress: stress.as_ref() };
     let probes = probe_values(&case.probes, &fields, exact)?;
@@ -180,25 +244,23 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let exact = exact.as_deref();
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
     // With PETSc each rank assembles the rows of the free nodes it owns (a Morton split
-    // of their positions, as for the Navier model); in one process `owner` is all 0.
+    // of their positions, as for the Navier model).
     let free_positions = &disc.nodes.positions[..disc.nodes.free];
-    let owner = matches!(params.solver.kind, linalg::SolverKind::Petsc { .. })
-        .then(|| linalg::partition::morton_owners(free_positions, crate::petsc::world().size));
-    let rank = crate::petsc::world().rank as u32;
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
-        let own = |i: usize| owner.as_ref().is_none_or(|o| o[i] == rank);
-        let assembled = disc.bonds().stiffness_rows(&b, own).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
+        let assembled =
+            disc.bonds().stiffness_rows(&b, |i| disc.owns(i)).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
         let (m, rhs) = linalg::distributed::agree(assembled)?;
-        let rows = if owner.is_some() { " in this rank's rows" } else { "" };
+        let rows = if disc.owner.is_some() { " in this rank's rows" } else { "" };
         let note = format!("{} unknowns, {} nonzeros{rows}, {layer} nodes in loaded layers", rhs.len(), m.nnz());
         Ok(((m, rhs, b, layer), note))
     })?;
     let nonzeros = matrix.nnz();
     let (x, report) = timer.run(stage::SOLVE, || {
-        let (x, report) = match owner {
+        let (x, report) = match &disc.owner {
             Some(owner) => {
-                let dist = linalg::distributed::Distribution::new(owner, 2, crate::petsc::world());
+                // The post-processing reads the owners too (4 bytes per node).
+                let dist = linalg::distributed::Distribution::new(owner.clone(), 2, crate::petsc::world());
                 linalg::distributed::solve(&dist, matrix.entries(), &rhs, free_positions, &params.solver)?
             }
             None => {
@@ -220,7 +282,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         };
         Ok((post, note))
     })?;
-    let Discretisation { nodes, families, weights, micromodulus } = disc;
+    let Discretisation { nodes, weights, micromodulus, bond_count, .. } = disc;
     let timings = timer.finish();
     let mut report = report;
     if let Some(ranks) = report.ranks.as_mut() {
@@ -229,7 +291,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     Ok(PdSolution {
         params: *params,
         unknowns: nodes.dofs().len(),
-        bonds: families.bonds(),
+        bonds: bond_count,
         weights: WeightsSummary {
             complete_families: weights.complete_families,
             compatible_rows: weights.compatible_rows,

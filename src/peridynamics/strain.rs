@@ -12,11 +12,15 @@ use super::family::Families;
 use super::nodes::PdNodes;
 use rayon::prelude::*;
 
-/// `[[u_x, u_y], [v_x, v_y]]` at every free node; `u` holds all nodes.
-pub fn gradients(nodes: &PdNodes, families: &Families, u: &[[f64; 2]]) -> Vec<[[f64; 2]; 2]> {
+/// `[[u_x, u_y], [v_x, v_y]]` at every free node `wanted` picks (zero at the
+/// others); `u` holds all nodes.
+pub fn gradients(nodes: &PdNodes, families: &Families, u: &[[f64; 2]], wanted: impl Fn(usize) -> bool + Sync) -> Vec<[[f64; 2]; 2]> {
     (0..nodes.free)
         .into_par_iter()
         .map(|i| {
+            if !wanted(i) {
+                return [[0.0; 2]; 2];
+            }
             let x = nodes.positions[i];
             let (mut k, mut b) = ([[0.0; 2]; 2], [[0.0; 2]; 2]);
             for &j in families.of(i) {
@@ -63,7 +67,7 @@ mod tests {
             let families = Families::within(&nodes.positions, nodes.free, radius(&p));
             let u: Vec<[f64; 2]> =
                 nodes.positions.iter().map(|x| [1.0 + g[0][0] * x[0] + g[0][1] * x[1], -2.0 + g[1][0] * x[0] + g[1][1] * x[1]]).collect();
-            for (i, gi) in gradients(&nodes, &families, &u).iter().enumerate() {
+            for (i, gi) in gradients(&nodes, &families, &u, |_| true).iter().enumerate() {
                 for a in 0..2 {
                     for c in 0..2 {
                         assert!((gi[a][c] - g[a][c]).abs() < 1e-12, "{rule:?} node {i}: {gi:?}");

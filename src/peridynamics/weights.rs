@@ -105,7 +105,21 @@ pub struct BondWeights {
     pub compatible_failures: usize,
 }
 
+/// The halo a rank of a distributed run needs around its own rows, in layers of
+/// bonds ([`Families::around`]): `(rows, families)`. The compatible rule's
+/// symmetrisation reads the rows of the own nodes' neighbours (one layer of rows),
+/// and the volume correction of every row computed reads its neighbours' family
+/// volumes (one more layer of families).
+pub fn halo_layers(params: &PdParams) -> (u8, u8) {
+    let rows = u8::from(params.quadrature == Quadrature::Compatible);
+    (rows, rows + u8::from(params.correction == SurfaceCorrection::Volume))
+}
+
 /// Coefficients of every bond (module docs); `moment` is the calibrated `M`.
+/// `layer` (from [`Families::around`]) restricts the work to the rows a rank needs:
+/// those of layers up to [`halo_layers`]'s `rows` are computed (the coefficients of
+/// the others are left 0), and the counts are of layer 0, its own rows; `None`:
+/// every row, all counted.
 pub fn bond_coefficients(
     body: &Body,
     nodes: &PdNodes,
@@ -113,7 +127,10 @@ pub fn bond_coefficients(
     kernel: &Micromodulus,
     params: &PdParams,
     moment: f64,
+    layer: Option<&[u8]>,
 ) -> BondWeights {
+    let computed = |i: usize| layer.is_none_or(|l| l[i] <= halo_layers(params).0);
+    let counted = |i: usize| layer.is_none_or(|l| l[i] == 0);
     let delta = params.horizon;
     let complete_targets: Vec<f64> = MOMENTS.iter().map(|&m| target_moment(m, moment, delta)).collect();
     let scale = 3.0 * moment / delta.powi(4);
@@ -145,6 +162,9 @@ pub fn bond_coefficients(
     let rows: Vec<(Vec<f64>, bool, Option<bool>)> = (0..nodes.free)
         .into_par_iter()
         .map(|i| {
+            if !computed(i) {
+                return (vec![0.0; families.of(i).len()], false, None);
+            }
             let mut c = base_row(i);
             if params.correction == SurfaceCorrection::Volume {
                 for (cj, &j) in c.iter_mut().zip(families.of(i)) {
@@ -173,12 +193,13 @@ pub fn bond_coefficients(
         })
         .collect();
     let complete: Vec<bool> = rows.iter().map(|r| r.1).collect();
-    let complete_families = complete.iter().filter(|&&c| c).count();
-    let compatible_rows = rows.iter().filter(|r| r.2 == Some(true)).count();
-    let compatible_failures = rows.iter().filter(|r| r.2 == Some(false)).count();
+    let count = |pick: fn(bool, Option<bool>) -> bool| rows.iter().enumerate().filter(|(i, r)| counted(*i) && pick(r.1, r.2)).count();
+    let complete_families = count(|complete, _| complete);
+    let compatible_rows = count(|_, compatible| compatible == Some(true));
+    let compatible_failures = count(|_, compatible| compatible == Some(false));
     let mut coefficients: Vec<f64> = rows.into_iter().flat_map(|r| r.0).collect();
     if params.quadrature == Quadrature::Compatible {
-        coefficients = symmetrised(nodes, families, &coefficients, &complete);
+        coefficients = symmetrised(nodes, families, &coefficients, &complete, counted);
     }
     BondWeights { coefficients, complete_families, compatible_rows, compatible_failures }
 }
@@ -190,14 +211,16 @@ pub fn bond_coefficients(
 /// on a tension plate: interior error stalled at 3.8e-3; with it, first order). Bonds
 /// between complete families are left alone: on a uniform lattice their weights are
 /// already symmetric (translation invariance), and averaging the round-off of two
-/// moment solves would cost the cubic exactness (1e-15 -> 2e-10).
-fn symmetrised(nodes: &PdNodes, families: &Families, c: &[f64], complete: &[bool]) -> Vec<f64> {
+/// moment solves would cost the cubic exactness (1e-15 -> 2e-10). Only the rows
+/// `wanted` picks are symmetrised (a rank's own), the others are left as they are.
+fn symmetrised(nodes: &PdNodes, families: &Families, c: &[f64], complete: &[bool], wanted: impl Fn(usize) -> bool + Sync) -> Vec<f64> {
     (0..nodes.free)
         .into_par_iter()
         .flat_map_iter(|i| {
+            let wanted = wanted(i);
             families.range(i).zip(families.of(i)).map(move |(b, &j)| {
                 let j = j as usize;
-                if j >= nodes.free || (complete[i] && complete[j]) {
+                if !wanted || j >= nodes.free || (complete[i] && complete[j]) {
                     return c[b];
                 }
                 let back = families.range(j).start + families.of(j).binary_search(&(i as u32)).expect("bonds are mutual");
