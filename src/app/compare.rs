@@ -147,7 +147,7 @@ fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference,
         scalar("difference_magnitude", diff.iter().map(|d| d[0].hypot(d[1]))),
         integer("interior", interior.iter().map(|&b| b as i32)),
     ];
-    write_points_vtu(&dir.join(&name), free, &p.case.domain, &fields)?;
+    write_points_vtu(&dir.join(&name), free, &p.case.domain, fields)?;
     let inner = inner.ok_or_else(|| {
         AppError::Usage(format!("delta = {}: no node lies at distance >= delta from the boundary; use smaller horizons", params.horizon))
     })?;

@@ -29,7 +29,7 @@ pub(super) fn integer(name: &str, v: impl Iterator<Item = i32>) -> PointField {
 }
 
 /// Write `points` with `fields` to a .vtu, with Delaunay triangles inside the solid for viewing.
-pub(super) fn write_points_vtu(path: &Path, points: &[[f64; 2]], domain: &Domain, fields: &[PointField]) -> Result<(), AppError> {
+pub(super) fn write_points_vtu(path: &Path, points: &[[f64; 2]], domain: &Domain, fields: Vec<PointField>) -> Result<(), AppError> {
     Ok(output::write_vtu(path, points, &cells_inside(domain, points), fields)?)
 }
 

@@ -158,12 +158,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
     }
     let mut series = Series::new(&dir, &p.case.domain);
     let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
-    // Each branch starts the output's clock where its output begins (after the
+    // Each branch starts the output stage where its output begins (after the
     // estimate of a peridynamic run, which is timed as its own stage).
-    let clock = || {
-        let t_out = Instant::now();
-        move || t_out.elapsed().as_secs_f64()
-    };
     match outcome {
         Outcome::NavierStatic(sol) => write_navier_static(&p, sol, staged, t0, &req, None, term, quiet)?,
         Outcome::PdStatic(mut sol) => {
@@ -171,13 +167,13 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             let free = &sol.nodes.positions[..n];
             let fields = (&sol.displacement[..n], sol.stress.as_ref());
             let estimate = peridynamics_estimate(&p, free, (fields, &[]), &mut sol.timings, term);
-            let seconds = clock();
+            let output = OutputStage::start();
             let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
             checks.warnings.extend(warnings::memory(&p));
-            write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, &pd_fields(&p.case, &sol, &estimate))?;
-            sol.timings.record(OUTPUT, seconds());
+            write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, pd_fields(&p.case, &sol, &estimate))?;
+            output.record(&mut sol.timings);
             let target = publish(staged, &PdSummary::new(&p, &sol, &estimate, &checks, t0))?;
-            term.line(OUTPUT, seconds(), &target.display().to_string());
+            term.line(OUTPUT, output.seconds(), &target.display().to_string());
             if !quiet {
                 print_pd(&sol);
                 print_estimate(&estimate);
@@ -185,9 +181,9 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             report_checks(&checks, req.strict, quiet)?;
         }
         Outcome::NavierDynamic(mut sim) => {
-            let seconds = clock();
+            let output = OutputStage::start();
             series.finish(&sim.energies, &sim.positions, (&sim.u, &sim.v), &sim.estimate)?;
-            sim.timings.record(OUTPUT, seconds());
+            output.record(&mut sim.timings);
             let dynamic = Dynamic {
                 nodes: sim.positions.len(),
                 report: &sim.report,
@@ -201,9 +197,9 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             let nodes = &sim.discretisation.nodes;
             let run = ((sim.u.as_slice(), None), sim.history.as_slice());
             let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], run, &mut sim.timings, term);
-            let seconds = clock();
+            let output = OutputStage::start();
             series.finish(&sim.energies, &nodes.positions[..nodes.free], (&sim.u, &sim.v), &estimate)?;
-            sim.timings.record(OUTPUT, seconds());
+            output.record(&mut sim.timings);
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
@@ -213,6 +209,30 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         }
     }
     Ok(())
+}
+
+/// The output stage of a run: its seconds and its peak memory from [`OutputStage::start`].
+struct OutputStage {
+    start: Instant,
+    mark: crate::output::PeakMark,
+}
+
+impl OutputStage {
+    fn start() -> Self {
+        OutputStage { start: Instant::now(), mark: crate::output::restart_peak() }
+    }
+
+    fn seconds(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// Record the seconds and the peak so far as the output stage's.
+    fn record(&self, timings: &mut crate::pipeline::StageTimings) {
+        timings.record(OUTPUT, self.seconds());
+        if let Some(bytes) = crate::output::peak_since(self.mark) {
+            timings.record_peak(OUTPUT, bytes);
+        }
+    }
 }
 
 /// Write `solution.vtu` and `summary.json` of a static Navier run (with the history of
@@ -228,18 +248,17 @@ fn write_navier_static(
     term: &Terminal,
     quiet: bool,
 ) -> Result<(), AppError> {
-    let t_out = Instant::now();
-    let seconds = || t_out.elapsed().as_secs_f64();
+    let output = OutputStage::start();
     let dir = staged.path().to_path_buf();
     let mut checks = warnings::navier_static(&sol, &p.navier, &p.case);
     checks.warnings.extend(warnings::memory(p));
     checks.warnings.extend(target.and_then(TargetReport::warning));
-    write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, &navier_fields(&p.case, &sol))?;
-    sol.timings.record(OUTPUT, seconds());
+    write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, navier_fields(&p.case, &sol))?;
+    output.record(&mut sol.timings);
     let mut summary = NavierSummary::new(p, &sol, &checks, t0);
     summary.target = target;
     let written = publish(staged, &summary)?;
-    term.line(OUTPUT, seconds(), &written.display().to_string());
+    term.line(OUTPUT, output.seconds(), &written.display().to_string());
     if let (Some(to), Some(system)) = (&req.export_system, &sol.system) {
         export::write(to, system, &sol.solver)?;
         if !quiet {

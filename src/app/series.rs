@@ -40,7 +40,7 @@ impl<'a> Series<'a> {
         let tris = self.triangles.get_or_insert_with(|| cells_inside(domain, points));
         let mut fields = vec![vector("displacement", u.iter().copied()), vector("velocity", v.iter().copied())];
         fields.extend(more);
-        output::write_vtu(path, points, tris, &fields)
+        output::write_vtu(path, points, tris, fields)
     }
 
     /// `snapshots/step_<k>.vtu`, listed in `series.pvd`.

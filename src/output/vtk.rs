@@ -8,8 +8,9 @@
 //! vtkio quirks worked around here:
 //! * Its XML writer (`xml::se::to_writer`) calls `Write::write` instead of `write_all` and lets
 //!   its `BufWriter` flush on drop, so short writes and flush errors to a file would be lost
-//!   silently. We therefore serialise into a `Vec<u8>` (where neither can happen) and store it
-//!   with [`write_atomic`].
+//!   silently. We therefore hand it a writer that turns every `write` into `write_all` and
+//!   keeps the first error, which is checked after the serialisation (the file is written
+//!   atomically, [`write_atomic_with`]).
 //! * It `unwrap`s `u32::try_from` of the point and cell counts, so more than `u32::MAX` points
 //!   or triangles would panic; we reject them with an error first.
 //! * On reading, it silently drops point-data arrays it cannot decode, and it panics on some
@@ -19,13 +20,15 @@
 //!   cannot parse; such attributes are removed after serialisation. (For multi-component
 //!   arrays vtkio's range is the component-wise min/max, whereas VTK's own writer uses the
 //!   magnitude range; the attributes are optional hints and left as they are.)
-//! * The whole file is built in memory (about 1.4x the raw array bytes for base64, plus copies
-//!   of the arrays), which is fine for 2D problems of up to millions of nodes.
+//! * It converts the whole model to base64 strings before writing (about 1.4x the raw array
+//!   bytes); the fields' values are moved into it, not copied. A file with a non-finite value
+//!   (see below) is built in memory once more, to strip its ranges.
 //! * It has no model of the `Collection` (`.pvd`) file type (an unknown `type` is even parsed
 //!   as `UnstructuredGrid`), so [`write_pvd`] writes that small XML file by hand.
 
 use std::collections::{BTreeMap, HashSet};
 use std::fmt::Write as _;
+use std::io::Write;
 use std::path::Path;
 
 use vtkio::model::{
@@ -33,6 +36,7 @@ use vtkio::model::{
     VertexNumbers, Vtk,
 };
 
+use super::atomic::write_atomic_with;
 use super::{format_f64, write_atomic, OutputError};
 
 /// Values of a point-data field, stored point-major (`[p0c0, p0c1, ..., p1c0, ...]`).
@@ -110,11 +114,11 @@ fn pad_to_3<T: Copy + Default>(v: &[T]) -> Vec<T> {
     v.chunks_exact(2).flat_map(|c| [c[0], c[1], T::default()]).collect()
 }
 
-/// Validates `fields` against `n` points and converts them to `vtkio` attributes.
-fn point_attributes(fields: &[PointField], n: usize) -> Result<Vec<Attribute>, OutputError> {
+/// Validates `fields` against `n` points and converts them to `vtkio` attributes, each
+/// field's values moved, not copied (two-component ones are padded to three).
+fn point_attributes(fields: Vec<PointField>, n: usize) -> Result<Vec<Attribute>, OutputError> {
     let mut seen = HashSet::new();
-    let mut out = Vec::with_capacity(fields.len());
-    for f in fields {
+    for f in &fields {
         let bad = |detail: String| OutputError::InvalidField { name: f.name.clone(), detail };
         if f.name.is_empty() {
             return Err(bad("field name is empty".into()));
@@ -135,22 +139,57 @@ fn point_attributes(fields: &[PointField], n: usize) -> Result<Vec<Attribute>, O
                 f.components as u128 * n as u128
             )));
         }
-        let comps = if f.components == 2 { 3 } else { f.components };
-        let comps_u32 = u32::try_from(comps).map_err(|_| bad("too many components".into()))?;
-        let data: IOBuffer = match (&f.values, f.components) {
-            (FieldValues::F64(v), 2) => pad_to_3(v).into(),
-            (FieldValues::I32(v), 2) => pad_to_3(v).into(),
-            (FieldValues::F64(v), _) => v.clone().into(),
-            (FieldValues::I32(v), _) => v.clone().into(),
-        };
-        let elem = match comps {
-            1 => ElementType::Scalars { num_comp: 1, lookup_table: None },
-            3 => ElementType::Vectors,
-            _ => ElementType::Generic(comps_u32),
-        };
-        out.push(Attribute::DataArray(DataArray { name: f.name.clone(), elem, data }));
+        if u32::try_from(f.components.max(3)).is_err() {
+            return Err(bad("too many components".into()));
+        }
     }
-    Ok(out)
+    Ok(fields
+        .into_iter()
+        .map(|f| {
+            let comps = if f.components == 2 { 3 } else { f.components };
+            let data: IOBuffer = match (f.values, f.components) {
+                (FieldValues::F64(v), 2) => pad_to_3(&v).into(),
+                (FieldValues::I32(v), 2) => pad_to_3(&v).into(),
+                (FieldValues::F64(v), _) => v.into(),
+                (FieldValues::I32(v), _) => v.into(),
+            };
+            let elem = match comps {
+                1 => ElementType::Scalars { num_comp: 1, lookup_table: None },
+                3 => ElementType::Vectors,
+                _ => ElementType::Generic(comps as u32),
+            };
+            Attribute::DataArray(DataArray { name: f.name, elem, data })
+        })
+        .collect())
+}
+
+/// A writer that passes every `write` on as `write_all` and keeps the first error:
+/// vtkio's XML writer calls `write` (a short write would lose bytes) and flushes its
+/// own buffer when dropped (a failed flush would pass silently); here the caller reads
+/// the error afterwards.
+struct Complete<W: Write> {
+    inner: W,
+    error: Option<std::io::Error>,
+}
+
+impl<W: Write> Write for Complete<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.error.is_some() {
+            return Err(std::io::Error::other("an earlier write failed"));
+        }
+        match self.inner.write_all(buf) {
+            Ok(()) => Ok(buf.len()),
+            Err(e) => {
+                let kind = e.kind();
+                self.error = Some(e);
+                Err(kind.into())
+            }
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
 }
 
 /// Unstructured grid: points (z = 0), triangle cells, point data. Atomic.
@@ -161,7 +200,7 @@ fn point_attributes(fields: &[PointField], n: usize) -> Result<Vec<Attribute>, O
 /// `values.len() == components * points.len()` ([`OutputError::InvalidField`] naming the
 /// field). Non-finite field values are allowed and written as they are. The file is
 /// written with [`write_atomic`].
-pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fields: &[PointField]) -> Result<(), OutputError> {
+pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fields: Vec<PointField>) -> Result<(), OutputError> {
     let n = points.len();
     if u32::try_from(n).is_err() || u32::try_from(triangles.len()).is_err() {
         return Err(OutputError::invalid(path, "vtkio supports at most u32::MAX points and cells per file"));
@@ -172,11 +211,27 @@ pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fie
     if let Some(k) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
         return Err(OutputError::invalid(path, format!("triangle {k} {:?} refers to a point >= {n} (number of points)", triangles[k])));
     }
-    let point_data = point_attributes(fields, n)?;
     // Only an array holding NaN or inf gets a range to strip (the scan of the whole file
     // took 0.4 s at 1e6 nodes).
     let nonfinite = fields.iter().any(|f| matches!(&f.values, FieldValues::F64(v) if v.iter().any(|x| !x.is_finite())));
+    let point_data = point_attributes(fields, n)?;
 
+    let vtk = unstructured_grid(points, triangles, point_data);
+    let vtk_error = |e: vtkio::Error| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() };
+    if nonfinite {
+        // In memory, to strip the ranges vtkio writes as `NaN` or `inf`.
+        let mut bytes = Vec::new();
+        vtk.write_xml(&mut bytes).map_err(vtk_error)?;
+        bytes.push(b'\n');
+        return write_atomic(path, &strip_nonfinite_ranges(&bytes));
+    }
+    // Straight to the file (module docs): the cantilever at 1e6 nodes writes 334 MB,
+    // which in memory first cost up to twice that on top of vtkio's own copy.
+    write_atomic_with(path, |w| write_streamed(vtk, w, path))
+}
+
+/// The `vtkio` model of `points` (z = 0), triangle cells and `point_data`.
+fn unstructured_grid(points: &[[f64; 2]], triangles: &[[usize; 3]], point_data: Vec<Attribute>) -> Vtk {
     let piece = UnstructuredGridPiece {
         points: points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect::<Vec<f64>>().into(),
         cells: Cells {
@@ -188,21 +243,26 @@ pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fie
         },
         data: Attributes { point: point_data, cell: Vec::new() },
     };
-    let vtk = Vtk {
+    Vtk {
         version: Version::new_xml(1, 0),
         byte_order: ByteOrder::LittleEndian,
         title: String::new(),
         file_path: None,
         data: DataSet::inline(piece),
-    };
-    // In memory first: see the module documentation for why not straight to the file.
-    let mut bytes = Vec::new();
-    vtk.write_xml(&mut bytes).map_err(|e| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() })?;
-    bytes.push(b'\n');
-    if nonfinite {
-        bytes = strip_nonfinite_ranges(&bytes);
     }
-    write_atomic(path, &bytes)
+}
+
+/// Serialise `vtk` into `w` and a final newline through [`Complete`]: the first write
+/// error is the result, whatever vtkio made of it (`path` names the file in errors).
+fn write_streamed(vtk: Vtk, w: impl Write, path: &Path) -> Result<(), OutputError> {
+    let mut out = Complete { inner: w, error: None };
+    let written = vtk.write_xml(&mut out);
+    if let Some(e) = out.error {
+        return Err(OutputError::io(path, e));
+    }
+    written.map_err(|e| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() })?;
+    out.inner.write_all(b"\n").map_err(|e| OutputError::io(path, e))?;
+    out.inner.flush().map_err(|e| OutputError::io(path, e))
 }
 
 /// Removes `RangeMin`/`RangeMax` attributes whose value is not a finite number.

@@ -53,7 +53,7 @@ fn vtu_round_trip_is_bit_exact() {
         PointField::scalar("special", special.clone()),
         PointField::scalar("a<b & \"c\"", s.clone()),
     ];
-    write_vtu(&path, &pts, &tris, &fields).unwrap();
+    write_vtu(&path, &pts, &tris, fields.clone()).unwrap();
 
     let raw = std::fs::read_to_string(&path).unwrap();
     for needle in [
@@ -111,7 +111,7 @@ fn vtu_without_cells_or_fields() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("pts.vtu");
     let pts = [[0.5, 0.25], [1.0, -2.0]];
-    write_vtu(&path, &pts, &[], &[]).unwrap();
+    write_vtu(&path, &pts, &[], vec![]).unwrap();
     let back = read_vtu(&path).unwrap();
     assert_eq!(back.points, vec![[0.5, 0.25, 0.0], [1.0, -2.0, 0.0]]);
     assert_eq!(back.cells, 0);
@@ -125,7 +125,7 @@ fn invalid_field_length_names_the_field() {
     let (pts, tris) = grid();
     let n = pts.len();
     let fields = vec![PointField::scalar("ok", vec![0.0; n]), PointField::vector2("sigma_bad", &vec![[0.0; 2]; n - 1])];
-    let err = write_vtu(&path, &pts, &tris, &fields).unwrap_err();
+    let err = write_vtu(&path, &pts, &tris, fields).unwrap_err();
     match &err {
         OutputError::InvalidField { name, detail } => {
             assert_eq!(name, "sigma_bad");
@@ -137,11 +137,11 @@ fn invalid_field_length_names_the_field() {
     assert!(!path.exists(), "nothing may be written on error");
 
     let zero = PointField { name: "z".into(), components: 0, values: FieldValues::F64(vec![]) };
-    let err = write_vtu(&path, &pts, &tris, &[zero]).unwrap_err();
+    let err = write_vtu(&path, &pts, &tris, vec![zero]).unwrap_err();
     assert!(matches!(err, OutputError::InvalidField { ref name, .. } if name == "z"));
 
     let dup = vec![PointField::integer("k", vec![0; n]), PointField::integer("k", vec![1; n])];
-    let err = write_vtu(&path, &pts, &tris, &dup).unwrap_err();
+    let err = write_vtu(&path, &pts, &tris, dup).unwrap_err();
     assert!(matches!(err, OutputError::InvalidField { ref name, .. } if name == "k"));
     assert!(!path.exists());
 }
@@ -151,10 +151,10 @@ fn invalid_mesh_is_rejected() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.vtu");
     let pts = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-    let err = write_vtu(&path, &pts, &[[0, 1, 3]], &[]).unwrap_err();
+    let err = write_vtu(&path, &pts, &[[0, 1, 3]], vec![]).unwrap_err();
     assert!(matches!(err, OutputError::InvalidInput { .. }), "{err:?}");
     assert!(err.to_string().contains("triangle 0"), "{err}");
-    let err = write_vtu(&path, &[[0.0, f64::NAN]], &[], &[]).unwrap_err();
+    let err = write_vtu(&path, &[[0.0, f64::NAN]], &[], vec![]).unwrap_err();
     assert!(err.to_string().contains("point 0"), "{err}");
     assert!(!path.exists());
 }
@@ -185,7 +185,7 @@ fn read_vtu_reports_bad_files_without_panicking() {
 
     // A point-data array with a wrong length is dropped by vtkio; we must notice.
     let good = dir.path().join("good.vtu");
-    write_vtu(&good, &[[0.0, 0.0], [1.0, 0.0]], &[], &[PointField::scalar("f", vec![1.0, 2.0])]).unwrap();
+    write_vtu(&good, &[[0.0, 0.0], [1.0, 0.0]], &[], vec![PointField::scalar("f", vec![1.0, 2.0])]).unwrap();
     assert_eq!(read_vtu(&good).unwrap().fields.len(), 1);
     // Claim two components for a one-component array: vtkio drops it silently on reading.
     let text = std::fs::read_to_string(&good).unwrap();
@@ -229,4 +229,52 @@ fn pvd_lists_every_file_and_time() {
     assert!(matches!(err, OutputError::InvalidInput { .. }));
     // The earlier file is still intact after the failed call.
     assert_eq!(std::fs::read_to_string(&path).unwrap(), xml);
+}
+
+/// A writer that takes at most `chunk` bytes per call and fails once `limit` bytes
+/// have been taken.
+struct Stingy {
+    taken: Vec<u8>,
+    chunk: usize,
+    limit: usize,
+}
+
+impl std::io::Write for Stingy {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.taken.len() >= self.limit {
+            return Err(std::io::Error::other("device full"));
+        }
+        let n = buf.len().min(self.chunk).min(self.limit - self.taken.len());
+        self.taken.extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+fn small_grid() -> Vtk {
+    let pts: Vec<[f64; 2]> = (0..50).map(|k| [(k % 7) as f64 * 0.1, (k / 7) as f64 * 0.1 + 1e-3 * k as f64]).collect();
+    let data = point_attributes(vec![PointField::scalar("s", (0..50).map(|k| k as f64 / 3.0).collect())], 50).unwrap();
+    unstructured_grid(&pts, &[[0, 1, 7], [1, 8, 7]], data)
+}
+
+/// Streamed straight to the file, the XML is the in-memory serialisation plus a
+/// newline, even when the file takes a few bytes per call; a write error is the
+/// result (vtkio alone would have dropped the error of its final flush).
+#[test]
+fn streamed_output_is_complete_or_an_error() {
+    let mut whole = Vec::new();
+    small_grid().write_xml(&mut whole).unwrap();
+    whole.push(b'\n');
+    let path = Path::new("out.vtu");
+    let mut short = Stingy { taken: Vec::new(), chunk: 7, limit: usize::MAX };
+    write_streamed(small_grid(), &mut short, path).unwrap();
+    assert_eq!(short.taken, whole);
+    for limit in [10, whole.len() / 2, whole.len() - 1] {
+        let mut full = Stingy { taken: Vec::new(), chunk: 4096, limit };
+        let err = write_streamed(small_grid(), &mut full, path).unwrap_err();
+        assert!(matches!(err, OutputError::Io { .. }) && err.to_string().contains("device full"), "limit {limit}: {err}");
+    }
 }
