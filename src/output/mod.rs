@@ -94,6 +94,11 @@ impl OutputError {
         OutputError::Io { path: path.to_path_buf(), source }
     }
 
+    /// Shorthand for [`OutputError::Vtk`].
+    pub(crate) fn vtk(path: &std::path::Path, detail: impl ToString) -> Self {
+        OutputError::Vtk { path: path.to_path_buf(), detail: detail.to_string() }
+    }
+
     /// Shorthand for [`OutputError::InvalidInput`].
     pub(crate) fn invalid(path: &std::path::Path, detail: impl Into<String>) -> Self {
         OutputError::InvalidInput { path: path.to_path_buf(), detail: detail.into() }

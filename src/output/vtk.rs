@@ -217,11 +217,10 @@ pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fie
     let point_data = point_attributes(fields, n)?;
 
     let vtk = unstructured_grid(points, triangles, point_data);
-    let vtk_error = |e: vtkio::Error| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() };
     if nonfinite {
         // In memory, to strip the ranges vtkio writes as `NaN` or `inf`.
         let mut bytes = Vec::new();
-        vtk.write_xml(&mut bytes).map_err(vtk_error)?;
+        vtk.write_xml(&mut bytes).map_err(|e| OutputError::vtk(path, e))?;
         bytes.push(b'\n');
         return write_atomic(path, &strip_nonfinite_ranges(&bytes));
     }
@@ -260,7 +259,7 @@ fn write_streamed(vtk: Vtk, w: impl Write, path: &Path) -> Result<(), OutputErro
     if let Some(e) = out.error {
         return Err(OutputError::io(path, e));
     }
-    written.map_err(|e| OutputError::Vtk { path: path.to_path_buf(), detail: e.to_string() })?;
+    written.map_err(|e| OutputError::vtk(path, e))?;
     out.inner.write_all(b"\n").map_err(|e| OutputError::io(path, e))?;
     out.inner.flush().map_err(|e| OutputError::io(path, e))
 }
@@ -338,7 +337,7 @@ fn count_point_arrays(xml: &[u8]) -> usize {
 /// A panic inside vtkio is caught and reported as [`OutputError::Vtk`] (the default panic
 /// hook still prints its message to stderr).
 pub fn read_vtu(path: &Path) -> Result<VtuContents, OutputError> {
-    let vtk_err = |detail: String| OutputError::Vtk { path: path.to_path_buf(), detail };
+    let vtk_err = |detail: String| OutputError::vtk(path, detail);
     let bytes = std::fs::read(path).map_err(|e| OutputError::io(path, e))?;
     let expected_arrays = count_point_arrays(&bytes);
     // vtkio panics on some malformed files; report those as errors instead.

@@ -109,12 +109,17 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
 
+    /// `n` points drawn uniformly in the unit square with seed `seed`.
+    fn random_points(seed: u64, n: usize) -> Vec<Point> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        (0..n).map(|_| [rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)]).collect()
+    }
+
     /// The k-d tree query finds exactly the brute-force neighbours, sorted, without
     /// the node itself; bonds between free nodes come in pairs.
     #[test]
     fn families_are_the_brute_force_neighbourhoods() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let points: Vec<Point> = (0..400).map(|_| [rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)]).collect();
+        let points = random_points(5, 400);
         let (free, radius) = (300, 0.12);
         let f = Families::within(&points, free, radius);
         assert_eq!(f.len(), free);
@@ -140,8 +145,7 @@ mod tests {
     /// exactly the own nodes and the layers of neighbours around them.
     #[test]
     fn families_around_own_nodes_are_the_whole_search_in_layers() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let points: Vec<Point> = (0..600).map(|_| [rng.random_range(0.0..1.0), rng.random_range(0.0..1.0)]).collect();
+        let points = random_points(7, 600);
         let (free, radius) = (500, 0.08);
         let whole = Families::within(&points, free, radius);
         let own = |i: usize| points[i][0] < 0.3;

@@ -129,7 +129,8 @@ pub fn bond_coefficients(
     moment: f64,
     layer: Option<&[u8]>,
 ) -> BondWeights {
-    let computed = |i: usize| layer.is_none_or(|l| l[i] <= halo_layers(params).0);
+    let row_layers = halo_layers(params).0;
+    let computed = |i: usize| layer.is_none_or(|l| l[i] <= row_layers);
     let counted = |i: usize| layer.is_none_or(|l| l[i] == 0);
     let delta = params.horizon;
     let complete_targets: Vec<f64> = MOMENTS.iter().map(|&m| target_moment(m, moment, delta)).collect();
