@@ -7,7 +7,9 @@
 # Usage: bash benches/orders.sh [LEVELS] [SCENE ...]   (default: 4 halvings, all three)
 # Environment: BASES="phs 4;monomials 2" picks the bases; EDITS="material.nu=0.5 ..."
 # adds scene edits (benches/scene_variant.py syntax) to every run and to the label;
-# COARSE="lame=0.001" overrides a coarse spacing.
+# COARSE="lame=0.001" overrides a coarse spacing. Kirsch runs on its own graded density
+# (h = min(H, H/8 + 0.625 H d), d the distance to the hole, H = 0.32 at the coarsest
+# level); EDITS="-nodes.refine" COARSE="kirsch=0.16" gives the uniform series.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
@@ -16,7 +18,7 @@ shift || true
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(manufactured_traction lame kirsch)
 declare -A coarse=([manufactured_traction]=0.1 [lame]=0.0016 [kirsch]=0.32)
-declare -A extra=([manufactured_traction]='nodes.fill="scattered"' [lame]='' [kirsch]='')
+declare -A extra=([manufactured_traction]='nodes.fill="scattered"' [lame]='' [kirsch]='nodes.refine.spacing=0.04 nodes.refine.growth=0.2')
 for kv in ${COARSE:-}; do coarse[${kv%%=*}]=${kv#*=}; done
 IFS=';' read -ra bases <<< "${BASES:-monomials 2;phs 2;phs 4;phs 6}"
 edits=${EDITS:-}

@@ -2,18 +2,21 @@
 
 A bare key replaces the whole [approximation] table by the keys given (`basis="phs"`,
 `degree=4`); `table.key=value` sets one key of another table (`nodes.spacing=0.02`),
-adding it if absent. Values are TOML literals (quote strings).
+adding it if absent. Values are TOML literals (quote strings). `-table` drops a whole
+table (`-nodes.refine`: uniform spacing).
 """
 import sys
 src, out = sys.argv[1], sys.argv[2]
-edits = {}
-for kv in sys.argv[3:]:
+edits, dropped = {}, {a[1:] for a in sys.argv[3:] if a.startswith('-')}
+for kv in (a for a in sys.argv[3:] if not a.startswith('-')):
     k, v = kv.split('=', 1)
     table, key = (k.rsplit('.', 1) if '.' in k else ('approximation', k))
     edits.setdefault(table, {})[key] = v
 lines = open(src).read().split('\n')
 out_lines, table, seen = [], None, set()
 def flush(t):
+    if t in dropped:
+        return
     for k, v in edits.get(t, {}).items():
         if (t, k) not in seen:
             out_lines.append(f'{k} = {v}')
@@ -23,6 +26,10 @@ for line in lines:
     if st.startswith('[') and not st.startswith('[['):
         flush(table)
         table = st.strip('[]')
+        if table in dropped:
+            continue
+    if table in dropped and not st.startswith('[['):
+        continue
     elif st.startswith('[['):
         flush(table)
         table = None
@@ -36,7 +43,7 @@ for line in lines:
     out_lines.append(line)
 flush(table)
 for t, kv in edits.items():
-    if any((t, k) not in seen for k in kv):
+    if t not in dropped and any((t, k) not in seen for k in kv):
         out_lines.append(f'\n[{t}]')
         flush(t)
 open(out, 'w').write('\n'.join(out_lines) + '\n')

@@ -67,13 +67,11 @@ pub fn errors(p: &Problem) -> (usize, f64, f64) {
 }
 
 /// Observed order in the effective spacing `sqrt(1/N)` over a sequence of spacings.
+/// Each level is the edited scene at `nodes.spacing = h`; a graded spacing function
+/// is scaled as a whole (`Problem::with_spacing`), so its levels are refinements.
 pub fn orders(name: &str, spacings: &[f64], extra: &[(&str, Option<toml::Value>)]) -> (f64, f64, Vec<(usize, f64, f64)>) {
-    let mut rows = Vec::new();
-    for &h in spacings {
-        let mut edits = extra.to_vec();
-        edits.push(("nodes.spacing", f(h)));
-        rows.push(errors(&scene(name, &edits)));
-    }
+    let base = scene(name, extra);
+    let rows: Vec<(usize, f64, f64)> = spacings.iter().map(|&h| errors(&base.with_spacing(h).unwrap_or_else(|e| panic!("{e}")))).collect();
     let hs: Vec<f64> = rows.iter().map(|r| (1.0 / r.0 as f64).sqrt()).collect();
     let eu: Vec<f64> = rows.iter().map(|r| r.1).collect();
     let es: Vec<f64> = rows.iter().map(|r| r.2).collect();
