@@ -232,3 +232,46 @@ fn an_iterative_solver_that_stops_names_its_limit() {
         Ok(sol) => panic!("converged in {} iterations: raise the difficulty of this test", sol.solver.iterations),
     }
 }
+
+/// The residual check reads the row-equilibrated system, whose rows are unit-free.
+/// The Kirsch plate with exact displacements on its outer edges (no loads but the
+/// small boundary displacements, so the unscaled right-hand side is tiny against the
+/// Navier rows `~ E/h^2`) is solved by LU to a relative residual near 1e-15; its
+/// unscaled residual is 0.18 (it used to warn, with correct errors). It must not warn,
+/// while a GMRES tolerance of 1e-4 (a residual that really is large) must.
+#[test]
+fn the_residual_check_does_not_depend_on_the_units_of_the_rows() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/kirsch.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let text = text
+        .replace("part = \"right\"\nkind = \"traction\"", "part = \"right\"\nkind = \"displacement\"")
+        .replace("part = \"top\"\nkind = \"traction\"", "part = \"top\"\nkind = \"displacement\"");
+    let mut doc: toml::Table = toml::from_str(&text).unwrap();
+    doc.insert("nodes".into(), toml::Value::Table(toml::toml! { spacing = 0.08 fill = "scattered" seed = 1 }));
+    doc.insert("estimate".into(), toml::Value::Table(toml::toml! { method = "none" }));
+    let solve_with = |solver: toml::Table| {
+        let mut doc = doc.clone();
+        doc.insert("solver".into(), toml::Value::Table(solver));
+        let p = Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"));
+        run(&p)
+    };
+    let (sol, checks) = solve_with(toml::toml! { kind = "lu" });
+    let r = &sol.solver;
+    eprintln!(
+        "LU: residual {:.1e}, unscaled {:.1e}, e_inf(u) {:.1e}",
+        r.relative_residual,
+        r.original_relative_residual,
+        sol.errors.unwrap().e_inf_u
+    );
+    assert!(
+        r.original_relative_residual > 1e-3,
+        "the unscaled residual is small here ({:.1e}): the case no longer tests the units",
+        r.original_relative_residual
+    );
+    assert!(r.relative_residual < 1e-12, "{:.1e}", r.relative_residual);
+    assert!(sol.errors.unwrap().e_inf_u < 1e-2, "{:?}", sol.errors);
+    assert!(!checks.warnings.iter().any(|w| w.check == "residual"), "{:?}", checks.warnings);
+    let (sol, checks) = solve_with(toml::toml! { kind = "gmres" tolerance = 1e-4 });
+    assert!(sol.solver.relative_residual > 1e-6, "GMRES went to {:.1e}", sol.solver.relative_residual);
+    assert!(checks.warnings.iter().any(|w| w.check == "residual"), "{:?}", checks.warnings);
+}

@@ -63,7 +63,7 @@ fn multigrid_iterations_do_not_grow_with_the_grid() {
         // Five-node aggregates of a 5-point stencil carry 3 coarse unknowns for 10
         // fine ones, and the coarse stencils widen: measured 3.3.
         assert!(amg.operator_complexity() < 4.0, "{}", amg.operator_complexity());
-        let out = gmres::solve_gmres(amg.fine_operator().expect("kept"), &b, |v, z| amg.solve_into(v, z), 1e-10, 200, 30, None);
+        let out = gmres::solve_gmres(amg.fine_operator().expect("kept"), &b, |v, z| amg.solve_into(v, z), 1e-10, 200, 30);
         assert_eq!(out.status, gmres::Status::Converged, "{m}: {:?}", out.history);
         counts.push(out.iterations);
     }
@@ -88,7 +88,7 @@ fn a_preconditioner_only_hierarchy_applies_the_same_cycle() {
     kept.solve_into(&b, &mut z1);
     only.solve_into(&b, &mut z2);
     assert_eq!(z1, z2);
-    let run = |amg: &Amg| gmres::solve_gmres(&a, &b, |v, z| amg.solve_into(v, z), 1e-10, 200, 30, None);
+    let run = |amg: &Amg| gmres::solve_gmres(&a, &b, |v, z| amg.solve_into(v, z), 1e-10, 200, 30);
     let (o1, o2) = (run(&kept), run(&only));
     assert_eq!(o1.status, gmres::Status::Converged);
     assert_eq!(o1.iterations, o2.iterations);

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use super::csr::Csr;
 use super::{amg, bicgstab, gmres, lu, norm2, precond, relative, residual, row_residual};
-use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix, ORIGINAL_RESIDUAL_TARGET};
+use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
 /// `A x = b` is measured from that of the solved one `D A x = D b` (`D` the row
@@ -297,9 +297,7 @@ pub(super) fn run_gmres(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
-    let original_of = |r: &[f64]| rhs.residuals(r).1;
-    let original = rhs.scales.is_some().then_some(gmres::OriginalResidual { residual: &original_of, target: ORIGINAL_RESIDUAL_TARGET });
-    let out = gmres::solve_gmres(rows, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart, original);
+    let out = gmres::solve_gmres(rows, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
     let (_, original_relative_residual) = rhs.residuals(&row_residual(rows, &out.x, &rhs.solved));

@@ -14,8 +14,10 @@
 //!   ([`bicgstab`]) with Jacobi, ILU(0) or ILUT ([`precond`]).
 //!
 //! Whatever the path, the returned [`SolveReport::relative_residual`] is the
-//! *true* residual `‖b − A x‖₂ / ‖b‖₂` recomputed from the **original**
-//! (unscaled) `A` and `b` — never a solver's internal estimate. A result that
+//! *true* residual `‖b − A x‖₂ / ‖b‖₂` recomputed from the solved system (the
+//! row-equilibrated `D A x = D b` when equilibration is on: unit-free, and what
+//! bounds the error through the condition of `D A`) — never a solver's internal
+//! estimate. A result that
 //! is not finite, or (for LU) whose residual exceeds [`LU_RESIDUAL_LIMIT`], is
 //! an error, never silently returned.
 
@@ -73,12 +75,6 @@ pub type SparseMatrix = faer::sparse::SparseColMat<usize, f64>;
 /// means the matrix is numerically singular (or nearly so) and the "solution"
 /// is garbage, so [`solve`] reports [`SolveError::Singular`] instead.
 pub const LU_RESIDUAL_LIMIT: f64 = 1e-6;
-
-/// Relative residual `‖b − A x‖₂/‖b‖₂` of the original (unscaled) system that GMRES on
-/// the equilibrated system keeps iterating for ([`gmres::OriginalResidual`]), half the
-/// limit above which a run warns (`warnings::RESIDUAL_LIMIT`): the Lame ring's
-/// equilibrated residual of 4e-11 left 1.2e-6 in the unscaled rows.
-pub const ORIGINAL_RESIDUAL_TARGET: f64 = 5e-7;
 
 /// The residual `b − A x`, `A` in columns.
 fn residual(a: &SparseMatrix, x: &[f64], b: &[f64]) -> Vec<f64> {
