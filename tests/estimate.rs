@@ -145,8 +145,11 @@ fn a_handful_of_nodes_is_warned() {
 /// singular, the stress check skips them, and the healthy run gets notes, not a
 /// warning (the corners, and a global force imbalance of 1.1e-2 that the singular
 /// reactions explain: below ten times the threshold). The bracket (a re-entrant
-/// corner and two clamped ones) is warned: its displacement estimate is O(1) (README,
-/// known limits), and its reactions miss the applied load by 31 % (equilibrium).
+/// corner and two clamped ones) is warned: its displacement estimate is O(1), because
+/// the estimate's reference (PHS of degree 4) is itself wrong at a re-entrant corner on
+/// scattered nodes (README, known limits). Its reactions, 31 % off the applied load
+/// before the sector balance at the corner (`navier::sector`), are now 8.4 % off: the
+/// note of singular reactions (below ten times the threshold), not a warning.
 #[test]
 fn singular_corners_get_a_note_and_a_broken_run_a_warning() {
     let (sol, checks) = run(&estimated("steel_plate", &[]));
@@ -167,8 +170,8 @@ fn singular_corners_get_a_note_and_a_broken_run_a_warning() {
     assert_eq!(checks.singular_corners.len(), 3);
     assert!(sol.estimate.done().unwrap().norms.e_inf_u > 0.1);
     assert!(checks.warnings.iter().any(|w| w.check == "estimate"));
-    assert!(sol.equilibrium.unwrap().relative > 0.1, "{:?}", sol.equilibrium);
-    assert!(checks.warnings.iter().any(|w| w.check == "equilibrium"), "{:?}", checks.warnings);
+    assert!(sol.equilibrium.unwrap().relative < 0.1, "{:?}", sol.equilibrium);
+    assert!(!checks.warnings.iter().any(|w| w.check == "equilibrium"), "{:?}", checks.warnings);
 }
 
 /// A run at the highest degree has no higher one to compare with: warned as

@@ -142,11 +142,11 @@ fn bad_probes_are_refused_naming_the_field() {
     }
 }
 
-/// The bracket does not converge at its shipped discretisation (README, "Known
-/// limits"): its tip deflection is a third of the finite-element value and oscillates over the levels. The study says so: the
-/// finest level's estimate is above the threshold, so a warning (also under --quiet)
-/// and `warnings` in convergence.json say that the extrapolations are not to be
-/// trusted.
+/// The bracket's estimate stays O(1) at these spacings (its degree-4 reference is
+/// wrong at the re-entrant corner on scattered nodes; README, "Known limits"). The
+/// study says so: the finest level's estimate is above the threshold, so a warning
+/// (also under --quiet) and `warnings` in convergence.json say that the extrapolations
+/// are not to be trusted.
 #[test]
 fn a_study_outside_the_asymptotic_range_is_warned() {
     let tmp = TempDir::new().unwrap();

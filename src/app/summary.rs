@@ -96,6 +96,8 @@ pub(super) struct NavierSummary<'a> {
     boundary_nodes: usize,
     ghost_nodes: usize,
     widened_supports: usize,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    sector_balances: &'a [navier::sector::SectorSummary],
     unknowns: usize,
     formulation: &'static str,
     nonzeros: usize,
@@ -127,6 +129,7 @@ impl<'a> NavierSummary<'a> {
             boundary_nodes: sol.nodes.boundary.len(),
             ghost_nodes: sol.ghost_nodes,
             widened_supports: sol.widened_supports,
+            sector_balances: &sol.sector_balances,
             unknowns: sol.unknowns,
             formulation: sol.formulation.name(),
             nonzeros: sol.nonzeros,

@@ -23,7 +23,9 @@
 //! -4.879e-4 (not monotone); within 16, -4.908e-4, -4.857e-4, -4.878e-4, -4.893e-4;
 //! within 24, -4.797e-4, -4.854e-4, -4.873e-4, -4.888e-4 (errors 2.0, 0.8, 0.4,
 //! 0.1 %, monotone). The shipped bracket on a grid (holes included; reference
-//! -4.973e-4 m) goes from +2.2e-3 m to -4.963e-4 m at h = 1 mm.
+//! -4.973e-4 m) goes from +2.2e-3 m to -4.963e-4 m at h = 1 mm. (Measured before
+//! the sector balance at the corner, `navier::sector`, which moves the L's to
+//! -4.641e-4, -4.787e-4, -4.839e-4 m at 4, 2, 1 mm and makes scattered nodes converge.)
 
 use super::{Domain, NodeSet, Point};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};

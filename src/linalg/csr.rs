@@ -122,6 +122,33 @@ impl<V: Value> Csr<V> {
 }
 
 impl Csr {
+    /// The same matrix with the rows in `replaced` (row -> entries `(column, value)`,
+    /// sorted by column) instead of its own; the others copied (the matrix is held
+    /// twice while they are).
+    pub fn with_rows_replaced(self, replaced: &std::collections::BTreeMap<usize, Vec<(usize, f64)>>) -> Csr {
+        let extra: usize = replaced.iter().map(|(&i, r)| r.len().saturating_sub(self.offsets[i + 1] - self.offsets[i])).sum();
+        let (mut offsets, mut cols, mut vals) =
+            (Vec::with_capacity(self.nrows + 1), Vec::with_capacity(self.nnz() + extra), Vec::with_capacity(self.nnz() + extra));
+        offsets.push(0);
+        for i in 0..self.nrows {
+            match replaced.get(&i) {
+                Some(r) => {
+                    cols.extend(r.iter().map(|&(c, _)| u32::try_from(c).expect("columns fit in 32 bits")));
+                    vals.extend(r.iter().map(|&(_, v)| v));
+                }
+                None => {
+                    let range = self.offsets[i]..self.offsets[i + 1];
+                    cols.extend_from_slice(&self.cols[range.clone()]);
+                    vals.extend_from_slice(&self.vals[range]);
+                }
+            }
+            offsets.push(cols.len());
+        }
+        let (nrows, ncols) = (self.nrows, self.ncols);
+        drop(self);
+        Csr::from_parts(nrows, ncols, offsets, cols, vals)
+    }
+
     /// The same matrix with its values rounded to single precision (values in half
     /// the memory, an entry in two thirds): for operators whose application need only
     /// be a fixed linear map, not the exact one (the multigrid's transfers).

@@ -29,6 +29,7 @@ pub mod estimate;
 pub mod formulation;
 pub mod low_order;
 pub mod rows;
+pub mod sector;
 pub mod solve;
 pub mod system;
 

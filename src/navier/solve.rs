@@ -9,6 +9,7 @@ use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
 use super::estimate::{self, Estimate};
 use super::low_order;
+use super::sector;
 use super::system::System;
 use super::NavierParams;
 use crate::case::Case;
@@ -50,6 +51,8 @@ pub struct Solution {
     pub ghost_nodes: usize,
     /// Supports widened to determine an RBF-FD polynomial part.
     pub widened_supports: usize,
+    /// Re-entrant corners whose sector equilibrium was imposed ([`sector`]).
+    pub sector_balances: Vec<sector::SectorSummary>,
     /// Number of unknowns.
     pub unknowns: usize,
     /// What each node carries (the resolved formulation).
@@ -88,7 +91,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let mut disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let Solved { x, nonzeros, report, system } = assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
+    let Solved { x, nonzeros, report, system, sectors } = assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
@@ -148,6 +151,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         estimate,
         ghost_nodes,
         widened_supports,
+        sector_balances: sectors,
         unknowns,
         formulation,
         nonzeros,
@@ -168,6 +172,8 @@ pub(super) struct Solved {
     pub report: SolveReport,
     /// The matrix and right-hand side, when kept.
     pub system: Option<(SparseMatrix, Vec<f64>)>,
+    /// The sector balances imposed at re-entrant corners ([`sector`]; none over MPI).
+    pub sectors: Vec<sector::SectorSummary>,
 }
 
 /// Assemble the rows of `disc` and solve them with `params.solver` (stages `assembly`,
@@ -188,10 +194,12 @@ pub(super) fn assemble_and_solve(
     if disc.owner.is_some() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
     }
-    let (matrix, rhs) = timer.run(stage::ASSEMBLY, || {
-        let (m, rhs) = System { case, disc, exact }.assemble()?;
+    let (matrix, rhs, sectors) = timer.run(stage::ASSEMBLY, || {
+        let (m, mut rhs) = System { case, disc, exact }.assemble()?;
+        let balances = sector::balances(case, disc, &m);
+        let m = sector::impose(m, &mut rhs, &balances);
         let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.nnz());
-        Ok(((m, rhs), note))
+        Ok(((m, rhs, balances.iter().map(|b| b.summary()).collect()), note))
     })?;
     disc.release_row_shapes();
     let nonzeros = matrix.nnz();
@@ -210,7 +218,7 @@ pub(super) fn assemble_and_solve(
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report, kept), note))
     })?;
-    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs)) })
+    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs)), sectors })
 }
 
 /// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
@@ -239,5 +247,5 @@ fn assemble_and_solve_distributed(
         Ok(((x, report), note))
     })?;
     let nonzeros = report.ranks.as_ref().map_or(0, |r| r.nonzeros.iter().sum());
-    Ok(Solved { x, nonzeros, report, system: None })
+    Ok(Solved { x, nonzeros, report, system: None, sectors: Vec::new() })
 }

@@ -1,0 +1,403 @@
+//! Equilibrium of a sector around each re-entrant corner, imposed on the collocation
+//! system.
+//!
+//! At a re-entrant corner whose two edges are traction-free, the fields of a point
+//! force and of a point couple at the corner satisfy the Navier equation everywhere
+//! but at the corner and leave both edges free. The collocation rows see them only
+//! through the few stencils at the corner, where no polynomial fits the singular
+//! field, so the discrete system nearly admits them: on scattered nodes the solution
+//! of the L bracket carried a spurious corner load of 1-10 times the applied one (the
+//! column's section forces, `benches/section_forces.py`), and its tip deflection had
+//! the wrong sign. Here the equilibrium of the sector `V` of radius `rho` around the
+//! corner (its straight sides on the free edges) is imposed,
+//!
+//! ```text
+//! integral over the arc of sigma(u) n ds = 0,   integral over the arc of r x sigma(u) n ds = 0,
+//! ```
+//!
+//! `n` the arc's outward normal, `r` from the corner, `sigma(u)` from a degree-2 least
+//! squares fit over the 12 nearest nodes at each point of a midpoint rule on the arc.
+//! Its three multipliers are a force and a couple injected into the Navier rows of
+//! the interior nodes within [`INJECTION_SPACINGS`] of the corner (each row's share
+//! scaled by its norm), eliminated on three pivot rows (partial pivoting on the
+//! injection), so the system stays square and keeps its unknowns:
+//! `A_i x + g_i . lambda = b_i` for the injected rows and `C x = 0` become
+//! `(A_i - g_i G_P^-1 A_P) x = b_i - g_i G_P^-1 b_P` and the pivot rows `C x = 0`.
+//!
+//! The balance rows have no diagonal entry (the arc is far from the pivots' nodes):
+//! LU pivots past it, incomplete factorisations without pivoting do not (BiCGSTAB +
+//! ILUT diverges on the scattered bracket and is reported so; `auto` takes LU).
+//!
+//! Applied when both edges at the corner are traction-free, there is no body force,
+//! and the unknowns are displacements; the radius is [`SECTOR_SPACINGS`] local
+//! spacings, halved (down to [`MIN_SECTOR_SPACINGS`]) while the arc leaves the solid
+//! more than once or meets a boundary part other than the corner's two.
+
+use super::discrete::Discretisation;
+use crate::case::Case;
+use crate::domain::Point;
+use crate::elasticity::conditions::ComponentCondition;
+use crate::elasticity::dofs::Unknowns;
+use crate::linalg::Csr;
+use crate::mlsm::{wls, Basis, Op, Weight};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use nalgebra::Matrix3;
+use std::collections::BTreeMap;
+use std::num::NonZeroUsize;
+
+/// Radius of the sector, in local spacings of the corner node (the tip deflection of
+/// the L bracket was the same at 10 and 20 spacings to 0.3 %; at 5 it scattered).
+pub const SECTOR_SPACINGS: f64 = 10.0;
+
+/// Smallest radius tried, in local spacings, where the arc would meet another part.
+pub const MIN_SECTOR_SPACINGS: f64 = 4.0;
+
+/// Radius around the corner, in local spacings, of the interior nodes whose Navier
+/// rows carry the multipliers.
+pub const INJECTION_SPACINGS: f64 = 2.0;
+
+/// Nodes of the least-squares fit of the stress at an arc point.
+const FIT_NODES: usize = 12;
+
+/// The balance of one corner's sector: three rows over the unknowns and the
+/// injected rows' shares of the three multipliers.
+#[derive(Debug, Clone)]
+pub struct SectorBalance {
+    /// The corner.
+    pub corner: Point,
+    /// Radius of the arc (m).
+    pub radius: f64,
+    /// Force x, force y and moment of the arc's tractions, `(unknown, coefficient)`.
+    rows: [Vec<(usize, f64)>; 3],
+    /// `(row, g)`: the row's share of the force x, force y and couple multipliers.
+    injected: Vec<(usize, [f64; 3])>,
+}
+
+/// What `summary.json` says of one imposed balance.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct SectorSummary {
+    /// The corner.
+    pub corner: Point,
+    /// Radius of the arc (m).
+    pub radius: f64,
+}
+
+impl SectorBalance {
+    /// The corner and radius.
+    pub fn summary(&self) -> SectorSummary {
+        SectorSummary { corner: self.corner, radius: self.radius }
+    }
+}
+
+/// The sector balances of the case's re-entrant corners that qualify (module docs).
+pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> Vec<SectorBalance> {
+    if disc.dofs.unknowns() != Unknowns::Displacement || !case.body_force.is_zero() {
+        return Vec::new();
+    }
+    let free = |part: usize| case.conditions.get(part).is_some_and(|c| c.is_all(ComponentCondition::Traction) && c.value.is_zero());
+    let nodes = &disc.nodes;
+    let corners: Vec<_> = crate::domain::corner::corners(&case.domain, nodes)
+        .into_iter()
+        .filter(|c| c.reentrant && c.parts.iter().all(|&p| free(p)))
+        .collect();
+    if corners.is_empty() {
+        return Vec::new();
+    }
+    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&nodes.positions).expect("finite node positions");
+    corners
+        .iter()
+        .filter_map(|c| {
+            let h = nodes.local_spacing[c.node];
+            let arc = arc(case, disc, c.position, c.parts, h)?;
+            let rows = arc_rows(case, disc, &tree, c.position, &arc, h)?;
+            let injected = injection(disc, matrix, c.position, h)?;
+            Some(SectorBalance { corner: c.position, radius: arc.radius, rows, injected })
+        })
+        .collect()
+}
+
+/// The part of the circle of radius `radius` around a corner inside the solid.
+struct Arc {
+    radius: f64,
+    /// Start and end angle, `end > start`.
+    angles: (f64, f64),
+}
+
+/// The arc of the largest radius from [`SECTOR_SPACINGS`] down that leaves the solid
+/// once and meets no boundary node of a part other than the corner's `parts`.
+fn arc(case: &Case, disc: &Discretisation, corner: Point, parts: [usize; 2], h: f64) -> Option<Arc> {
+    let mut spacings = SECTOR_SPACINGS;
+    while spacings >= MIN_SECTOR_SPACINGS {
+        let radius = spacings * h;
+        let foreign = disc.nodes.boundary.iter().any(|b| {
+            (b.position[0] - corner[0]).hypot(b.position[1] - corner[1]) <= radius * 1.05
+                && b.touches.iter().any(|(p, _)| !parts.contains(p))
+        });
+        if !foreign {
+            if let Some(angles) = inside_interval(case, corner, radius) {
+                return Some(Arc { radius, angles });
+            }
+        }
+        spacings /= 2.0;
+    }
+    None
+}
+
+/// The one interval of angles whose circle points lie in the solid, its ends found
+/// by bisection; `None` when the circle enters the solid more than once.
+fn inside_interval(case: &Case, c: Point, radius: f64) -> Option<(f64, f64)> {
+    const SAMPLES: usize = 720;
+    let at = |t: f64| case.domain.contains([c[0] + radius * t.cos(), c[1] + radius * t.sin()]);
+    let step = std::f64::consts::TAU / SAMPLES as f64;
+    let inside: Vec<bool> = (0..SAMPLES).map(|k| at(k as f64 * step)).collect();
+    // Entries: an outside sample followed by an inside one.
+    let entries: Vec<usize> = (0..SAMPLES).filter(|&k| !inside[k] && inside[(k + 1) % SAMPLES]).collect();
+    let [entry] = entries[..] else { return None };
+    let exit = (1..SAMPLES).map(|d| (entry + 1 + d) % SAMPLES).find(|&k| !inside[k])?;
+    let refine = |mut out: f64, mut inn: f64| {
+        for _ in 0..50 {
+            let mid = 0.5 * (out + inn);
+            if at(mid) {
+                inn = mid;
+            } else {
+                out = mid;
+            }
+        }
+        0.5 * (out + inn)
+    };
+    let start = refine(entry as f64 * step, (entry + 1) as f64 * step);
+    let mut end_out = exit as f64 * step;
+    if end_out <= start {
+        end_out += std::f64::consts::TAU;
+    }
+    let end = refine(end_out, end_out - step);
+    Some((start, end))
+}
+
+/// The force and moment rows of the arc's tractions (midpoint rule, about two points
+/// per local spacing, at least 48).
+fn arc_rows(
+    case: &Case,
+    disc: &Discretisation,
+    tree: &ImmutableKdTree<f64, 2>,
+    c: Point,
+    arc: &Arc,
+    h: f64,
+) -> Option<[Vec<(usize, f64)>; 3]> {
+    let lame = case.material.lame();
+    let (lam, mu) = (lame.lambda, lame.mu);
+    let (t0, t1) = arc.angles;
+    let count = ((arc.radius * (t1 - t0) / (0.5 * h)).ceil() as usize).max(48);
+    let dt = (t1 - t0) / count as f64;
+    let fit = NonZeroUsize::new(FIT_NODES.min(disc.nodes.len()))?;
+    let mut sums: [BTreeMap<usize, f64>; 3] = Default::default();
+    let (mut points, mut weights) = (Vec::with_capacity(FIT_NODES), vec![0.0; 2 * FIT_NODES]);
+    // Rows scaled to O(1) coefficients: the stress of a unit gradient times the arc.
+    let scale = 1.0 / ((lam + 2.0 * mu) * arc.radius);
+    for k in 0..count {
+        let t = t0 + (k as f64 + 0.5) * dt;
+        let n = [t.cos(), t.sin()];
+        let q = [c[0] + arc.radius * n[0], c[1] + arc.radius * n[1]];
+        let r = [q[0] - c[0], q[1] - c[1]];
+        let ds = arc.radius * dt * scale;
+        let found = tree.query(&q).nearest_n::<SquaredEuclidean<f64>>(fit).execute();
+        points.clear();
+        points.extend(found.iter().map(|f| disc.nodes.positions[f.item as usize]));
+        let m = points.len();
+        wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, q, &points, &[Op::Dx, Op::Dy], &mut weights[..2 * m]).ok()?;
+        for (j, f) in found.iter().enumerate() {
+            let (wx, wy) = (weights[j], weights[m + j]);
+            let node = f.item as usize;
+            // Traction t = sigma n of the gradient weights of u_x and u_y at node j.
+            let tx = [(lam + 2.0 * mu) * wx * n[0] + mu * wy * n[1], lam * wy * n[0] + mu * wx * n[1]];
+            let ty = [mu * wy * n[0] + lam * wx * n[1], mu * wx * n[0] + (lam + 2.0 * mu) * wy * n[1]];
+            for comp in 0..2 {
+                let col = disc.dofs.dof(node, comp);
+                *sums[0].entry(col).or_default() += ds * tx[comp];
+                *sums[1].entry(col).or_default() += ds * ty[comp];
+                *sums[2].entry(col).or_default() += ds * (r[0] * ty[comp] - r[1] * tx[comp]) / arc.radius;
+            }
+        }
+    }
+    Some(sums.map(|s| s.into_iter().collect()))
+}
+
+/// The injected rows: the Navier rows of the interior nodes within
+/// [`INJECTION_SPACINGS`] of the corner (the radius grows by half until there are two
+/// nodes, up to twice), each scaled by the row's norm; the couple's share is the
+/// direction perpendicular to the node's offset from the corner.
+fn injection(disc: &Discretisation, matrix: &Csr, c: Point, h: f64) -> Option<Vec<(usize, [f64; 3])>> {
+    let interior = disc.nodes.boundary.len()..disc.nodes.len();
+    let mut radius = INJECTION_SPACINGS * h;
+    for _ in 0..3 {
+        let near: Vec<usize> = interior.clone().filter(|&i| dist(disc.nodes.positions[i], c) < radius).collect();
+        if near.len() >= 2 {
+            let mut out = Vec::with_capacity(2 * near.len());
+            for i in near {
+                let p = disc.nodes.positions[i];
+                let d = dist(p, c);
+                let perp = [-(p[1] - c[1]) / d, (p[0] - c[0]) / d];
+                for comp in 0..2 {
+                    let row = disc.dofs.dof(i, comp);
+                    let norm = matrix.row(row).values().iter().map(|v| v * v).sum::<f64>().sqrt();
+                    let mut g = [0.0; 3];
+                    g[comp] = norm;
+                    g[2] = norm * perp[comp];
+                    out.push((row, g));
+                }
+            }
+            return Some(out);
+        }
+        radius *= 1.5;
+    }
+    None
+}
+
+fn dist(a: Point, b: Point) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// `matrix` and `rhs` with every balance imposed (module docs): the injected rows
+/// combined with the pivot rows, the pivot rows replaced by the balance. A balance
+/// whose injection has no three independent rows is left out.
+pub fn impose(matrix: Csr, rhs: &mut [f64], balances: &[SectorBalance]) -> Csr {
+    let mut replaced: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
+    for b in balances {
+        let Some(pivots) = pivot_rows(&b.injected) else { continue };
+        let row_of = |k: usize, replaced: &BTreeMap<usize, Vec<(usize, f64)>>| -> Vec<(usize, f64)> {
+            replaced.get(&k).cloned().unwrap_or_else(|| {
+                let r = matrix.row(k);
+                r.col_indices().iter().map(|&c| c as usize).zip(r.values().iter().copied()).collect()
+            })
+        };
+        let gp = Matrix3::from_fn(|a, k| b.injected[pivots[a]].1[k]);
+        let Some(gp_inv) = gp.try_inverse() else { continue };
+        let pivot_rows: Vec<Vec<(usize, f64)>> = pivots.iter().map(|&a| row_of(b.injected[a].0, &replaced)).collect();
+        let pivot_rhs: Vec<f64> = pivots.iter().map(|&a| rhs[b.injected[a].0]).collect();
+        for (a, (row, g)) in b.injected.iter().enumerate() {
+            if pivots.contains(&a) {
+                continue;
+            }
+            // coef = g G_P^-1 (a row vector over the pivots).
+            let coef: Vec<f64> = (0..3).map(|p| (0..3).map(|k| g[k] * gp_inv[(k, p)]).sum()).collect();
+            let mut combined: BTreeMap<usize, f64> = row_of(*row, &replaced).into_iter().collect();
+            for (p, pr) in pivot_rows.iter().enumerate() {
+                for &(col, v) in pr {
+                    *combined.entry(col).or_default() -= coef[p] * v;
+                }
+                rhs[*row] -= coef[p] * pivot_rhs[p];
+            }
+            replaced.insert(*row, combined.into_iter().collect());
+        }
+        for (p, &a) in pivots.iter().enumerate() {
+            let row = b.injected[a].0;
+            replaced.insert(row, b.rows[p].clone());
+            rhs[row] = 0.0;
+        }
+    }
+    if replaced.is_empty() {
+        return matrix;
+    }
+    matrix.with_rows_replaced(&replaced)
+}
+
+/// Three rows of the injection `g` (one per multiplier) by Gaussian elimination with
+/// partial pivoting; `None` when its rank is below three.
+fn pivot_rows(injected: &[(usize, [f64; 3])]) -> Option<[usize; 3]> {
+    let mut g: Vec<[f64; 3]> = injected.iter().map(|(_, g)| *g).collect();
+    let largest = g.iter().flat_map(|r| r.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut pivots = [usize::MAX; 3];
+    for k in 0..3 {
+        let (p, v) =
+            (0..g.len())
+                .filter(|a| !pivots.contains(a))
+                .map(|a| (a, g[a][k].abs()))
+                .fold((usize::MAX, 0.0), |m, x| if x.1 > m.1 { x } else { m });
+        if p == usize::MAX || v <= 1e-8 * largest {
+            return None;
+        }
+        pivots[k] = p;
+        let pivot = g[p];
+        for (a, row) in g.iter_mut().enumerate() {
+            if !pivots.contains(&a) {
+                let f = row[k] / pivot[k];
+                for j in k..3 {
+                    row[j] -= f * pivot[j];
+                }
+            }
+        }
+    }
+    Some(pivots)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    /// A deterministic pseudo-random number in [-1, 1).
+    fn noise(k: usize) -> f64 {
+        let x = ((k as f64 + 1.0) * 12.9898).sin() * 43758.5453;
+        2.0 * (x - x.floor()) - 1.0
+    }
+
+    /// The eliminated square system has the solution of the bordered one,
+    /// `[A G; C 0] [x; lambda] = [b; 0]`, to round-off: the algebra of [`impose`].
+    #[test]
+    fn imposing_equals_the_bordered_system() {
+        let n = 9;
+        let mut entries = Vec::new();
+        for i in 0..n {
+            entries.push((i, i, 4.0 + noise(i)));
+            for j in [(i + 1) % n, (i + 3) % n] {
+                entries.push((i, j, noise(10 * i + j)));
+            }
+        }
+        let a = Csr::from_triplets(n, n, &entries);
+        let b: Vec<f64> = (0..n).map(|i| noise(100 + i)).collect();
+        let rows: [Vec<(usize, f64)>; 3] =
+            std::array::from_fn(|k| (0..n).filter(|j| (j + k) % 2 == 0).map(|j| (j, noise(200 + 10 * k + j))).collect());
+        let injected: Vec<(usize, [f64; 3])> =
+            [1, 2, 4, 5, 7].iter().map(|&r| (r, [noise(300 + r), noise(310 + r), noise(320 + r)])).collect();
+        let balance = SectorBalance { corner: [0.0, 0.0], radius: 1.0, rows: rows.clone(), injected: injected.clone() };
+        // Bordered system, dense.
+        let mut k = DMatrix::zeros(n + 3, n + 3);
+        for (i, j, v) in a.entries() {
+            k[(i, j)] += v;
+        }
+        for (r, g) in &injected {
+            for m in 0..3 {
+                k[(*r, n + m)] = g[m];
+            }
+        }
+        for (m, row) in rows.iter().enumerate() {
+            for &(j, v) in row {
+                k[(n + m, j)] = v;
+            }
+        }
+        let mut rhs = DVector::zeros(n + 3);
+        rhs.rows_mut(0, n).copy_from_slice(&b);
+        let bordered = k.lu().solve(&rhs).expect("a regular bordered system");
+        // Eliminated.
+        let mut b2 = b.clone();
+        let imposed = impose(a, &mut b2, &[balance]);
+        let mut d = DMatrix::zeros(n, n);
+        for (i, j, v) in imposed.entries() {
+            d[(i, j)] += v;
+        }
+        let x = d.lu().solve(&DVector::from_vec(b2)).expect("a regular eliminated system");
+        let worst = (0..n).map(|i| (x[i] - bordered[i]).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-12, "eliminated against bordered: {worst:.1e}");
+        for (m, row) in rows.iter().enumerate() {
+            let c: f64 = row.iter().map(|&(j, v)| v * x[j]).sum();
+            assert!(c.abs() < 1e-12, "balance {m} not met: {c:.1e}");
+        }
+    }
+
+    /// Injections that cannot carry three independent multipliers are refused.
+    #[test]
+    fn a_rank_deficient_injection_has_no_pivots() {
+        assert!(pivot_rows(&[(0, [1.0, 0.0, 0.0]), (1, [2.0, 0.0, 0.0]), (2, [0.0, 1.0, 0.0])]).is_none());
+        assert!(pivot_rows(&[(0, [1.0, 0.0, 0.5]), (1, [0.0, 1.0, 0.0]), (2, [0.0, 1.0, 1.0])]).is_some());
+    }
+}
