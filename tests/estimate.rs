@@ -145,9 +145,9 @@ fn a_handful_of_nodes_is_warned() {
 /// singular, the stress check skips them, and the healthy run gets notes, not a
 /// warning (the corners, and a global force imbalance of 1.1e-2 that the singular
 /// reactions explain: below ten times the threshold). The bracket (a re-entrant
-/// corner and two clamped ones) is warned: its displacement estimate is O(1), because
-/// the estimate's reference (PHS of degree 4) is itself wrong at a re-entrant corner on
-/// scattered nodes (README, known limits). Its reactions, 31 % off the applied load
+/// corner and two clamped ones) is warned: its displacement estimate is 0.17 (0.98
+/// while the estimate's reference, PHS of degree 4, had no ghosts near the corner;
+/// README, known limits). Its reactions, 31 % off the applied load
 /// before the sector balance at the corner (`navier::sector`), are now 8.4 % off: the
 /// note of singular reactions (below ten times the threshold), not a warning.
 #[test]

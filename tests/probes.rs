@@ -142,8 +142,8 @@ fn bad_probes_are_refused_naming_the_field() {
     }
 }
 
-/// The bracket's estimate stays O(1) at these spacings (its degree-4 reference is
-/// wrong at the re-entrant corner on scattered nodes; README, "Known limits"). The
+/// The bracket's estimate stays above the threshold at these spacings (the singular
+/// corners; README, "Known limits"). The
 /// study says so: the finest level's estimate is above the threshold, so a warning
 /// (also under --quiet) and `warnings` in convergence.json say that the extrapolations
 /// are not to be trusted.

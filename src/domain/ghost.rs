@@ -35,8 +35,15 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 /// deflection converged monotonically).
 pub const REENTRANT_GHOST_FREE: f64 = 24.0;
 
-/// Ghosts for the boundary nodes `candidates`: `(boundary node, ghost position)`.
-pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> Vec<(usize, Point)> {
+/// The re-entrant corners of `nodes` in `domain`, around which [`place_ghosts`] puts no
+/// ghost by default.
+pub fn reentrant_corners(domain: &Domain, nodes: &NodeSet) -> Vec<Point> {
+    super::corner::corners(domain, nodes).into_iter().filter(|c| c.reentrant).map(|c| c.position).collect()
+}
+
+/// Ghosts for the boundary nodes `candidates`: `(boundary node, ghost position)`; none
+/// within [`REENTRANT_GHOST_FREE`] local spacings of a corner in `ghost_free`.
+pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize], ghost_free: &[Point]) -> Vec<(usize, Point)> {
     let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&nodes.positions).expect("finite node positions");
     let mut placed: Vec<(usize, Point)> = Vec::with_capacity(candidates.len());
     // Ghosts lie in a band along the boundary: a hash of cells of half the smallest
@@ -44,13 +51,12 @@ pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize]) -> V
     let cell_size = 0.5 * candidates.iter().map(|&i| nodes.local_spacing[i]).fold(f64::INFINITY, f64::min);
     let cell = |p: Point| ((p[0] / cell_size).floor() as i64, (p[1] / cell_size).floor() as i64);
     let mut grid: std::collections::HashMap<(i64, i64), Vec<usize>> = std::collections::HashMap::new();
-    let reentrant: Vec<Point> = super::corner::corners(domain, nodes).into_iter().filter(|c| c.reentrant).map(|c| c.position).collect();
     for &i in candidates {
         // The rules use the node's own (local) spacing h.
         let h = nodes.local_spacing[i];
         let min_gap = 0.5 * h;
         let (p, n) = (nodes.positions[i], nodes.normal(i));
-        if reentrant.iter().any(|c| (c[0] - p[0]).hypot(c[1] - p[1]) < REENTRANT_GHOST_FREE * h) {
+        if ghost_free.iter().any(|c| (c[0] - p[0]).hypot(c[1] - p[1]) < REENTRANT_GHOST_FREE * h) {
             continue;
         }
         let g = [p[0] + h * n[0], p[1] + h * n[1]];
@@ -104,7 +110,7 @@ mod tests {
         let domain = Domain::rectangle([0.0, 0.0], [1.0, 0.5]);
         let n = nodes(&domain, h);
         let all: Vec<usize> = (0..n.boundary.len()).collect();
-        let ghosts = place_ghosts(&domain, &n, &all);
+        let ghosts = place_ghosts(&domain, &n, &all, &reentrant_corners(&domain, &n));
         assert_eq!(ghosts.len(), n.boundary.len(), "every boundary node of a convex solid has a ghost");
         let mut points = n.positions.clone();
         for &(i, g) in &ghosts {
@@ -119,7 +125,7 @@ mod tests {
             }
         }
         // Only the candidates get ghosts.
-        assert_eq!(place_ghosts(&domain, &n, &all[..3]).len(), 3);
+        assert_eq!(place_ghosts(&domain, &n, &all[..3], &[]).len(), 3);
     }
 
     /// An L-shaped solid: no boundary node within [`REENTRANT_GHOST_FREE`] spacings of
@@ -135,7 +141,7 @@ mod tests {
         };
         let n = nodes(&domain, h);
         let all: Vec<usize> = (0..n.boundary.len()).collect();
-        let ghosts = place_ghosts(&domain, &n, &all);
+        let ghosts = place_ghosts(&domain, &n, &all, &reentrant_corners(&domain, &n));
         let corner = n.positions.iter().position(|p| (p[0] - 0.5).hypot(p[1] - 0.5) < 1e-12).expect("a node at the concave corner");
         assert!(!ghosts.iter().any(|&(i, _)| i == corner), "the concave corner got a ghost");
         for &(i, g) in &ghosts {

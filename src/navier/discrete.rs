@@ -100,7 +100,7 @@ impl Discretisation {
         let world = crate::petsc::world();
         let distributed = matches!(params.solver.kind, SolverKind::Petsc { .. });
         let (positions, ghost, owner, supports, (every, needs, gradient_kept), widened) = timer.run(SUPPORTS, || {
-            let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations);
+            let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations, distributed);
             // Distributed: a rank finds the supports and makes the shapes of its own
             // nodes and ghosts only (their supports reach into the others' halo).
             let owner = distributed.then(|| {
@@ -352,7 +352,13 @@ fn ghost_parents(ghost: &[Option<usize>], count: usize) -> Vec<usize> {
 ///   them the one-sided RBF-FD stencils where a symmetry edge meets a curved free
 ///   edge went unstable (Lame, p = 4, 2e4 nodes: e_inf(sigma) 8.1e-4 without, 4.4e-6
 ///   with; Kirsch, p = 2: e_inf(u) 0.39 without, 1.0e-3 with).
-fn ghosts(case: &Case, params: &NavierParams, nodes: &NodeSet, equations: &[[ComponentEquation; 2]]) -> (Vec<Point>, Vec<Option<usize>>) {
+fn ghosts(
+    case: &Case,
+    params: &NavierParams,
+    nodes: &NodeSet,
+    equations: &[[ComponentEquation; 2]],
+    distributed: bool,
+) -> (Vec<Point>, Vec<Option<usize>>) {
     let rbf_fd = matches!(params.approximation.basis, Basis::RbfFd { .. });
     let wants_ghost = |eq: &[ComponentEquation; 2]| {
         if rbf_fd {
@@ -366,7 +372,14 @@ fn ghosts(case: &Case, params: &NavierParams, nodes: &NodeSet, equations: &[[Com
     } else {
         Vec::new()
     };
-    let placed = place_ghosts(&case.domain, nodes, &candidates);
+    // Ghost-free around re-entrant corners (`domain::ghost`), except, for RBF-FD, where
+    // the sector balance takes the corner's spurious load (`super::sector`).
+    let mut ghost_free = domain::ghost::reentrant_corners(&case.domain, nodes);
+    if rbf_fd && !distributed {
+        let balanced = super::sector::balanced_corners(case, nodes, params.formulation.unknowns(&case.material));
+        ghost_free.retain(|c| !balanced.contains(c));
+    }
+    let placed = place_ghosts(&case.domain, nodes, &candidates, &ghost_free);
     let n = nodes.len();
     let mut positions = nodes.positions.clone();
     positions.extend(placed.iter().map(|g| g.1));

@@ -28,6 +28,11 @@
 //! LU pivots past it, incomplete factorisations without pivoting do not (BiCGSTAB +
 //! ILUT diverges on the scattered bracket and is reported so; `auto` takes LU).
 //!
+//! With RBF-FD the boundary nodes near a balanced corner keep their ghosts
+//! (`domain::ghost`, `navier::discrete`): without them its one-sided 30-node traction
+//! stencils made a spurious load of their own outside the sector (the L's tip
+//! -9.0e-4 m at 1 mm against -4.84e-4 m with them; finite elements -4.894e-4).
+//!
 //! Applied when both edges at the corner are traction-free, there is no body force,
 //! and the unknowns are displacements; the radius is [`SECTOR_SPACINGS`] local
 //! spacings, halved (down to [`MIN_SECTOR_SPACINGS`]) while the arc leaves the solid
@@ -35,7 +40,7 @@
 
 use super::discrete::Discretisation;
 use crate::case::Case;
-use crate::domain::Point;
+use crate::domain::{NodeSet, Point};
 use crate::elasticity::conditions::ComponentCondition;
 use crate::elasticity::dofs::Unknowns;
 use crate::linalg::Csr;
@@ -89,29 +94,41 @@ impl SectorBalance {
     }
 }
 
-/// The sector balances of the case's re-entrant corners that qualify (module docs).
-pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> Vec<SectorBalance> {
-    if disc.dofs.unknowns() != Unknowns::Displacement || !case.body_force.is_zero() {
+/// The re-entrant corners of the case that qualify for a balance (module docs), with
+/// their arcs and the corner node's local spacing.
+fn qualifying(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Vec<(Point, Arc, f64)> {
+    if unknowns != Unknowns::Displacement || !case.body_force.is_zero() {
         return Vec::new();
     }
     let free = |part: usize| case.conditions.get(part).is_some_and(|c| c.is_all(ComponentCondition::Traction) && c.value.is_zero());
-    let nodes = &disc.nodes;
-    let corners: Vec<_> = crate::domain::corner::corners(&case.domain, nodes)
+    crate::domain::corner::corners(&case.domain, nodes)
         .into_iter()
         .filter(|c| c.reentrant && c.parts.iter().all(|&p| free(p)))
-        .collect();
+        .filter_map(|c| {
+            let h = nodes.local_spacing[c.node];
+            Some((c.position, arc(case, nodes, c.position, c.parts, h)?, h))
+        })
+        .collect()
+}
+
+/// The re-entrant corners that [`balances`] will balance (in-process solves).
+pub fn balanced_corners(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Vec<Point> {
+    qualifying(case, nodes, unknowns).into_iter().map(|(c, _, _)| c).collect()
+}
+
+/// The sector balances of the case's re-entrant corners that qualify (module docs).
+pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> Vec<SectorBalance> {
+    let corners = qualifying(case, &disc.nodes, disc.dofs.unknowns());
     if corners.is_empty() {
         return Vec::new();
     }
-    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&nodes.positions).expect("finite node positions");
+    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&disc.nodes.positions).expect("finite node positions");
     corners
-        .iter()
-        .filter_map(|c| {
-            let h = nodes.local_spacing[c.node];
-            let arc = arc(case, disc, c.position, c.parts, h)?;
-            let rows = arc_rows(case, disc, &tree, c.position, &arc, h)?;
-            let injected = injection(disc, matrix, c.position, h)?;
-            Some(SectorBalance { corner: c.position, radius: arc.radius, rows, injected })
+        .into_iter()
+        .filter_map(|(corner, arc, h)| {
+            let rows = arc_rows(case, disc, &tree, corner, &arc, h)?;
+            let injected = injection(disc, matrix, corner, h)?;
+            Some(SectorBalance { corner, radius: arc.radius, rows, injected })
         })
         .collect()
 }
@@ -125,11 +142,11 @@ struct Arc {
 
 /// The arc of the largest radius from [`SECTOR_SPACINGS`] down that leaves the solid
 /// once and meets no boundary node of a part other than the corner's `parts`.
-fn arc(case: &Case, disc: &Discretisation, corner: Point, parts: [usize; 2], h: f64) -> Option<Arc> {
+fn arc(case: &Case, nodes: &NodeSet, corner: Point, parts: [usize; 2], h: f64) -> Option<Arc> {
     let mut spacings = SECTOR_SPACINGS;
     while spacings >= MIN_SECTOR_SPACINGS {
         let radius = spacings * h;
-        let foreign = disc.nodes.boundary.iter().any(|b| {
+        let foreign = nodes.boundary.iter().any(|b| {
             (b.position[0] - corner[0]).hypot(b.position[1] - corner[1]) <= radius * 1.05
                 && b.touches.iter().any(|(p, _)| !parts.contains(p))
         });
