@@ -12,8 +12,10 @@
 //!   a concave corner, where the continuations of the two sides disagree; a convex
 //!   corner keeps its ghosts, whose nearest foreign node is `sqrt(2) h` away);
 //! * its owner lies within [`REENTRANT_GHOST_FREE`] local spacings of a re-entrant
-//!   corner, where the stress is singular: there the extrapolation across the
-//!   boundary is wrong by O(1) however fine the nodes.
+//!   corner given as ghost-free, where the stress is singular: there the
+//!   extrapolation across the boundary is wrong by O(1) however fine the nodes (the
+//!   caller leaves out the corners whose spurious load the sector balance of
+//!   `navier::sector` takes, for RBF-FD, which needs its ghosts).
 //!
 //! Measured on the L bracket without holes (base clamped, tip shear, grid), tip
 //! deflection against a P2 finite-element reference of -4.894e-4 m
