@@ -39,6 +39,12 @@ pub fn corners(domain: &Domain, nodes: &NodeSet) -> Vec<Corner> {
         .collect()
 }
 
+/// The positions of the re-entrant corners of `nodes` in `domain` (by default the
+/// ghost-free corners of `ghost::place_ghosts`).
+pub fn reentrant_corners(domain: &Domain, nodes: &NodeSet) -> Vec<Point> {
+    corners(domain, nodes).into_iter().filter(|c| c.reentrant).map(|c| c.position).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

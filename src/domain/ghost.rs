@@ -37,12 +37,6 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 /// deflection converged monotonically).
 pub const REENTRANT_GHOST_FREE: f64 = 24.0;
 
-/// The re-entrant corners of `nodes` in `domain`, around which [`place_ghosts`] puts no
-/// ghost by default.
-pub fn reentrant_corners(domain: &Domain, nodes: &NodeSet) -> Vec<Point> {
-    super::corner::corners(domain, nodes).into_iter().filter(|c| c.reentrant).map(|c| c.position).collect()
-}
-
 /// Ghosts for the boundary nodes `candidates`: `(boundary node, ghost position)`; none
 /// within [`REENTRANT_GHOST_FREE`] local spacings of a corner in `ghost_free`.
 pub fn place_ghosts(domain: &Domain, nodes: &NodeSet, candidates: &[usize], ghost_free: &[Point]) -> Vec<(usize, Point)> {
@@ -112,7 +106,7 @@ mod tests {
         let domain = Domain::rectangle([0.0, 0.0], [1.0, 0.5]);
         let n = nodes(&domain, h);
         let all: Vec<usize> = (0..n.boundary.len()).collect();
-        let ghosts = place_ghosts(&domain, &n, &all, &reentrant_corners(&domain, &n));
+        let ghosts = place_ghosts(&domain, &n, &all, &crate::domain::corner::reentrant_corners(&domain, &n));
         assert_eq!(ghosts.len(), n.boundary.len(), "every boundary node of a convex solid has a ghost");
         let mut points = n.positions.clone();
         for &(i, g) in &ghosts {
@@ -143,7 +137,7 @@ mod tests {
         };
         let n = nodes(&domain, h);
         let all: Vec<usize> = (0..n.boundary.len()).collect();
-        let ghosts = place_ghosts(&domain, &n, &all, &reentrant_corners(&domain, &n));
+        let ghosts = place_ghosts(&domain, &n, &all, &crate::domain::corner::reentrant_corners(&domain, &n));
         let corner = n.positions.iter().position(|p| (p[0] - 0.5).hypot(p[1] - 0.5) < 1e-12).expect("a node at the concave corner");
         assert!(!ghosts.iter().any(|&(i, _)| i == corner), "the concave corner got a ghost");
         for &(i, g) in &ghosts {

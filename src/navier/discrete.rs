@@ -375,7 +375,7 @@ fn ghosts(
     // Ghost-free around re-entrant corners (`domain::ghost`), except, for RBF-FD, where
     // the sector balance of a static in-process solve takes the corner's spurious load
     // (`super::sector`; dynamics assembles without it).
-    let mut ghost_free = domain::ghost::reentrant_corners(&case.domain, nodes);
+    let mut ghost_free = domain::corner::reentrant_corners(&case.domain, nodes);
     if rbf_fd && !distributed && case.dynamics.is_none() {
         let balanced = super::sector::balanced_corners(case, nodes, params.formulation.unknowns(&case.material));
         ghost_free.retain(|c| !balanced.contains(c));

@@ -146,10 +146,8 @@ fn arc(case: &Case, nodes: &NodeSet, corner: Point, parts: [usize; 2], h: f64) -
     let mut spacings = SECTOR_SPACINGS;
     while spacings >= MIN_SECTOR_SPACINGS {
         let radius = spacings * h;
-        let foreign = nodes.boundary.iter().any(|b| {
-            (b.position[0] - corner[0]).hypot(b.position[1] - corner[1]) <= radius * 1.05
-                && b.touches.iter().any(|(p, _)| !parts.contains(p))
-        });
+        let foreign =
+            nodes.boundary.iter().any(|b| dist(b.position, corner) <= radius * 1.05 && b.touches.iter().any(|(p, _)| !parts.contains(p)));
         if !foreign {
             if let Some(angles) = inside_interval(case, corner, radius) {
                 return Some(Arc { radius, angles });
@@ -202,7 +200,6 @@ fn arc_rows(
     h: f64,
 ) -> Option<[Vec<(usize, f64)>; 3]> {
     let lame = case.material.lame();
-    let (lam, mu) = (lame.lambda, lame.mu);
     let (t0, t1) = arc.angles;
     let count = ((arc.radius * (t1 - t0) / (0.5 * h)).ceil() as usize).max(48);
     let dt = (t1 - t0) / count as f64;
@@ -210,7 +207,7 @@ fn arc_rows(
     let mut sums: [BTreeMap<usize, f64>; 3] = Default::default();
     let (mut points, mut weights) = (Vec::with_capacity(FIT_NODES), vec![0.0; 2 * FIT_NODES]);
     // Rows scaled to O(1) coefficients: the stress of a unit gradient times the arc.
-    let scale = 1.0 / ((lam + 2.0 * mu) * arc.radius);
+    let scale = 1.0 / ((lame.lambda + 2.0 * lame.mu) * arc.radius);
     for k in 0..count {
         let t = t0 + (k as f64 + 0.5) * dt;
         let n = [t.cos(), t.sin()];
@@ -223,16 +220,18 @@ fn arc_rows(
         let m = points.len();
         wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, q, &points, &[Op::Dx, Op::Dy], &mut weights[..2 * m]).ok()?;
         for (j, f) in found.iter().enumerate() {
-            let (wx, wy) = (weights[j], weights[m + j]);
             let node = f.item as usize;
-            // Traction t = sigma n of the gradient weights of u_x and u_y at node j.
-            let tx = [(lam + 2.0 * mu) * wx * n[0] + mu * wy * n[1], lam * wy * n[0] + mu * wx * n[1]];
-            let ty = [mu * wy * n[0] + lam * wx * n[1], mu * wx * n[0] + (lam + 2.0 * mu) * wy * n[1]];
             for comp in 0..2 {
+                // Traction t = sigma n of the gradient that component `comp` of node j
+                // contributes: its weights in row `comp` of grad u.
+                let mut g = [[0.0; 2]; 2];
+                g[comp] = [weights[j], weights[m + j]];
+                let [sxx, syy, sxy] = lame.stress(g);
+                let (tx, ty) = (sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]);
                 let col = disc.dofs.dof(node, comp);
-                *sums[0].entry(col).or_default() += ds * tx[comp];
-                *sums[1].entry(col).or_default() += ds * ty[comp];
-                *sums[2].entry(col).or_default() += ds * (r[0] * ty[comp] - r[1] * tx[comp]) / arc.radius;
+                *sums[0].entry(col).or_default() += ds * tx;
+                *sums[1].entry(col).or_default() += ds * ty;
+                *sums[2].entry(col).or_default() += ds * (r[0] * ty - r[1] * tx) / arc.radius;
             }
         }
     }
