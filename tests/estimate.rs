@@ -177,6 +177,26 @@ fn singular_corners_get_a_note_and_a_broken_run_a_warning() {
     assert!(!checks.warnings.iter().any(|w| w.check == "equilibrium"), "{:?}", checks.warnings);
 }
 
+/// A corner or hole that could carry a spurious load and gets no balance is named in a
+/// note with the reason, never skipped silently: the bracket in the
+/// displacement-pressure form (the balance is for displacement unknowns) names its
+/// re-entrant corner and both holes; the shipped bracket balances all three and has no
+/// such note.
+#[test]
+fn an_unbalanced_corner_or_hole_is_a_note() {
+    use mlsm::navier::sector::Around;
+    let (sol, checks) = run(&scene("bracket", &[("nodes.spacing", f(0.004)), ("approximation.formulation", s("displacement-pressure"))]));
+    assert!(sol.sector_balances.is_empty());
+    let places: Vec<_> = sol.unbalanced.iter().map(|u| (u.around, u.reason.contains("displacement-pressure"))).collect();
+    assert_eq!(places, vec![(Around::Corner, true), (Around::Hole, true), (Around::Hole, true)]);
+    let note = checks.notes.iter().find(|n| n.starts_with("not balanced")).expect("a note");
+    assert!(note.contains("the re-entrant corner at (6.0000e-2, 1.4000e-1)") && note.matches("the hole around").count() == 2, "{note}");
+
+    let (sol, checks) = run(&scene("bracket", &[("nodes.spacing", f(0.004))]));
+    assert_eq!(sol.sector_balances.len(), 3);
+    assert!(sol.unbalanced.is_empty() && !checks.notes.iter().any(|n| n.starts_with("not balanced")), "{:?}", sol.unbalanced);
+}
+
 /// A run at the highest degree has no higher one to compare with: warned as
 /// unestimated, never silent.
 #[test]

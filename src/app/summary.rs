@@ -98,6 +98,7 @@ pub(super) struct NavierSummary<'a> {
     widened_supports: usize,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     sector_balances: &'a [navier::sector::SectorSummary],
+    unbalanced: &'a [navier::sector::Unbalanced],
     unknowns: usize,
     formulation: &'static str,
     nonzeros: usize,
@@ -130,6 +131,7 @@ impl<'a> NavierSummary<'a> {
             ghost_nodes: sol.ghost_nodes,
             widened_supports: sol.widened_supports,
             sector_balances: &sol.sector_balances,
+            unbalanced: &sol.unbalanced,
             unknowns: sol.unknowns,
             formulation: sol.formulation.name(),
             nonzeros: sol.nonzeros,

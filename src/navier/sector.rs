@@ -133,26 +133,78 @@ struct Contour {
     seeds: Vec<Point>,
 }
 
-/// The contours of the case that qualify for a balance (module docs): re-entrant
-/// corners between free edges, and free holes.
-fn qualifying(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Vec<Contour> {
-    if unknowns != Unknowns::Displacement || !case.body_force.is_zero() {
-        return Vec::new();
-    }
-    let free = |part: usize| case.conditions.get(part).is_some_and(|c| c.is_all(ComponentCondition::Traction) && c.value.is_zero());
-    let corners = crate::domain::corner::corners(&case.domain, nodes)
-        .into_iter()
-        .filter(|c| c.reentrant && c.parts.iter().all(|&p| free(p)))
-        .filter_map(|c| {
-            let h = spacing_at_arc(nodes, c.position, nodes.local_spacing[c.node]);
-            let arc = arc(case, nodes, c.position, c.parts, h)?;
-            Some(Contour { around: Around::Corner, centre: c.position, arc, h, seeds: vec![c.position] })
-        });
+/// A re-entrant corner between traction edges or a hole with traction edges that gets
+/// no balance, and why: reported as a note, since its discrete solution may carry the
+/// spurious load the balance removes.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Unbalanced {
+    /// Corner or hole.
+    pub around: Around,
+    /// The corner, or the mean position of the hole's nodes.
+    pub at: Point,
+    /// Why it is not balanced.
+    pub reason: String,
+}
+
+/// The contours of the case that qualify for a balance (module docs), and the corners
+/// and holes with traction edges that do not, with the reason.
+fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> (Vec<Contour>, Vec<Unbalanced>) {
+    let traction = |part: usize| case.conditions.get(part).is_some_and(|c| c.is_all(ComponentCondition::Traction));
+    let free = |part: usize| traction(part) && case.conditions[part].value.is_zero();
+    let corners =
+        crate::domain::corner::corners(&case.domain, nodes).into_iter().filter(|c| c.reentrant && c.parts.iter().all(|&p| traction(p)));
     let holes = crate::domain::corner::holes(nodes)
         .into_iter()
-        .filter(|hole| hole.iter().all(|&i| nodes.boundary[i].touches.iter().all(|&(p, _)| free(p))))
-        .filter_map(|hole| ring(case, nodes, &hole));
-    corners.chain(holes).collect()
+        .filter(|hole| hole.iter().all(|&i| nodes.boundary[i].touches.iter().all(|&(p, _)| traction(p))));
+    let overall = if unknowns != Unknowns::Displacement {
+        Some("the displacement-pressure form is not balanced")
+    } else if !case.body_force.is_zero() {
+        Some("a body force acts")
+    } else {
+        None
+    };
+    let (mut contours, mut unbalanced) = (Vec::new(), Vec::new());
+    let mut refuse = |around: Around, at: Point, reason: &str| unbalanced.push(Unbalanced { around, at, reason: reason.into() });
+    for c in corners {
+        let why = overall.or_else(|| (!c.parts.iter().all(|&p| free(p))).then_some("an edge at the corner is loaded"));
+        if let Some(why) = why {
+            refuse(Around::Corner, c.position, why);
+            continue;
+        }
+        let h = spacing_at_arc(nodes, c.position, nodes.local_spacing[c.node]);
+        match arc(case, nodes, c.position, c.parts, h) {
+            Some(arc) => contours.push(Contour { around: Around::Corner, centre: c.position, arc, h, seeds: vec![c.position] }),
+            None => refuse(
+                Around::Corner,
+                c.position,
+                &format!("no arc of {MIN_SECTOR_SPACINGS} to {SECTOR_SPACINGS} spacings stays between its two edges"),
+            ),
+        }
+    }
+    for hole in holes {
+        let k = hole.len() as f64;
+        let mean = hole.iter().fold([0.0, 0.0], |m, &i| [m[0] + nodes.positions[i][0] / k, m[1] + nodes.positions[i][1] / k]);
+        let loaded = !hole.iter().all(|&i| nodes.boundary[i].touches.iter().all(|&(p, _)| free(p)));
+        let why = overall.or_else(|| loaded.then_some("the hole is loaded"));
+        if let Some(why) = why {
+            refuse(Around::Hole, mean, why);
+            continue;
+        }
+        match ring(case, nodes, &hole) {
+            Some(ring) => contours.push(ring),
+            None => refuse(Around::Hole, mean, "no ring 3 to 10 spacings out fits in the solid without meeting another boundary"),
+        }
+    }
+    (contours, unbalanced)
+}
+
+/// The corners and holes with traction edges of an assembly that imposes no balance
+/// (rows split over MPI ranks), each with `reason`. Dynamic runs assemble without
+/// balances and do not report them yet.
+pub fn none_balanced(case: &Case, nodes: &NodeSet, reason: &str) -> Vec<Unbalanced> {
+    let (contours, mut unbalanced) = survey(case, nodes, Unknowns::Displacement);
+    unbalanced.extend(contours.into_iter().map(|c| Unbalanced { around: c.around, at: c.centre, reason: reason.into() }));
+    unbalanced
 }
 
 /// The spacing `h` at which the arc of radius `SECTOR_SPACINGS h` is `SECTOR_SPACINGS`
@@ -175,24 +227,34 @@ fn spacing_at_arc(nodes: &NodeSet, corner: Point, mut h: f64) -> f64 {
 
 /// The re-entrant corners that [`balances`] will balance (in-process solves).
 pub fn balanced_corners(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Vec<Point> {
-    qualifying(case, nodes, unknowns).into_iter().filter(|c| c.around == Around::Corner).map(|c| c.centre).collect()
+    survey(case, nodes, unknowns).0.into_iter().filter(|c| c.around == Around::Corner).map(|c| c.centre).collect()
 }
 
-/// The balances of the case's re-entrant corners and holes that qualify (module docs).
-pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> Vec<SectorBalance> {
-    let contours = qualifying(case, &disc.nodes, disc.dofs.unknowns());
+/// The balances of the case's re-entrant corners and holes that qualify (module docs),
+/// and those that get none, with the reason.
+pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> (Vec<SectorBalance>, Vec<Unbalanced>) {
+    let (contours, mut unbalanced) = survey(case, &disc.nodes, disc.dofs.unknowns());
     if contours.is_empty() {
-        return Vec::new();
+        return (Vec::new(), unbalanced);
     }
     let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&disc.nodes.positions).expect("finite node positions");
-    contours
-        .into_iter()
-        .filter_map(|c| {
-            let rows = arc_rows(case, disc, &tree, c.centre, &c.arc, c.h)?;
-            let injected = injection(disc, matrix, c.centre, &c.seeds, c.h)?;
-            Some(SectorBalance { around: c.around, centre: c.centre, radius: c.arc.radius, rows, injected })
-        })
-        .collect()
+    let mut balances = Vec::with_capacity(contours.len());
+    for c in contours {
+        let rows = arc_rows(case, disc, &tree, c.centre, &c.arc, c.h);
+        let injected = injection(disc, matrix, c.centre, &c.seeds, c.h);
+        match (rows, injected) {
+            (Some(rows), Some(injected)) if pivot_rows(&injected).is_some() => {
+                balances.push(SectorBalance { around: c.around, centre: c.centre, radius: c.arc.radius, rows, injected })
+            }
+            (None, _) => unbalanced.push(Unbalanced { around: c.around, at: c.centre, reason: "the stress fit on its arc failed".into() }),
+            _ => unbalanced.push(Unbalanced {
+                around: c.around,
+                at: c.centre,
+                reason: "too few interior nodes near it carry the force and couple".into(),
+            }),
+        }
+    }
+    (balances, unbalanced)
 }
 
 /// Distances of a hole's ring from the hole, in local spacings, tried from the

@@ -51,8 +51,11 @@ pub struct Solution {
     pub ghost_nodes: usize,
     /// Supports widened to determine an RBF-FD polynomial part.
     pub widened_supports: usize,
-    /// Re-entrant corners whose sector equilibrium was imposed ([`sector`]).
+    /// Re-entrant corners and holes whose equilibrium was imposed ([`sector`]).
     pub sector_balances: Vec<sector::SectorSummary>,
+    /// The re-entrant corners and holes with traction edges that got no balance, and
+    /// why (a note of the checks).
+    pub unbalanced: Vec<sector::Unbalanced>,
     /// Number of unknowns.
     pub unknowns: usize,
     /// What each node carries (the resolved formulation).
@@ -91,7 +94,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let mut disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let Solved { x, nonzeros, report, system, sectors } = assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
+    let Solved { x, nonzeros, report, system, sectors, unbalanced } = assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
@@ -152,6 +155,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         ghost_nodes,
         widened_supports,
         sector_balances: sectors,
+        unbalanced,
         unknowns,
         formulation,
         nonzeros,
@@ -172,8 +176,11 @@ pub(super) struct Solved {
     pub report: SolveReport,
     /// The matrix and right-hand side, when kept.
     pub system: Option<(SparseMatrix, Vec<f64>)>,
-    /// The sector balances imposed at re-entrant corners ([`sector`]; none over MPI).
+    /// The sector balances imposed at re-entrant corners and holes ([`sector`]; none
+    /// over MPI).
     pub sectors: Vec<sector::SectorSummary>,
+    /// The corners and holes with traction edges that got no balance, and why.
+    pub unbalanced: Vec<sector::Unbalanced>,
 }
 
 /// Assemble the rows of `disc` and solve them with `params.solver` (stages `assembly`,
@@ -194,12 +201,12 @@ pub(super) fn assemble_and_solve(
     if disc.owner.is_some() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
     }
-    let (matrix, rhs, sectors) = timer.run(stage::ASSEMBLY, || {
+    let (matrix, rhs, sectors, unbalanced) = timer.run(stage::ASSEMBLY, || {
         let (m, mut rhs) = System { case, disc, exact }.assemble()?;
-        let balances = sector::balances(case, disc, &m);
+        let (balances, unbalanced) = sector::balances(case, disc, &m);
         let m = sector::impose(m, &mut rhs, &balances);
         let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.nnz());
-        Ok(((m, rhs, balances.iter().map(|b| b.summary()).collect()), note))
+        Ok(((m, rhs, balances.iter().map(|b| b.summary()).collect(), unbalanced), note))
     })?;
     disc.release_row_shapes();
     let nonzeros = matrix.nnz();
@@ -218,7 +225,7 @@ pub(super) fn assemble_and_solve(
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, report, kept), note))
     })?;
-    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs)), sectors })
+    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs)), sectors, unbalanced })
 }
 
 /// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
@@ -247,5 +254,6 @@ fn assemble_and_solve_distributed(
         Ok(((x, report), note))
     })?;
     let nonzeros = report.ranks.as_ref().map_or(0, |r| r.nonzeros.iter().sum());
-    Ok(Solved { x, nonzeros, report, system: None, sectors: Vec::new() })
+    let unbalanced = sector::none_balanced(case, &disc.nodes, "its rows are split over MPI ranks (solver.kind = \"petsc\")");
+    Ok(Solved { x, nonzeros, report, system: None, sectors: Vec::new(), unbalanced })
 }
