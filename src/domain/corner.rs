@@ -76,8 +76,7 @@ pub fn holes(nodes: &NodeSet) -> Vec<Vec<usize>> {
     loops
         .into_values()
         .filter(|l| {
-            let k = l.len() as f64;
-            let mean = l.iter().fold([0.0, 0.0], |m, &i| [m[0] + nodes.positions[i][0] / k, m[1] + nodes.positions[i][1] / k]);
+            let mean = mean_position(nodes, l);
             let outward: f64 = l
                 .iter()
                 .map(|&i| {
@@ -88,6 +87,12 @@ pub fn holes(nodes: &NodeSet) -> Vec<Vec<usize>> {
             outward < 0.0
         })
         .collect()
+}
+
+/// The mean position of the nodes `indices`.
+pub fn mean_position(nodes: &NodeSet, indices: &[usize]) -> Point {
+    let k = indices.len() as f64;
+    indices.iter().fold([0.0, 0.0], |m, &i| [m[0] + nodes.positions[i][0] / k, m[1] + nodes.positions[i][1] / k])
 }
 
 #[cfg(test)]

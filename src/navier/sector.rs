@@ -182,8 +182,7 @@ fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> (Vec<Contour>, Ve
         }
     }
     for hole in holes {
-        let k = hole.len() as f64;
-        let mean = hole.iter().fold([0.0, 0.0], |m, &i| [m[0] + nodes.positions[i][0] / k, m[1] + nodes.positions[i][1] / k]);
+        let mean = crate::domain::corner::mean_position(nodes, &hole);
         let loaded = !hole.iter().all(|&i| nodes.boundary[i].touches.iter().all(|&(p, _)| free(p)));
         let why = overall.or_else(|| loaded.then_some("the hole is loaded"));
         if let Some(why) = why {
