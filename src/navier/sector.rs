@@ -51,6 +51,10 @@
 //! [`RING_SPACINGS`] from its farthest node, inside the solid with no other boundary
 //! node within), the multipliers injected into the Navier rows of the interior nodes
 //! within [`INJECTION_SPACINGS`] of the hole's nodes.
+//!
+//! A corner or hole with traction edges that gets no balance (the cases above, or no
+//! arc or ring fits, or its fit or injection fails) is listed as [`Unbalanced`] with
+//! the reason, which the checks turn into a note.
 
 use super::discrete::Discretisation;
 use crate::case::Case;
