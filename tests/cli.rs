@@ -1150,6 +1150,34 @@ fn export_system_writes_a_system_that_other_solvers_can_read() {
     let ghosts = csv.lines().skip(1).filter(|l| l.ends_with(",1")).count();
     assert_eq!(ghosts, 2 * s["ghost_nodes"].as_u64().unwrap() as usize, "two unknowns per ghost");
 
+    // The bracket's balances border its system: their multipliers come last in
+    // unknowns.csv (node -1, components 3, 4, 5), and the exported bordered system holds
+    // the exported solution, multipliers included.
+    let bracket = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/bracket.toml");
+    let args = ["--quiet", "run", bracket.to_str().unwrap(), "--spacing", "0.004", "--out", res.to_str().unwrap()];
+    let o = mlsm(tmp.path(), &[&args[..], &["--export-system", sys.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    let balances = s["sector_balances"].as_array().unwrap().len();
+    assert_eq!(balances, 3, "{s}");
+    let (a, b, x) = (load("matrix.mtx"), load("rhs.mtx"), load("solution.mtx"));
+    assert_eq!(a.nrows(), s["unknowns"].as_u64().unwrap() as usize + 3 * balances);
+    let (mut b, x) = (dense(&b), dense(&x));
+    let mut r = b.clone();
+    a.triplet_iter().for_each(|(i, j, v)| r[i] -= v * x[j]);
+    // In the rows' own scale (rows divided by their largest entry, as the solver
+    // equilibrates them): the Navier rows (E / h^2 ~ 1e16) would dominate otherwise.
+    let mut row_max = vec![0.0f64; a.nrows()];
+    a.triplet_iter().for_each(|(i, _, v)| row_max[i] = row_max[i].max(v.abs()));
+    r.iter_mut().zip(&mut b).zip(&row_max).for_each(|((r, b), m)| (*r, *b) = (*r / m, *b / m));
+    assert!(norm(&r) / norm(&b) < 1e-10, "bordered: relative residual {:.1e}", norm(&r) / norm(&b));
+    let csv = std::fs::read_to_string(sys.join("unknowns.csv")).unwrap();
+    let multipliers: Vec<&str> = csv.lines().skip(1).filter(|l| l.split(',').nth(1) == Some("-1")).collect();
+    assert_eq!(multipliers.len(), 3 * balances, "{csv}");
+    let components: Vec<&str> = multipliers.iter().map(|l| l.split(',').nth(2).unwrap()).collect();
+    assert_eq!(&components[..3], &["3", "4", "5"]);
+    assert_eq!(read_json(&sys.join("system.json"))["multipliers"].as_u64(), Some(3 * balances as u64));
+
     let scene = shipped("steel_plate_dynamic");
     write(tmp.path(), "dynamic.toml", &scene);
     let o = mlsm(tmp.path(), &["--quiet", "run", "dynamic.toml", "--out", res.to_str().unwrap(), "--export-system", sys.to_str().unwrap()]);

@@ -6,7 +6,10 @@
 //!   equilibration, and our solution `x`;
 //! * `unknowns.csv`: per unknown its node, component (0 = x, 1 = y, 2 = pressure / mu),
 //!   the node's position and whether it is a ghost (the coordinates give the
-//!   rigid-body modes, the near-null space of multigrid);
+//!   rigid-body modes, the near-null space of multigrid); a run with sector balances
+//!   (re-entrant corners, free holes) has their multipliers last, node -1, component
+//!   3, 4, 5 (force x, force y, moment), at the balance's centre: the system is then
+//!   bordered, `[A G; C 0]` (`linalg::border`);
 //! * `system.json`: sizes, layout and the relative residual `‖b − A x‖₂ / ‖b‖₂` of our
 //!   solution on this system.
 
@@ -21,6 +24,7 @@ use std::path::Path;
 #[derive(Serialize)]
 struct SystemSummary<'a> {
     unknowns: usize,
+    multipliers: usize,
     nonzeros: usize,
     nodes: usize,
     ghost_nodes: usize,
@@ -37,21 +41,32 @@ pub(super) fn write(dir: &Path, system: &LinearSystem, report: &SolveReport) -> 
     let n = a.nrows();
     let column = ColumnMatrix { n, column_starts: a.symbolic().col_ptr(), rows: a.symbolic().row_idx(), values: a.val() };
     output::write_system(dir, &column, &system.rhs, &system.x)?;
+    let field = n - system.multipliers.len();
     let rows: Vec<Vec<f64>> = (0..n)
-        .map(|dof| {
-            let (node, c) = system.dofs.location(dof);
-            let p = system.points[node];
-            vec![dof as f64, node as f64, c as f64, p[0], p[1], f64::from(u8::from(node >= system.nodes))]
+        .map(|dof| match dof.checked_sub(field) {
+            None => {
+                let (node, c) = system.dofs.location(dof);
+                let p = system.points[node];
+                vec![dof as f64, node as f64, c as f64, p[0], p[1], f64::from(u8::from(node >= system.nodes))]
+            }
+            // A multiplier: no node, component 3 + (0 force x, 1 force y, 2 moment),
+            // at its balance's centre.
+            Some(m) => {
+                let p = system.multipliers[m];
+                vec![dof as f64, -1.0, (3 + m % 3) as f64, p[0], p[1], 0.0]
+            }
         })
         .collect();
     output::write_csv(&dir.join("unknowns.csv"), &["unknown", "node", "component", "x", "y", "ghost"], &rows)?;
     let summary = SystemSummary {
         unknowns: n,
+        multipliers: system.multipliers.len(),
         nonzeros: a.compute_nnz(),
         nodes: system.nodes,
         ghost_nodes: system.points.len() - system.nodes,
         formulation: system.dofs.unknowns().name(),
-        rows: "as assembled (not equilibrated); unknowns ordered node by node: x, y[, pressure / mu]",
+        rows: "as assembled (not equilibrated); unknowns ordered node by node: x, y[, pressure / mu]; then the \
+               multipliers of the sector balances (force x, force y, moment each), whose rows are the balances",
         relative_residual: relative_residual(a, &system.x, &system.rhs),
         solver: &report.method,
     };

@@ -58,7 +58,12 @@ fn multigrid_iterations_do_not_grow_with_the_grid() {
         let (a, d) = scaling::equilibrate_rows(&to_csr(&a)).unwrap();
         let b: Vec<f64> = (0..a.nrows()).map(|i| if (i / 2) % m == 0 { 0.0 } else { 1.0 }).collect();
         let b = scaling::scale_rhs(&b, &d);
-        let amg = Amg::build_from_rows(a, Some(NodeLayout { per_node: 2, positions: &positions }), AmgParams::default(), Finest::System);
+        let amg = Amg::build_from_rows(
+            a,
+            Some(NodeLayout { per_node: 2, positions: &positions, multipliers: 0 }),
+            AmgParams::default(),
+            Finest::System,
+        );
         assert!(amg.sizes().len() >= 2, "{:?}", amg.sizes());
         // Five-node aggregates of a 5-point stencil carry 3 coarse unknowns for 10
         // fine ones, and the coarse stencils widen: measured 3.3.
@@ -80,7 +85,7 @@ fn a_preconditioner_only_hierarchy_applies_the_same_cycle() {
     let (a, positions) = vector_laplacian(65);
     let (a, d) = scaling::equilibrate_rows(&to_csr(&a)).unwrap();
     let b = scaling::scale_rhs(&(0..a.nrows()).map(|i| 1.0 + (i % 7) as f64).collect::<Vec<_>>(), &d);
-    let layout = Some(NodeLayout { per_node: 2, positions: &positions });
+    let layout = Some(NodeLayout { per_node: 2, positions: &positions, multipliers: 0 });
     let kept = Amg::build_from_rows(a.clone(), layout, AmgParams::default(), Finest::System);
     let only = Amg::build_from_rows(a.clone(), layout, AmgParams::default(), Finest::PreconditionerOnly);
     assert!(kept.fine_operator().is_some() && only.fine_operator().is_none());

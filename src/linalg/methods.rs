@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use super::csr::Csr;
-use super::{amg, bicgstab, gmres, lu, norm2, precond, relative, residual, row_residual};
+use super::{amg, bicgstab, border, gmres, lu, norm2, precond, relative, residual, row_residual};
 use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
@@ -93,7 +93,8 @@ pub(super) fn iteration_limit(max_iterations: usize) -> String {
 pub(super) fn solved_rows(a: Cow<'_, Csr>, rhs: &Rhs) -> Csr {
     let mut rows = a.into_owned();
     if let Some(d) = &rhs.scales {
-        rows.scale_rows(d);
+        // An auxiliary operator of a bordered system has the leading rows only.
+        rows.scale_rows(&d[..rows.nrows()]);
     }
     rows
 }
@@ -233,12 +234,22 @@ pub(super) fn solve_gmres_multigrid(
         None => start.method.clone(),
     };
     let start = Start { method, choice: start.choice.clone(), ..*start };
+    // A bordered system's multigrid is built on its leading block (border module).
+    let multipliers = layout.map_or(0, |l| l.multipliers);
     let (finest, system) = match auxiliary {
         Some(aux) => (aux, Some(rows)),
+        None if multipliers > 0 => (border::leading_block(&rows, multipliers), Some(rows)),
         None => (rows, None),
     };
     let keep = if system.is_some() { amg::Finest::PreconditionerOnly } else { amg::Finest::System };
-    let pc = precond::BuiltPreconditioner::Amg(Box::new(amg::Amg::build_from_rows(finest, layout, amg::AmgParams::default(), keep)));
+    let amg = Box::new(amg::Amg::build_from_rows(finest, layout.map(NodeLayout::nodes_only), amg::AmgParams::default(), keep));
+    let pc = match system.as_ref().filter(|_| multipliers > 0) {
+        None => precond::BuiltPreconditioner::Amg(amg),
+        Some(rows) => match border::Bordered::build(rows, multipliers, precond::BuiltPreconditioner::Amg(amg)) {
+            Ok(b) => precond::BuiltPreconditioner::Bordered(Box::new(b)),
+            Err(e) => return Err(Box::new((e, Leftover::Rows(system.expect("a bordered system is kept"))))),
+        },
+    };
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
     run_gmres(rows, &pc, rhs, &start, settings).map_err(|e| {
         let rows = system.unwrap_or_else(|| {

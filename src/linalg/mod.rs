@@ -11,7 +11,9 @@
 //!   accumulation and CSC assembly (duplicates summed),
 //! * [`solve`]: optional row equilibration ([`scaling`]) followed by either the
 //!   sparse direct LU of `faer` ([`lu`]) or right-preconditioned BiCGSTAB
-//!   ([`bicgstab`]) with Jacobi, ILU(0) or ILUT ([`precond`]).
+//!   ([`bicgstab`]) with Jacobi, ILU(0) or ILUT ([`precond`]),
+//! * [`border`]: constraints with multipliers, `[A G; C 0]`, and the block
+//!   preconditioner that lets the Krylov solvers take them.
 //!
 //! Whatever the path, the returned [`SolveReport::relative_residual`] is the
 //! *true* residual `‖b − A x‖₂ / ‖b‖₂` recomputed from the solved system (the
@@ -25,6 +27,7 @@ pub mod aggregation;
 pub mod amg;
 pub mod bicgstab;
 pub mod blocks;
+pub mod border;
 pub mod csr;
 pub mod distributed;
 pub mod gmres;

@@ -100,7 +100,7 @@ mod tests {
     #[test]
     fn rigid_body_modes_are_centred_translations_and_a_rotation() {
         let positions = [[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
-        let (b, k) = rigid_body_modes(8, Some(NodeLayout { per_node: 2, positions: &positions }));
+        let (b, k) = rigid_body_modes(8, Some(NodeLayout { per_node: 2, positions: &positions, multipliers: 0 }));
         assert_eq!(k, 3);
         // Node 2 at (1, 1) from the centre, scaled by 1: u = (-y, x) = (-1, 1).
         assert_eq!(&b[4 * 3..4 * 3 + 3], &[1.0, 0.0, -1.0]);

@@ -68,6 +68,9 @@ pub enum BuiltPreconditioner {
     Amg(Box<Amg>),
     /// The block-triangular preconditioner of the displacement-pressure form.
     SaddlePoint(Box<super::saddle::SaddlePoint>),
+    /// The block-triangular preconditioner of a bordered system (constraints with
+    /// multipliers), around one of the others built on its leading block.
+    Bordered(Box<super::border::Bordered>),
 }
 
 /// `a` with an explicit zero stored at every missing diagonal entry, or `None` when
@@ -91,9 +94,18 @@ fn with_stored_diagonal(a: &SparseMatrix) -> Result<Option<SparseMatrix>, SolveE
 }
 
 impl BuiltPreconditioner {
-    /// Build the preconditioner `kind` for `a`; `layout` gives AMG its near-null space.
+    /// Build the preconditioner `kind` for `a`; `layout` gives AMG its near-null space,
+    /// and with `layout.multipliers > 0` the preconditioner of the bordered system
+    /// around `kind` built on its leading block ([`super::border`]).
     /// Errors: [`SolveError::Singular`] for zero pivots / missing diagonals.
     pub fn build(a: &SparseMatrix, kind: Preconditioner, layout: Option<NodeLayout>) -> Result<Self, SolveError> {
+        if let Some(l) = layout.filter(|l| l.multipliers > 0) {
+            let rows = super::amg::to_csr(a);
+            let lead = super::amg::columns_of(super::border::leading_block(&rows, l.multipliers));
+            let inner = Self::build(&lead, kind, Some(l.nodes_only()))?;
+            drop(lead);
+            return Ok(BuiltPreconditioner::Bordered(Box::new(super::border::Bordered::build(&rows, l.multipliers, inner)?)));
+        }
         Ok(match kind {
             Preconditioner::Jacobi => BuiltPreconditioner::Jacobi(Jacobi::try_new(a)?),
             Preconditioner::Ilu0 => {
@@ -131,6 +143,7 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Ilut(p) => p.nonzeros(),
             BuiltPreconditioner::Amg(p) => p.nonzeros(),
             BuiltPreconditioner::SaddlePoint(p) => p.nonzeros(),
+            BuiltPreconditioner::Bordered(p) => p.nonzeros(),
         }
     }
 
@@ -150,17 +163,19 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::SaddlePoint(p) => {
                 format!(" on the displacement block{}, the Schur complement by its SIMPLE diagonal", levels(p.multigrid()))
             }
+            BuiltPreconditioner::Bordered(p) => format!("{}, bordered by the constraints' Schur complement", p.inner().describe()),
             _ => String::new(),
         }
     }
 
-    fn dim(&self) -> usize {
+    pub(super) fn dim(&self) -> usize {
         match self {
             BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
             BuiltPreconditioner::Ilu0(p) => p.dim(),
             BuiltPreconditioner::Ilut(p) => p.dim(),
             BuiltPreconditioner::Amg(p) => p.dim(),
             BuiltPreconditioner::SaddlePoint(p) => p.dim(),
+            BuiltPreconditioner::Bordered(p) => p.dim(),
         }
     }
 
@@ -168,6 +183,7 @@ impl BuiltPreconditioner {
     pub fn solve_into(&self, v: &[f64], z: &mut [f64]) {
         match self {
             BuiltPreconditioner::Amg(p) => p.solve_into(v, z),
+            BuiltPreconditioner::Bordered(p) => p.solve_into(v, z),
             _ => {
                 z.copy_from_slice(v);
                 self.solve_in_place(z);
@@ -182,6 +198,10 @@ impl BuiltPreconditioner {
             BuiltPreconditioner::Ilut(p) => p.solve_in_place(x),
             BuiltPreconditioner::Amg(p) => p.solve_in_place(x),
             BuiltPreconditioner::SaddlePoint(p) => p.solve_in_place(x),
+            BuiltPreconditioner::Bordered(p) => {
+                let v = x.to_vec();
+                p.solve_into(&v, x);
+            }
             BuiltPreconditioner::Ilu0(p) => {
                 let n = x.len();
                 let m = faer::MatMut::from_column_major_slice_mut(x, n, 1);

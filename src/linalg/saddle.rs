@@ -107,7 +107,7 @@ impl SaddlePoint {
         let continuity = block(a, Component::Pressure, Component::Displacement);
         let inverse_schur = simple_inverse_schur(a, &gradient, &continuity);
         drop(continuity);
-        let layout = NodeLayout { per_node: 2, positions: layout.positions };
+        let layout = NodeLayout { per_node: 2, positions: layout.positions, multipliers: 0 };
         let displacement = Amg::build_from_rows(displacement, Some(layout), AmgParams::default(), Finest::PreconditionerOnly);
         Some(SaddlePoint { displacement, gradient, inverse_schur, work: Mutex::new((Vec::new(), Vec::new())) })
     }
@@ -214,7 +214,8 @@ mod tests {
         let nodes = 40;
         let a = ring(nodes);
         let positions: Vec<[f64; 2]> = (0..nodes).map(|i| [(i as f64).cos(), (i as f64).sin()]).collect();
-        let pc = SaddlePoint::build(&a, None, NodeLayout { per_node: 3, positions: &positions }).expect("three unknowns per node");
+        let pc = SaddlePoint::build(&a, None, NodeLayout { per_node: 3, positions: &positions, multipliers: 0 })
+            .expect("three unknowns per node");
         let dense = DMatrix::from_fn(3 * nodes, 3 * nodes, |r, c| {
             let row = a.row(r);
             row.col_indices().binary_search(&(c as u32)).map_or(0.0, |k| row.values()[k])

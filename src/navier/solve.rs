@@ -72,14 +72,18 @@ pub struct Solution {
     pub timings: StageTimings,
 }
 
-/// The assembled system `A x = b` of a run, with what each unknown is.
+/// The assembled system `A x = b` of a run, with what each unknown is; with sector
+/// balances it is the bordered system `[A G; C 0]` (`linalg::border`).
 pub struct LinearSystem {
     /// `A`, as assembled (before the solver's row equilibration).
     pub matrix: SparseMatrix,
     /// `b`.
     pub rhs: Vec<f64>,
-    /// The solution `x`.
+    /// The solution `x` (the multipliers last).
     pub x: Vec<f64>,
+    /// The centre of the balance of each multiplier (three per balance: force x,
+    /// force y, moment), the unknowns after the nodes' (`linalg::border`).
+    pub multipliers: Vec<Point>,
     /// Unknown layout over nodes and ghosts.
     pub dofs: DofMap,
     /// Position of every node and ghost (ghosts after the nodes).
@@ -94,7 +98,8 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = case.exact_solution();
     let exact = exact.as_deref();
     let mut disc = Discretisation::new(case, params, exact, &mut timer)?;
-    let Solved { x, nonzeros, report, system, sectors, unbalanced } = assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
+    let Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced } =
+        assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
@@ -125,7 +130,8 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let system = system.map(|(matrix, rhs)| LinearSystem {
         matrix,
         rhs,
-        x: x.clone(),
+        x: x.iter().chain(&multipliers).copied().collect(),
+        multipliers: sectors.iter().flat_map(|s| [s.centre; 3]).collect(),
         dofs: disc.dofs,
         points: (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect(),
         nodes: disc.nodes.len(),
@@ -170,6 +176,9 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
 pub(super) struct Solved {
     /// The unknowns (displacements of nodes and ghosts).
     pub x: Vec<f64>,
+    /// The multipliers of the sector balances (force x, force y, moment of each),
+    /// the trailing unknowns of the bordered system (`linalg::border`).
+    pub multipliers: Vec<f64>,
     /// Nonzeros of the matrix.
     pub nonzeros: usize,
     /// What the solver did.
@@ -201,31 +210,38 @@ pub(super) fn assemble_and_solve(
     if disc.owner.is_some() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
     }
-    let (matrix, rhs, sectors, unbalanced) = timer.run(stage::ASSEMBLY, || {
-        let (m, mut rhs) = System { case, disc, exact }.assemble()?;
+    let (matrix, rhs, sectors, unbalanced, multipliers) = timer.run(stage::ASSEMBLY, || {
+        let (m, rhs) = System { case, disc, exact }.assemble()?;
         let (balances, unbalanced) = sector::balances(case, disc, &m);
-        let m = sector::impose(m, &mut rhs, &balances);
-        let note = format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.nnz());
-        Ok(((m, rhs, balances.iter().map(|b| b.summary()).collect(), unbalanced), note))
+        let border = sector::border(&balances);
+        let (m, rhs) = if border.is_empty() { (m, rhs) } else { border.bordered(m, &rhs) };
+        let note = match border.len() {
+            0 => format!("{} unknowns, {} nonzeros", disc.dofs.len(), m.nnz()),
+            k => format!("{} unknowns and {k} multipliers, {} nonzeros", disc.dofs.len(), m.nnz()),
+        };
+        Ok(((m, rhs, balances.iter().map(|b| b.summary()).collect(), unbalanced, border.len()), note))
     })?;
     disc.release_row_shapes();
     let nonzeros = matrix.nnz();
-    let (x, report, kept) = timer.run(stage::SOLVE, || {
-        let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions });
+    let (x, multipliers, report, kept) = timer.run(stage::SOLVE, || {
+        let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions, multipliers });
         let auxiliary: linalg::Auxiliary = params.multigrid.low_order(disc.supports.requested()).then(|| {
             let approximation = low_order::approximation(&params.approximation, params.fill.kind);
             Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
         });
         // Handed over unless kept: the solver frees it once it holds its own form.
-        let ((x, report), kept) = if keep {
+        let ((mut x, report), kept) = if keep {
             (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary)?, Some(matrix))
         } else {
             (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary)?, None)
         };
+        // The multipliers of the balances are not unknowns of the field.
+        let lambda = x.split_off(x.len() - multipliers);
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
-        Ok(((x, report, kept), note))
+        Ok(((x, lambda, report, kept), note))
     })?;
-    Ok(Solved { x, nonzeros, report, system: kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs)), sectors, unbalanced })
+    let system = kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs));
+    Ok(Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced })
 }
 
 /// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
@@ -255,5 +271,5 @@ fn assemble_and_solve_distributed(
     })?;
     let nonzeros = report.ranks.as_ref().map_or(0, |r| r.nonzeros.iter().sum());
     let unbalanced = sector::none_balanced(case, &disc.nodes, "its rows are split over MPI ranks (solver.kind = \"petsc\")");
-    Ok(Solved { x, nonzeros, report, system: None, sectors: Vec::new(), unbalanced })
+    Ok(Solved { x, multipliers: Vec::new(), nonzeros, report, system: None, sectors: Vec::new(), unbalanced })
 }

@@ -265,7 +265,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
             }
             None => {
                 // The unknowns are the free nodes' displacements, free nodes first.
-                let layout = linalg::NodeLayout { per_node: 2, positions: free_positions };
+                let layout = linalg::NodeLayout { per_node: 2, positions: free_positions, multipliers: 0 };
                 linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?
             }
         };

@@ -19,14 +19,13 @@
 //! squares fit over the 12 nearest nodes at each point of a midpoint rule on the arc.
 //! Its three multipliers are a force and a couple injected into the Navier rows of
 //! the interior nodes within [`INJECTION_SPACINGS`] of the corner (each row's share
-//! scaled by its norm), eliminated on three pivot rows (partial pivoting on the
-//! injection), so the system stays square and keeps its unknowns:
-//! `A_i x + g_i . lambda = b_i` for the injected rows and `C x = 0` become
-//! `(A_i - g_i G_P^-1 A_P) x = b_i - g_i G_P^-1 b_P` and the pivot rows `C x = 0`.
-//!
-//! The balance rows have no diagonal entry (the arc is far from the pivots' nodes):
-//! LU pivots past it, incomplete factorisations without pivoting do not (BiCGSTAB +
-//! ILUT diverges on the scattered bracket and is reported so; `auto` takes LU).
+//! scaled by its norm), and the system is bordered by them ([`border`],
+//! `linalg::border`): `A x + G lambda = b`, `C x = 0`. Sparse LU factors the bordered
+//! matrix as it stands; the Krylov solvers take it with a block preconditioner around
+//! one of `A`. (Until 2026-11-27 the multipliers were eliminated on three pivot rows,
+//! which put the balance rows, without a diagonal entry, in their place: ILU met a
+//! zero pivot there, and BiCGSTAB + ILUT failed on the bracket. The bordered matrix
+//! also has 7 % fewer entries: the elimination filled the injected rows.)
 //!
 //! With RBF-FD the boundary nodes near a balanced corner keep their ghosts
 //! (`domain::ghost`, `navier::discrete`): without them its one-sided 30-node traction
@@ -68,7 +67,7 @@ use std::collections::BTreeMap;
 use std::num::NonZeroUsize;
 
 mod impose;
-pub use impose::impose;
+pub use impose::border;
 use impose::pivot_rows;
 
 /// Radius of the sector, in local spacings of the corner node (the tip deflection of
