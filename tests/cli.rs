@@ -1285,3 +1285,24 @@ fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
         assert!((a - b).abs() <= 1e-4 * a, "{norm}: LU {a:e} vs fallback {b:e}");
     }
 }
+
+/// A dynamic run imposes no sector balance, and says so: the bracket in time names its
+/// re-entrant corner and both holes in a note and in summary.json's `unbalanced`, with
+/// the reason (before, a dynamic run said nothing of them).
+#[test]
+fn a_dynamic_run_names_the_corners_and_holes_it_does_not_balance() {
+    let tmp = TempDir::new().unwrap();
+    let scene = shipped("bracket");
+    let scene = &scene[..scene.find("[[probe]]").expect("the bracket has a probe")];
+    write(tmp.path(), "dynamic.toml", &format!("{scene}\n[dynamics]\nend_time = 2e-6\ndensity = 7800\n\n[estimate]\nmethod = \"none\"\n"));
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["--quiet", "run", "dynamic.toml", "--spacing", "0.004", "--out", res.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    let unbalanced = s["unbalanced"].as_array().unwrap_or_else(|| panic!("no unbalanced list: {s}"));
+    let around: Vec<&str> = unbalanced.iter().map(|u| u["around"].as_str().unwrap()).collect();
+    assert_eq!(around, vec!["corner", "hole", "hole"], "{s}");
+    assert!(unbalanced.iter().all(|u| u["reason"].as_str().unwrap().contains("dynamic")), "{s}");
+    let notes = s["notes"].as_array().unwrap();
+    assert!(notes.iter().any(|n| n.as_str().unwrap().starts_with("not balanced: the re-entrant corner at (6.0000e-2, 1.4000e-1)")), "{s}");
+}

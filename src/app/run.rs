@@ -190,6 +190,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
                 energies: &sim.energies,
                 timings: &sim.timings,
                 estimate: &sim.estimate,
+                unbalanced: &sim.unbalanced,
             };
             write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
@@ -203,8 +204,14 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
             }
-            let dynamic =
-                Dynamic { nodes: nodes.free, report: &sim.report, energies: &sim.energies, timings: &sim.timings, estimate: &estimate };
+            let dynamic = Dynamic {
+                nodes: nodes.free,
+                report: &sim.report,
+                energies: &sim.energies,
+                timings: &sim.timings,
+                estimate: &estimate,
+                unbalanced: &[],
+            };
             write_dynamic(&p, staged, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
     }
@@ -324,6 +331,7 @@ fn write_dynamic<M: Serialize>(
         checks.warnings.extend(resolution);
     }
     checks.warnings.extend(warnings::memory(p));
+    checks.notes.extend(warnings::unbalanced_note(d.unbalanced));
     let dir = publish(staged, &DynamicSummary::new(p, &d, model, &checks, t0))?;
     if !quiet {
         let (e0, e1) = (d.energies[0], d.energies.last().expect("recorded"));

@@ -246,6 +246,8 @@ pub(super) struct NavierDynamicPart {
     algebraic_unknowns: usize,
     spacing: f64,
     approximation: Approximation,
+    /// The corners and holes with traction edges (none balanced in time).
+    unbalanced: Vec<navier::sector::Unbalanced>,
 }
 
 impl NavierDynamicPart {
@@ -257,6 +259,7 @@ impl NavierDynamicPart {
             algebraic_unknowns: sim.unknowns.1,
             spacing: p.navier.fill.spacing,
             approximation: p.navier.approximation,
+            unbalanced: sim.unbalanced.clone(),
         }
     }
 }
@@ -270,6 +273,8 @@ pub(super) struct Dynamic<'a> {
     pub timings: &'a StageTimings,
     /// The error estimate (Navier: over the history; peridynamics: at the end time).
     pub estimate: &'a navier::Estimate,
+    /// The re-entrant corners and holes left unbalanced (Navier), for the note.
+    pub unbalanced: &'a [navier::sector::Unbalanced],
 }
 
 /// `summary.json` of a time-dependent run.
@@ -293,7 +298,7 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
 
 impl<'a, M: Serialize> DynamicSummary<'a, M> {
     pub(super) fn new(p: &'a Problem, d: &Dynamic<'a>, model: M, checks: &'a Checks, t0: Instant) -> Self {
-        let Dynamic { nodes, report, energies, timings, estimate } = *d;
+        let Dynamic { nodes, report, energies, timings, estimate, .. } = *d;
         DynamicSummary {
             header: Header::new(p, timings, t0),
             nodes,

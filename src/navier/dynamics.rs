@@ -249,7 +249,13 @@ pub struct Simulation {
     pub history: Vec<(f64, Vec<[f64; 2]>)>,
     /// Stage timings (assembly includes the split and the boundary factorisation).
     pub timings: StageTimings,
+    /// The re-entrant corners and holes with traction edges, none of them balanced
+    /// (the sector balances are not imposed in time, `super::sector`).
+    pub unbalanced: Vec<super::sector::Unbalanced>,
 }
+
+/// Why a dynamic run balances no corner or hole (`Simulation::unbalanced`).
+pub const UNBALANCED_IN_TIME: &str = "dynamic runs impose no sector balance";
 
 /// The condensed system of `disc`: assembled, split and factorised (module docs),
 /// with its loads re-evaluated in time when they depend on it.
@@ -411,5 +417,6 @@ pub fn simulate_sampled(
         estimate,
         history,
         timings: timer.finish(),
+        unbalanced: super::sector::none_balanced(case, &disc.nodes, UNBALANCED_IN_TIME),
     })
 }

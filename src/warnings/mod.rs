@@ -243,6 +243,27 @@ fn equilibrium(q: &Equilibrium, threshold: f64, checks: &mut Checks, params: &Na
     }
 }
 
+/// The note that names the re-entrant corners and holes with traction edges that got
+/// no sector balance, grouped by the reason; `None` when there are none.
+pub fn unbalanced_note(unbalanced: &[crate::navier::sector::Unbalanced]) -> Option<String> {
+    if unbalanced.is_empty() {
+        return None;
+    }
+    let mut by_reason: std::collections::BTreeMap<&str, Vec<String>> = std::collections::BTreeMap::new();
+    for u in unbalanced {
+        let what = match u.around {
+            crate::navier::sector::Around::Corner => "the re-entrant corner at",
+            crate::navier::sector::Around::Hole => "the hole around",
+        };
+        by_reason.entry(&u.reason).or_default().push(format!("{what} ({:.4e}, {:.4e})", u.at[0], u.at[1]));
+    }
+    let list: Vec<String> = by_reason.into_iter().map(|(why, places)| format!("{} ({why})", places.join(", "))).collect();
+    Some(format!(
+        "not balanced: {}; the solution may carry a spurious load there, which only the error estimate shows (README, \"Known limits\", re-entrant corners)",
+        list.join("; ")
+    ))
+}
+
 /// The checks of a static Navier run (module docs).
 pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Checks {
     let threshold = params.estimate.threshold;
@@ -289,21 +310,7 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
         None => checks.notes.push("no equilibrium check: the scene computes no stress (output.fields)".into()),
     }
     checks.warnings.extend(linear_solve(&sol.solver));
-    if !sol.unbalanced.is_empty() {
-        let mut by_reason: std::collections::BTreeMap<&str, Vec<String>> = std::collections::BTreeMap::new();
-        for u in &sol.unbalanced {
-            let what = match u.around {
-                crate::navier::sector::Around::Corner => "the re-entrant corner at",
-                crate::navier::sector::Around::Hole => "the hole around",
-            };
-            by_reason.entry(&u.reason).or_default().push(format!("{what} ({:.4e}, {:.4e})", u.at[0], u.at[1]));
-        }
-        let list: Vec<String> = by_reason.into_iter().map(|(why, places)| format!("{} ({why})", places.join(", "))).collect();
-        checks.notes.push(format!(
-            "not balanced: {}; the solution may carry a spurious load there, which only the error estimate shows (README, \"Known limits\", re-entrant corners)",
-            list.join("; ")
-        ));
-    }
+    checks.notes.extend(unbalanced_note(&sol.unbalanced));
     if let Some(e) = &sol.errors {
         let mut over = Vec::new();
         if exceeds(e.e_inf_u, threshold) {
