@@ -89,10 +89,16 @@ pub fn holes(nodes: &NodeSet) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// The mean position of the nodes `indices`.
+/// The mean position of the boundary nodes `indices`, each weighted by the length of
+/// boundary it stands for (graded nodes crowd one side of a hole; the plain mean
+/// leaned towards it): `sum l_i x_i / sum l_i`.
 pub fn mean_position(nodes: &NodeSet, indices: &[usize]) -> Point {
-    let k = indices.len() as f64;
-    indices.iter().fold([0.0, 0.0], |m, &i| [m[0] + nodes.positions[i][0] / k, m[1] + nodes.positions[i][1] / k])
+    let length = |i: usize| nodes.boundary[i].lengths.iter().sum::<f64>();
+    let total: f64 = indices.iter().map(|&i| length(i)).sum();
+    indices.iter().fold([0.0, 0.0], |m, &i| {
+        let w = length(i) / total;
+        [m[0] + w * nodes.positions[i][0], m[1] + w * nodes.positions[i][1]]
+    })
 }
 
 #[cfg(test)]

@@ -64,6 +64,9 @@ pub struct Discretisation {
     /// (`solver.kind = "petsc"`): a rank computes the shapes and rows of its own nodes
     /// only (a ghost belongs to its node's rank).
     pub owner: Option<Vec<u32>>,
+    /// The re-entrant corners and holes with traction edges, and which of them the
+    /// assembly balances (`super::sector`).
+    pub survey: super::sector::Survey,
 }
 
 impl Discretisation {
@@ -99,8 +102,9 @@ impl Discretisation {
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
         let world = crate::petsc::world();
         let distributed = matches!(params.solver.kind, SolverKind::Petsc { .. });
+        let survey = super::sector::survey(case, &nodes, unknowns);
         let (positions, ghost, owner, supports, (every, needs, gradient_kept), widened) = timer.run(SUPPORTS, || {
-            let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations, distributed);
+            let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations, (distributed, &survey));
             // Distributed: a rank finds the supports and makes the shapes of its own
             // nodes and ghosts only (their supports reach into the others' halo).
             let owner = distributed.then(|| {
@@ -169,6 +173,7 @@ impl Discretisation {
             operators_computed,
             dofs,
             owner,
+            survey,
         })
     }
 
@@ -357,7 +362,7 @@ fn ghosts(
     params: &NavierParams,
     nodes: &NodeSet,
     equations: &[[ComponentEquation; 2]],
-    distributed: bool,
+    (distributed, survey): (bool, &super::sector::Survey),
 ) -> (Vec<Point>, Vec<Option<usize>>) {
     let rbf_fd = matches!(params.approximation.basis, Basis::RbfFd { .. });
     let wants_ghost = |eq: &[ComponentEquation; 2]| {
@@ -377,7 +382,7 @@ fn ghosts(
     // (`super::sector`; dynamics assembles without it).
     let mut ghost_free = domain::corner::reentrant_corners(&case.domain, nodes);
     if rbf_fd && !distributed && case.dynamics.is_none() {
-        let balanced = super::sector::balanced_corners(case, nodes, params.formulation.unknowns(&case.material));
+        let balanced = survey.balanced_corners();
         ghost_free.retain(|c| !balanced.contains(c));
     }
     let placed = place_ghosts(&case.domain, nodes, &candidates, &ghost_free);

@@ -417,6 +417,6 @@ pub fn simulate_sampled(
         estimate,
         history,
         timings: timer.finish(),
-        unbalanced: super::sector::none_balanced(case, &disc.nodes, UNBALANCED_IN_TIME),
+        unbalanced: disc.survey.none_balanced(UNBALANCED_IN_TIME),
     })
 }

@@ -270,6 +270,6 @@ fn assemble_and_solve_distributed(
         Ok(((x, report), note))
     })?;
     let nonzeros = report.ranks.as_ref().map_or(0, |r| r.nonzeros.iter().sum());
-    let unbalanced = sector::none_balanced(case, &disc.nodes, "its rows are split over MPI ranks (solver.kind = \"petsc\")");
+    let unbalanced = disc.survey.none_balanced("its rows are split over MPI ranks (solver.kind = \"petsc\")");
     Ok(Solved { x, multipliers: Vec::new(), nonzeros, report, system: None, sectors: Vec::new(), unbalanced })
 }

@@ -131,6 +131,7 @@ impl SectorBalance {
 /// A contour that qualifies for a balance: what it goes around, its centre, its arc,
 /// the local spacing there, and the points whose neighbourhood carries the
 /// multipliers (the corner, or the hole's boundary nodes).
+#[derive(Debug, Clone)]
 struct Contour {
     around: Around,
     centre: Point,
@@ -152,9 +153,35 @@ pub struct Unbalanced {
     pub reason: String,
 }
 
-/// The contours of the case that qualify for a balance (module docs), and the corners
-/// and holes with traction edges that do not, with the reason.
-fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> (Vec<Contour>, Vec<Unbalanced>) {
+/// The re-entrant corners and holes with traction edges of a node set: the contours of
+/// those that qualify for a balance (module docs), and those that do not, with the
+/// reason. Made once per discretisation ([`survey`]; `Discretisation::survey`): the
+/// ghost placement reads its corners, the assembly its contours.
+#[derive(Debug, Clone, Default)]
+pub struct Survey {
+    contours: Vec<Contour>,
+    /// The corners and holes that get no balance, and why.
+    pub unbalanced: Vec<Unbalanced>,
+}
+
+impl Survey {
+    /// The re-entrant corners that [`balances`] will balance (in-process static solves).
+    pub fn balanced_corners(&self) -> Vec<Point> {
+        self.contours.iter().filter(|c| c.around == Around::Corner).map(|c| c.centre).collect()
+    }
+
+    /// Every corner and hole with traction edges, for an assembly that imposes no
+    /// balance (rows split over MPI ranks, time steps), those that qualified with
+    /// `reason`.
+    pub fn none_balanced(&self, reason: &str) -> Vec<Unbalanced> {
+        let mut unbalanced = self.unbalanced.clone();
+        unbalanced.extend(self.contours.iter().map(|c| Unbalanced { around: c.around, at: c.centre, reason: reason.into() }));
+        unbalanced
+    }
+}
+
+/// The [`Survey`] of `nodes` for a run with `unknowns`.
+pub fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Survey {
     let traction = |part: usize| case.conditions.get(part).is_some_and(|c| c.is_all(ComponentCondition::Traction));
     let free = |part: usize| traction(part) && case.conditions[part].value.is_zero();
     let corners =
@@ -200,16 +227,7 @@ fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> (Vec<Contour>, Ve
             None => refuse(Around::Hole, mean, "no ring 3 to 10 spacings out fits in the solid without meeting another boundary"),
         }
     }
-    (contours, unbalanced)
-}
-
-/// The corners and holes with traction edges of an assembly that imposes no balance
-/// (rows split over MPI ranks), each with `reason`. Dynamic runs assemble without
-/// balances and do not report them yet.
-pub fn none_balanced(case: &Case, nodes: &NodeSet, reason: &str) -> Vec<Unbalanced> {
-    let (contours, mut unbalanced) = survey(case, nodes, Unknowns::Displacement);
-    unbalanced.extend(contours.into_iter().map(|c| Unbalanced { around: c.around, at: c.centre, reason: reason.into() }));
-    unbalanced
+    Survey { contours, unbalanced }
 }
 
 /// The spacing `h` at which the arc of radius `SECTOR_SPACINGS h` is `SECTOR_SPACINGS`
@@ -230,15 +248,10 @@ fn spacing_at_arc(nodes: &NodeSet, corner: Point, mut h: f64) -> f64 {
     h
 }
 
-/// The re-entrant corners that [`balances`] will balance (in-process solves).
-pub fn balanced_corners(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Vec<Point> {
-    survey(case, nodes, unknowns).0.into_iter().filter(|c| c.around == Around::Corner).map(|c| c.centre).collect()
-}
-
 /// The balances of the case's re-entrant corners and holes that qualify (module docs),
 /// and those that get none, with the reason.
 pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> (Vec<SectorBalance>, Vec<Unbalanced>) {
-    let (contours, mut unbalanced) = survey(case, &disc.nodes, disc.dofs.unknowns());
+    let Survey { contours, mut unbalanced } = disc.survey.clone();
     if contours.is_empty() {
         return (Vec::new(), unbalanced);
     }
@@ -274,12 +287,10 @@ const RING_SPACINGS: [f64; 6] = [10.0, 8.0, 6.0, 5.0, 4.0, 3.0];
 /// the solid all round and has no other boundary node inside.
 fn ring(case: &Case, nodes: &NodeSet, hole: &[usize]) -> Option<Contour> {
     // Means weighted by the arc length each node stands for (graded nodes crowd one side).
+    let centre = crate::domain::corner::mean_position(nodes, hole);
     let length = |i: usize| nodes.boundary[i].lengths.iter().sum::<f64>();
-    let total: f64 = hole.iter().map(|&i| length(i)).sum();
-    let mean = |f: &dyn Fn(usize) -> f64| hole.iter().map(|&i| length(i) * f(i)).sum::<f64>() / total;
-    let centre = [mean(&|i| nodes.positions[i][0]), mean(&|i| nodes.positions[i][1])];
+    let h = hole.iter().map(|&i| length(i) * nodes.local_spacing[i]).sum::<f64>() / hole.iter().map(|&i| length(i)).sum::<f64>();
     let reach = hole.iter().map(|&i| dist(nodes.positions[i], centre)).fold(0.0, f64::max);
-    let h = mean(&|i| nodes.local_spacing[i]);
     let own: std::collections::BTreeSet<usize> = hole.iter().copied().collect();
     RING_SPACINGS.iter().find_map(|&s| {
         let radius = reach + s * h;
@@ -299,6 +310,7 @@ fn ring(case: &Case, nodes: &NodeSet, hole: &[usize]) -> Option<Contour> {
 }
 
 /// The part of the circle of radius `radius` around a corner inside the solid.
+#[derive(Debug, Clone, Copy)]
 struct Arc {
     radius: f64,
     /// Start and end angle, `end > start`.
