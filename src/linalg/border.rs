@@ -22,7 +22,7 @@
 //! that of `M` on `A`. `T` is `k x k`, formed once by `k` applications of `M`.
 //! Eliminating the multipliers on pivot rows instead (the earlier form) put the
 //! constraint rows where the unknowns' own rows were: rows without a diagonal entry,
-//! on which ILU met a zero pivot and the multigrid's smoother stalled.
+//! on which ILU met a zero pivot.
 
 use super::csr::Csr;
 use super::precond::BuiltPreconditioner;
