@@ -4,8 +4,9 @@
 //! A point of an edge lies on the solid's boundary iff the solid's signed distance
 //! vanishes there (`|d| <= tol`). Edges are classified on a fine parameter sample
 //! (step `h / 8`); every change of class is located by bisection to `1e-13` of the
-//! edge length, so the corners where two primitives meet are found to round-off
-//! and both edges produce the same corner point. Points closer than `1e-3 h` are
+//! edge length, then to the zero of the signed distance, extrapolated from two
+//! points just past it, so the corners where two primitives meet are found to
+//! round-off and both edges produce the same corner point. Points closer than `1e-3 h` are
 //! merged into one node that remembers every part it touches, with the normal of
 //! each ([`BoundarySample::touches`]).
 //!
@@ -52,8 +53,14 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
     let on = |s: f64| domain.signed_distance(c.curve.at(s).0).abs() <= tol;
     let samples = ((len / (h / 8.0)).ceil() as usize).max(16);
     let ds = len / samples as f64;
-    // Bisection between an "on" and an "off" parameter: returns the last "on" point.
-    let refine = |mut s_on: f64, mut s_off: f64| {
+    // The corner between an "on" and an "off" parameter (the off one a sample, so a
+    // valid parameter): bisection to the last "on" point, which lies where |d|
+    // reaches `tol`, up to `tol / sin(angle)` past the true corner; then the zero of
+    // `d` extrapolated from two points past it, where `d` is the other primitive's
+    // distance, linear in `s` to `O(delta^2 / radius)`.
+    let distance = |s: f64| domain.signed_distance(c.curve.at(s).0);
+    let refine = |s_on: f64, s_sample_off: f64| {
+        let (mut s_on, mut s_off) = (s_on, s_sample_off);
         while (s_on - s_off).abs() > 1e-13 * len {
             let mid = 0.5 * (s_on + s_off);
             if on(mid) {
@@ -62,7 +69,7 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
                 s_off = mid;
             }
         }
-        s_on
+        exact_corner(s_on, s_off, s_sample_off, &distance, h).unwrap_or(s_on)
     };
     let mut intervals = Vec::new();
     let mut start = if on(0.0) { Some(0.0) } else { None };
@@ -92,6 +99,22 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
         intervals[0].0 = last.0 - len;
     }
     intervals
+}
+
+/// The parameter where the signed distance `d` of the solid vanishes between the
+/// last on-boundary parameter `s_on` and the first off-boundary one `s_off` (both from
+/// a bisection), extrapolated linearly from `d(s_off)` and `d` one small step
+/// (`1e-4 h`, at most as far as the off-boundary sample `s_sample_off`) further off.
+/// `None` if `d` does not change over that step (a clamped parameter, a tangent
+/// meeting) or the zero lies more than `1e-3 h` from `s_on` (not a transversal corner).
+fn exact_corner(s_on: f64, s_off: f64, s_sample_off: f64, d: &dyn Fn(f64) -> f64, h: f64) -> Option<f64> {
+    let step = (s_sample_off - s_off).signum() * (1e-4 * h).min((s_sample_off - s_off).abs());
+    let (d0, d1) = (d(s_off), d(s_off + step));
+    if step == 0.0 || d1 == d0 || !(d0.is_finite() && d1.is_finite()) {
+        return None;
+    }
+    let s = s_off - d0 * step / (d1 - d0);
+    (s.is_finite() && (s - s_on).abs() <= 1e-3 * h).then_some(s)
 }
 
 /// Sample the boundary of `domain` at spacing about `h` (see module docs).
@@ -158,7 +181,8 @@ pub fn discretise_boundary_graded(domain: &Domain, field: &SpacingField) -> Vec<
             }
         }
     }
-    // Corners found by two curves agree to about `tol`; anything closer than h/1000 is one node.
+    // Corners found by two curves agree to round-off (`exact_corner`); anything closer
+    // than h/1000 is one node.
     merge_coincident(raw, 1e-3 * h)
 }
 
@@ -247,11 +271,15 @@ mod tests {
     #[test]
     fn hole_meets_edges_at_exact_corners() {
         let b = discretise_boundary(&quarter_plate(), 0.05);
-        // The hole arc meets the left edge at (0, 1) and the bottom edge at (1, 0); the
-        // bisection stops where |d| reaches tol = 1e-9 * domain size (5.7e-9 here).
+        // The hole arc meets the left edge at (0, 1) and the bottom edge at (1, 0). The
+        // bisection alone stops where |d| reaches tol = 1e-9 * domain size (5.7e-9
+        // here), which put the arc's corner node 5.7e-9 outside the solid; the
+        // extrapolated zero of d puts it on both curves to round-off.
         for target in [[0.0, 1.0], [1.0, 0.0]] {
             let s = b.iter().find(|s| (s.position[0] - target[0]).hypot(s.position[1] - target[1]) < 1e-8).expect("corner node");
             assert_eq!(s.touches.len(), 2, "{:?}", s);
+            let off = (s.position[0] - target[0]).hypot(s.position[1] - target[1]);
+            assert!(off < 1e-15, "corner {:?} is {off:.1e} from {target:?}", s.position);
         }
         // No node inside the hole, all on the boundary.
         for s in &b {
@@ -268,12 +296,13 @@ mod tests {
     #[test]
     fn lengths_are_trapezoid_weights_of_the_boundary() {
         // Perimeter of the quarter plate: 3 + 4 + 4 + 3 + pi/2 (the weights are arc
-        // lengths), up to the on-boundary tolerance 1e-9 * scale by which each clipped
-        // edge may overshoot its corner (measured 1.7e-8 over 8 edge ends); area by the divergence theorem, (1/2) ∮ x·n ds, exact on
-        // the straight edges (x·n is linear there) and O(h^2) on the arc.
+        // lengths), to round-off now that the clipped edges end at their exact corners
+        // (the bisection alone overshot by up to 1e-9 * scale: 1.7e-8 over 8 edge
+        // ends); area by the divergence theorem, (1/2) ∮ x·n ds, exact on the straight
+        // edges (x·n is linear there) and O(h^2) on the arc.
         let b = discretise_boundary(&quarter_plate(), 0.05);
         let perimeter: f64 = b.iter().flat_map(|s| s.lengths.iter()).sum();
-        assert!((perimeter - (14.0 + std::f64::consts::FRAC_PI_2)).abs() < 1e-7, "{perimeter}");
+        assert!((perimeter - (14.0 + std::f64::consts::FRAC_PI_2)).abs() < 1e-12, "{perimeter}");
         let area: f64 = b
             .iter()
             .flat_map(|s| s.touches.iter().zip(&s.lengths).map(|((_, n), l)| 0.5 * l * (s.position[0] * n[0] + s.position[1] * n[1])))
