@@ -1258,9 +1258,8 @@ fn auto_solves_the_displacement_pressure_form_iteratively_when_lu_does_not_fit()
 /// 50) and a budget of 130 iterations: the multigrid on the system stalls there,
 /// BiCGSTAB + ILU(0) converges in 109), the matrix the solver was
 /// handed (and freed) is rebuilt in columns from the multigrid's equilibrated rows and
-/// BiCGSTAB + ILU(0) solves it; the choice says so and the errors are LU's (measured
-/// 4e-5 apart relative, the 1e-10 tolerance on a system of condition ~1e5; the bound
-/// 1e-4 allows twice that).
+/// BiCGSTAB + ILU(0) solves it; the choice says so and the errors are LU's to within
+/// the fallback's own estimated error (below).
 #[test]
 fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
     let tmp = TempDir::new().unwrap();
@@ -1280,10 +1279,18 @@ fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
     assert!(why.contains("GMRES(30)+AMG did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
     let roomy = run(None, "roomy");
     assert_eq!(roomy["solver"]["method"], "lu", "{roomy}");
-    for norm in ["e_inf_u", "e_inf_sigma"] {
-        let (a, b) = (roomy["errors"][norm].as_f64().unwrap(), tight["errors"][norm].as_f64().unwrap());
-        assert!((a - b).abs() <= 1e-4 * a, "{norm}: LU {a:e} vs fallback {b:e}");
-    }
+    // The two e_inf(u) differ by at most the distance between the solutions over max |u|:
+    // the fallback's own error (LU's is round-off), which it estimates. Measured: 3.0e-10
+    // apart (5.7e-10 between the displacement fields), estimated 5.5e-10; 1.5x covers an
+    // estimate that falls short by a third. A stress error is a derivative of that
+    // distance: 1.7e-5 relative apart, bound 1e-4.
+    let solver_error = tight["solver"]["solver_error"].as_f64().unwrap_or_else(|| panic!("no solver_error: {tight}"));
+    assert!(solver_error > 0.0 && solver_error < 1e-8, "{solver_error:e}");
+    assert!(roomy["solver"]["solver_error"].is_null(), "LU reports no solver error: {roomy}");
+    let (a, b) = (roomy["errors"]["e_inf_u"].as_f64().unwrap(), tight["errors"]["e_inf_u"].as_f64().unwrap());
+    assert!((a - b).abs() <= 1.5 * solver_error, "e_inf_u: LU {a:e} vs fallback {b:e}, its estimated own error {solver_error:e}");
+    let (a, b) = (roomy["errors"]["e_inf_sigma"].as_f64().unwrap(), tight["errors"]["e_inf_sigma"].as_f64().unwrap());
+    assert!((a - b).abs() <= 1e-4 * a, "e_inf_sigma: LU {a:e} vs fallback {b:e}");
 }
 
 /// A dynamic run imposes no sector balance, and says so: the bracket in time names its

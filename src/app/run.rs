@@ -355,7 +355,11 @@ fn write_dynamic<M: Serialize>(
 
 fn print_navier(sol: &crate::navier::Solution) {
     println!("nodes {}  unknowns {} ({})  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.formulation.name(), sol.nonzeros);
-    println!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
+    print!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
+    match sol.solver.solver_error {
+        Some(e) => println!(", own error ~{e:.1e} of max |u|"),
+        None => println!(),
+    }
     if let Some(why) = &sol.solver.choice {
         println!("  ({why})");
     }

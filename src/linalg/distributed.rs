@@ -303,6 +303,8 @@ pub fn solve(
         restarts: 0,
         subnormal_unknowns: x.iter().filter(|v| v.is_subnormal() && v.abs() > 1e-12 * largest).count(),
         condition_estimate: None,
+        // PETSc's KSP holds the preconditioner; its error is not estimated here.
+        solver_error: None,
         ranks: Some(RankReport {
             ranks: dist.world.size,
             rows: column(0),

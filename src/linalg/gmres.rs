@@ -106,8 +106,8 @@ pub(super) fn orthogonalise(basis: &[Vec<f64>], w: &mut [f64]) -> (Vec<f64>, f64
     (h, after)
 }
 
-fn true_residual(a: &Csr, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
-    product(a, x, r);
+fn true_residual(apply: &impl Fn(&[f64], &mut [f64]), x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
+    apply(x, r);
     r.par_iter_mut().zip(b).with_min_len(4096).for_each(|(r, b)| *r = b - *r);
     norm(r)
 }
@@ -117,6 +117,18 @@ fn true_residual(a: &Csr, x: &[f64], b: &[f64], r: &mut [f64]) -> f64 {
 /// `max_iterations` inner steps are spent, or a cycle stalls.
 pub fn solve_gmres(
     a: &Csr,
+    b: &[f64],
+    precondition: impl Fn(&[f64], &mut [f64]),
+    tolerance: f64,
+    max_iterations: usize,
+    restart: usize,
+) -> GmresOutcome {
+    solve_gmres_with(|x, y| product(a, x, y), b, precondition, tolerance, max_iterations, restart)
+}
+
+/// [`solve_gmres`] with the matrix given by its product `apply(x, y)`: `y ← A x`.
+pub fn solve_gmres_with(
+    apply: impl Fn(&[f64], &mut [f64]),
     b: &[f64],
     precondition: impl Fn(&[f64], &mut [f64]),
     tolerance: f64,
@@ -137,7 +149,7 @@ pub fn solve_gmres(
     }
     // `w` holds the residual between cycles and `A M⁻¹ v` within one.
     let (mut w, mut z) = (vec![0.0; n], vec![0.0; n]);
-    let mut beta = true_residual(a, &x, b, &mut w);
+    let mut beta = true_residual(&apply, &x, b, &mut w);
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
     loop {
         let relative = beta / b_norm;
@@ -163,7 +175,7 @@ pub fn solve_gmres(
                 break;
             }
             precondition(&basis[j], &mut z);
-            product(a, &z, &mut w);
+            apply(&z, &mut w);
             let (projections, wn) = orthogonalise(&basis, &mut w);
             for (i, d) in projections.into_iter().enumerate() {
                 h[i][j] = d;
@@ -209,7 +221,7 @@ pub fn solve_gmres(
             break;
         }
         let previous = beta;
-        beta = true_residual(a, &x, b, &mut w);
+        beta = true_residual(&apply, &x, b, &mut w);
         out.history.push(beta / b_norm);
         if beta / b_norm > tolerance && beta > STAGNATION * previous {
             out.status = Status::Stalled;
@@ -280,7 +292,7 @@ mod tests {
         let out = solve_gmres(&a, &b, |v, z| z.copy_from_slice(v), 1e-12, 1000, 20);
         assert_eq!(out.status, Status::Converged);
         let mut r = vec![0.0; 200];
-        let res = true_residual(&a, &out.x, &b, &mut r) / norm(&b);
+        let res = true_residual(&|x: &[f64], y: &mut [f64]| product(&a, x, y), &out.x, &b, &mut r) / norm(&b);
         assert!(res <= 1e-12, "{res}");
         assert!((res - out.relative_residual).abs() < 1e-15);
         assert!(out.history.windows(2).all(|w| w[1] <= w[0]), "GMRES residuals never grow: {:?}", out.history);

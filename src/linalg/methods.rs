@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use super::csr::Csr;
-use super::{amg, bicgstab, border, gmres, lu, norm2, precond, relative, residual, row_residual};
+use super::{amg, bicgstab, border, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error};
 use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
@@ -63,6 +63,7 @@ impl Start {
             restarts: 0,
             subnormal_unknowns: 0,
             condition_estimate: None,
+            solver_error: None,
             ranks: None,
         }
     }
@@ -175,8 +176,15 @@ pub(super) fn solve_krylov_bicgstab(
     match out.status {
         bicgstab::Status::Converged => {
             let (_, original_relative_residual) = rhs.residuals(&last_residual);
+            let t_error = Instant::now();
+            let zeros = vec![0.0; out.x.len()];
+            let product = |x: &[f64], y: &mut [f64]| y.iter_mut().zip(residual(a, x, &zeros)).for_each(|(y, r)| *y = -r);
+            let delta = solver_error::correction(product, &last_residual, |v, z| pc.solve_into(v, z));
+            let solver_error = solver_error::relative_to_displacement(&delta, &out.x, layout.as_ref());
+            let solve_seconds = solve_seconds + t_error.elapsed().as_secs_f64();
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
-            Ok((out.x, start.converged(&pc, (setup_seconds, solve_seconds), counts)))
+            let report = start.converged(&pc, (setup_seconds, solve_seconds), counts);
+            Ok((out.x, SolveReport { solver_error: Some(solver_error), ..report }))
         }
         bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
             hint: IN_PROCESS_HINT,
@@ -251,7 +259,7 @@ pub(super) fn solve_gmres_multigrid(
         },
     };
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
-    run_gmres(rows, &pc, rhs, &start, settings).map_err(|e| {
+    run_gmres(rows, &pc, rhs, &start, settings, layout.as_ref()).map_err(|e| {
         let rows = system.unwrap_or_else(|| {
             let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
             amg.into_fine_operator().expect("kept as the system")
@@ -282,7 +290,7 @@ pub(super) fn solve_gmres_saddle_point(
         .ok_or_else(|| SolveError::Dimension { detail: "the displacement-pressure preconditioner needs three unknowns per node".into() })?;
     drop(auxiliary);
     let pc = precond::BuiltPreconditioner::SaddlePoint(Box::new(built));
-    run_gmres(&rows, &pc, rhs, &start, settings)
+    run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))
 }
 
 /// GMRES with a one-level preconditioner built on the solved operator `a` (`D A`).
@@ -295,7 +303,7 @@ pub(super) fn solve_krylov_gmres(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let pc = precond::BuiltPreconditioner::build(a, settings.preconditioner, layout)?;
     let rows = amg::to_csr(a);
-    run_gmres(&rows, &pc, rhs, start, settings)
+    run_gmres(&rows, &pc, rhs, start, settings, layout.as_ref())
 }
 
 /// GMRES(restart) on `rows` (the solved operator) with the preconditioner `pc`.
@@ -305,17 +313,24 @@ pub(super) fn run_gmres(
     rhs: &Rhs,
     start: &Start,
     GmresSettings { preconditioner, tolerance, max_iterations, restart }: GmresSettings,
+    layout: Option<&NodeLayout>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
     let out = gmres::solve_gmres(rows, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
-    let (_, original_relative_residual) = rhs.residuals(&row_residual(rows, &out.x, &rhs.solved));
+    let r = row_residual(rows, &out.x, &rhs.solved);
+    let (_, original_relative_residual) = rhs.residuals(&r);
     match out.status {
         gmres::Status::Converged => {
+            let t_error = Instant::now();
+            let delta = solver_error::correction(|x, y| amg::product(rows, x, y), &r, |v, z| pc.solve_into(v, z));
+            let solver_error = solver_error::relative_to_displacement(&delta, &out.x, layout);
+            let solve_seconds = solve_seconds + t_error.elapsed().as_secs_f64();
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
-            Ok((out.x, start.converged(pc, (setup_seconds, solve_seconds), counts)))
+            let report = start.converged(pc, (setup_seconds, solve_seconds), counts);
+            Ok((out.x, SolveReport { solver_error: Some(solver_error), ..report }))
         }
         gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
             hint: IN_PROCESS_HINT,

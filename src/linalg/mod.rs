@@ -44,6 +44,7 @@ pub mod rowmat;
 pub mod saddle;
 pub mod scaling;
 pub mod smoother;
+pub mod solver_error;
 pub mod spgemm;
 pub mod triplets;
 pub mod vector_state;

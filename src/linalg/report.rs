@@ -41,6 +41,10 @@ pub struct SolveReport {
     /// Hager–Higham estimate of `κ₁` of the solved (equilibrated) matrix, LU only:
     /// the solution keeps about `-log10(κ₁ ε)` correct digits.
     pub condition_estimate: Option<f64>,
+    /// The Krylov solvers' estimate of their own error, `max |δ_u| / max |u|` with
+    /// `δ ≈ A⁻¹ r` ([`super::solver_error`]): what the stopped iteration may still be
+    /// off, in the units of `e_inf(u)`. `None` for LU (see `condition_estimate`).
+    pub solver_error: Option<f64>,
     /// Rows, entries, halo and stage times of each MPI rank (PETSc runs only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ranks: Option<distributed::RankReport>,
