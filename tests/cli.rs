@@ -1281,7 +1281,7 @@ fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
     assert_eq!(roomy["solver"]["method"], "lu", "{roomy}");
     // The two e_inf(u) differ by at most the distance between the solutions over max |u|:
     // the fallback's own error (LU's is round-off), which it estimates. Measured: 3.0e-10
-    // apart (5.7e-10 between the displacement fields), estimated 5.5e-10; 1.5x covers an
+    // apart (5.7e-10 between the displacement fields), estimated 5.2e-10; 1.5x covers an
     // estimate that falls short by a third. A stress error is a derivative of that
     // distance: 1.7e-5 relative apart, bound 1e-4.
     let solver_error = tight["solver"]["solver_error"].as_f64().unwrap_or_else(|| panic!("no solver_error: {tight}"));

@@ -138,6 +138,9 @@ pub struct Bordered {
     columns: Vec<Vec<(usize, f64)>>,
     /// `T⁻¹`, `T = −C M⁻¹ G`.
     t_inverse: DMatrix<f64>,
+    /// The leading part of the right-hand side as `M` receives it, kept between
+    /// applications (one Krylov iteration each) instead of allocated every time.
+    workspace: std::sync::Mutex<Vec<f64>>,
 }
 
 impl Bordered {
@@ -179,14 +182,16 @@ impl Bordered {
                  (their Schur complement C M^-1 G is singular, largest entry {largest:.3e}); try lu"
             ),
         })?;
-        Ok(Bordered { inner, columns, t_inverse })
+        Ok(Bordered { inner, columns, t_inverse, workspace: std::sync::Mutex::new(Vec::new()) })
     }
 
     /// `z = P⁻¹ v` (module docs).
     pub fn solve_into(&self, v: &[f64], z: &mut [f64]) {
         let (n, k) = (v.len() - self.columns.len(), self.columns.len());
         let lambda = &self.t_inverse * nalgebra::DVector::from_column_slice(&v[n..]);
-        let mut w = v[..n].to_vec();
+        let mut w = self.workspace.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        w.clear();
+        w.extend_from_slice(&v[..n]);
         for (column, &l) in self.columns.iter().zip(lambda.iter()) {
             column.iter().for_each(|&(i, g)| w[i] -= g * l);
         }
