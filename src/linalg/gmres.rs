@@ -149,7 +149,9 @@ pub fn solve_gmres_with(
     }
     // `w` holds the residual between cycles and `A M⁻¹ v` within one.
     let (mut w, mut z) = (vec![0.0; n], vec![0.0; n]);
-    let mut beta = true_residual(&apply, &x, b, &mut w);
+    // From x₀ = 0 the residual is b itself: no product needed.
+    w.copy_from_slice(b);
+    let mut beta = b_norm;
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
     loop {
         let relative = beta / b_norm;
