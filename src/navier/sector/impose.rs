@@ -20,10 +20,11 @@ pub fn border(balances: &[SectorBalance]) -> Border {
     border
 }
 
-/// Three rows of the injection `g` (one per multiplier) by Gaussian elimination with
-/// partial pivoting; `None` when its rank is below three, where the bordered system
-/// would be singular (the balance is then refused and named as unbalanced).
-pub(super) fn pivot_rows(injected: &[(usize, [f64; 3])]) -> Option<[usize; 3]> {
+/// Whether the injection `g` (one column per multiplier) has rank three, by Gaussian
+/// elimination with partial pivoting (a pivot below `1e-8` of its largest entry counts
+/// as zero). Below three the bordered system would be singular, and the balance is
+/// refused and named as unbalanced.
+pub(super) fn has_rank_three(injected: &[(usize, [f64; 3])]) -> bool {
     let mut g: Vec<[f64; 3]> = injected.iter().map(|(_, g)| *g).collect();
     let largest = g.iter().flat_map(|r| r.iter()).fold(0.0f64, |m, v| m.max(v.abs()));
     let mut pivots = [usize::MAX; 3];
@@ -34,7 +35,7 @@ pub(super) fn pivot_rows(injected: &[(usize, [f64; 3])]) -> Option<[usize; 3]> {
                 .map(|a| (a, g[a][k].abs()))
                 .fold((usize::MAX, 0.0), |m, x| if x.1 > m.1 { x } else { m });
         if p == usize::MAX || v <= 1e-8 * largest {
-            return None;
+            return false;
         }
         pivots[k] = p;
         let pivot = g[p];
@@ -47,7 +48,7 @@ pub(super) fn pivot_rows(injected: &[(usize, [f64; 3])]) -> Option<[usize; 3]> {
             }
         }
     }
-    Some(pivots)
+    true
 }
 
 #[cfg(test)]
@@ -72,8 +73,8 @@ mod tests {
 
     /// Injections that cannot carry three independent multipliers are refused.
     #[test]
-    fn a_rank_deficient_injection_has_no_pivots() {
-        assert!(pivot_rows(&[(0, [1.0, 0.0, 0.0]), (1, [2.0, 0.0, 0.0]), (2, [0.0, 1.0, 0.0])]).is_none());
-        assert!(pivot_rows(&[(0, [1.0, 0.0, 0.5]), (1, [0.0, 1.0, 0.0]), (2, [0.0, 1.0, 1.0])]).is_some());
+    fn a_rank_deficient_injection_is_refused() {
+        assert!(!has_rank_three(&[(0, [1.0, 0.0, 0.0]), (1, [2.0, 0.0, 0.0]), (2, [0.0, 1.0, 0.0])]));
+        assert!(has_rank_three(&[(0, [1.0, 0.0, 0.5]), (1, [0.0, 1.0, 0.0]), (2, [0.0, 1.0, 1.0])]));
     }
 }

@@ -68,7 +68,7 @@ use std::num::NonZeroUsize;
 
 mod impose;
 pub use impose::border;
-use impose::pivot_rows;
+use impose::has_rank_three;
 
 /// Radius of the sector, in local spacings of the corner node (the tip deflection of
 /// the L bracket was the same at 10 and 20 spacings to 0.3 %; at 5 it scattered).
@@ -261,7 +261,7 @@ pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> (Vec<Sector
         let rows = arc_rows(case, disc, &tree, c.centre, &c.arc, c.h);
         let injected = injection(disc, matrix, c.centre, &c.seeds, c.h);
         match (rows, injected) {
-            (Some(rows), Some(injected)) if pivot_rows(&injected).is_some() => {
+            (Some(rows), Some(injected)) if has_rank_three(&injected) => {
                 balances.push(SectorBalance { around: c.around, centre: c.centre, radius: c.arc.radius, rows, injected })
             }
             (None, _) => unbalanced.push(Unbalanced { around: c.around, at: c.centre, reason: "the stress fit on its arc failed".into() }),
