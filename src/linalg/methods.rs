@@ -81,6 +81,23 @@ impl Start {
     }
 }
 
+/// `report` of a converged Krylov solve with its own error ([`solver_error`]) from the
+/// final residual `r` of the iterate `x`, `A` given by its product `apply`; the
+/// estimate's time is added to the solve's.
+fn with_own_error(
+    report: SolveReport,
+    apply: impl Fn(&[f64], &mut [f64]),
+    r: &[f64],
+    pc: &precond::BuiltPreconditioner,
+    x: &[f64],
+    layout: Option<&NodeLayout>,
+) -> SolveReport {
+    let t_error = Instant::now();
+    let delta = solver_error::correction(apply, r, |v, z| pc.solve_into(v, z));
+    let own = solver_error::relative_to_displacement(&delta, x, layout);
+    SolveReport { solver_error: Some(own), solve_seconds: report.solve_seconds + t_error.elapsed().as_secs_f64(), ..report }
+}
+
 /// What to try when an in-process Krylov solver does not converge.
 pub(super) const IN_PROCESS_HINT: &str = "try lu, a stronger preconditioner (ilut with smaller drop / larger fill) or more iterations";
 
@@ -176,15 +193,12 @@ pub(super) fn solve_krylov_bicgstab(
     match out.status {
         bicgstab::Status::Converged => {
             let (_, original_relative_residual) = rhs.residuals(&last_residual);
-            let t_error = Instant::now();
             let zeros = vec![0.0; out.x.len()];
             let product = |x: &[f64], y: &mut [f64]| y.iter_mut().zip(residual(a, x, &zeros)).for_each(|(y, r)| *y = -r);
-            let delta = solver_error::correction(product, &last_residual, |v, z| pc.solve_into(v, z));
-            let solver_error = solver_error::relative_to_displacement(&delta, &out.x, layout.as_ref());
-            let solve_seconds = solve_seconds + t_error.elapsed().as_secs_f64();
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(&pc, (setup_seconds, solve_seconds), counts);
-            Ok((out.x, SolveReport { solver_error: Some(solver_error), ..report }))
+            let report = with_own_error(report, product, &last_residual, &pc, &out.x, layout.as_ref());
+            Ok((out.x, report))
         }
         bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
             hint: IN_PROCESS_HINT,
@@ -324,13 +338,10 @@ pub(super) fn run_gmres(
     let (_, original_relative_residual) = rhs.residuals(&r);
     match out.status {
         gmres::Status::Converged => {
-            let t_error = Instant::now();
-            let delta = solver_error::correction(|x, y| amg::product(rows, x, y), &r, |v, z| pc.solve_into(v, z));
-            let solver_error = solver_error::relative_to_displacement(&delta, &out.x, layout);
-            let solve_seconds = solve_seconds + t_error.elapsed().as_secs_f64();
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(pc, (setup_seconds, solve_seconds), counts);
-            Ok((out.x, SolveReport { solver_error: Some(solver_error), ..report }))
+            let report = with_own_error(report, |x, y| amg::product(rows, x, y), &r, pc, &out.x, layout);
+            Ok((out.x, report))
         }
         gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {
             hint: IN_PROCESS_HINT,
