@@ -1293,6 +1293,37 @@ fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
     assert!((a - b).abs() <= 1e-4 * a, "e_inf_sigma: LU {a:e} vs fallback {b:e}");
 }
 
+/// When `auto` goes iterative (LU's factors do not fit) and the multigrid and its
+/// ILU(0) fallback both fail, the error reports both, and the multigrid's failure
+/// with its measured cause: on the bracket (2 mm, 4 444 nodes, a 60 MB memory limit)
+/// GMRES(30) + AMG stagnates at 0.38 because one V-cycle amplifies an error (measured
+/// 1.1e4-fold; block Gauss-Seidel diverges next to the re-entrant corner's ghost-free
+/// boundary, BENCHMARKS.md), and BiCGSTAB + ILU(0) then diverges. Before, only the
+/// fallback's failure was reported. Exit 3, and nothing is written.
+#[test]
+fn a_failed_fallback_reports_both_failures_and_the_multigrids_instability() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "bracket.toml", &format!("{}\n[estimate]\nmethod = \"none\"\n", shipped("bracket")));
+    let res = tmp.path().join("res");
+    let o = Command::new(env!("CARGO_BIN_EXE_mlsm"))
+        .current_dir(tmp.path())
+        .args(["--quiet", "run", "bracket.toml", "--out", res.to_str().unwrap()])
+        .env("MLSM_MEMORY_LIMIT", "60e6")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3), "{}", describe(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    for part in [
+        "GMRES(30)+AMG did not converge",
+        "true relative residual",
+        "the multigrid is unstable on this system: one V-cycle, as a stationary iteration, amplifies an error",
+        "retried with BiCGSTAB+ILU(0), which failed too",
+    ] {
+        assert!(err.contains(part), "missing {part:?} in: {err}");
+    }
+    assert!(!res.join("solution.vtu").exists() && !res.join("summary.json").exists());
+}
+
 /// A dynamic run imposes no sector balance, and says so: the bracket in time names its
 /// re-entrant corner and both holes in a note and in summary.json's `unbalanced`, with
 /// the reason (before, a dynamic run said nothing of them).

@@ -93,6 +93,10 @@ pub enum Finest {
     PreconditionerOnly,
 }
 
+/// Cycles of [`Amg::cycle_growth`]'s power iteration (the L bracket's growth of 1e6
+/// per cycle shows from the first; the column's 0.92 needs two to settle).
+const GROWTH_CYCLES: usize = 3;
+
 /// A level's operator as the cycle applies it, its values in single precision: the
 /// cycle need only be a fixed linear map, and the smoother and residual passes are
 /// memory-bound (an entry in 8 bytes instead of 12). Measured with the block-stored
@@ -367,6 +371,43 @@ impl Amg {
     /// Unknowns of the finest level.
     pub fn dim(&self) -> usize {
         self.sizes[0]
+    }
+
+    /// How much one V-cycle, as the stationary iteration `e ← e − M⁻¹ A e` on the
+    /// finest operator, amplifies an error: `‖e₃‖ / ‖e₂‖` after [`GROWTH_CYCLES`]
+    /// cycles from a fixed pseudo-random `e₀` (a power iteration: the ratio approaches
+    /// the spectral radius of `I − M⁻¹ A`). Below 1 the cycle converges by itself;
+    /// far above it the smoother or the coarse correction diverges. `None` for a
+    /// hierarchy of one level (a direct solve). Costs a product and a cycle per step:
+    /// computed to explain a failure, not on every solve.
+    pub fn cycle_growth(&self) -> Option<f64> {
+        let level = self.levels.first()?;
+        let n = self.dim();
+        // A fixed xorshift sequence in [-1, 1): deterministic, and no smoothness for
+        // a structured mode to hide behind.
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut e: Vec<f64> = (0..n)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+            })
+            .collect();
+        let (mut ae, mut z) = (vec![0.0; n], vec![0.0; n]);
+        let mut growth = 0.0;
+        for _ in 0..GROWTH_CYCLES {
+            let before = super::norm2(&e);
+            if !(before > 0.0 && before.is_finite()) {
+                break;
+            }
+            e.iter_mut().for_each(|v| *v /= before);
+            product(level.a.cycle(), &e, &mut ae);
+            self.solve_into(&ae, &mut z);
+            e.iter_mut().zip(&z).for_each(|(e, z)| *e -= z);
+            growth = super::norm2(&e);
+        }
+        Some(if growth.is_finite() { growth } else { f64::INFINITY })
     }
 
     /// `x ← M⁻¹ x`: one V-cycle for `A z = x` from `z = 0`.

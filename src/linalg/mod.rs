@@ -302,7 +302,10 @@ pub(crate) fn solve_with_memory(
             match (attempt.map_err(|failed| *failed), fallback) {
                 (Ok(done), _) => Ok(done),
                 (
-                    Err((e @ (SolveError::NoConvergence { .. } | SolveError::Singular { .. }), leftover)),
+                    Err((
+                        e @ (SolveError::NoConvergence { .. } | SolveError::Singular { .. } | SolveError::UnstableMultigrid { .. }),
+                        leftover,
+                    )),
                     Some((tolerance, max_iterations)),
                 ) => {
                     let why = format!("{}; {e}; retried with BiCGSTAB+ILU(0)", start.choice.clone().unwrap_or_default());
@@ -313,7 +316,15 @@ pub(crate) fn solve_with_memory(
                         setup: Instant::now(),
                         ..start
                     };
-                    solve_krylov_bicgstab(&columns, &rhs, &retry, (Preconditioner::Ilu0, tolerance, max_iterations), layout)
+                    // A failed fallback reports both failures: the first is the one
+                    // that says what is wrong with the system.
+                    solve_krylov_bicgstab(&columns, &rhs, &retry, (Preconditioner::Ilu0, tolerance, max_iterations), layout).map_err(
+                        |retry| SolveError::FallbackFailed {
+                            first: Box::new(e),
+                            retry_method: "BiCGSTAB+ILU(0)".into(),
+                            retry: Box::new(retry),
+                        },
+                    )
                 }
                 (Err((e, _)), _) => Err(e),
             }

@@ -147,6 +147,15 @@ impl BuiltPreconditioner {
         }
     }
 
+    /// The multigrid, alone or inside the border of a bordered system.
+    pub(super) fn multigrid(&self) -> Option<&Amg> {
+        match self {
+            BuiltPreconditioner::Amg(p) => Some(p),
+            BuiltPreconditioner::Bordered(p) => p.inner().multigrid(),
+            _ => None,
+        }
+    }
+
     /// The operator in compressed rows, when the preconditioner keeps one (AMG's
     /// finest level).
     pub fn fine_operator(&self) -> Option<&super::csr::Csr> {

@@ -98,6 +98,31 @@ pub enum SolveError {
         /// The requested tolerance.
         tolerance: f64,
     },
+    /// A multigrid-preconditioned solve failed, and the multigrid's V-cycle, run as a
+    /// stationary iteration, amplifies an error on this system (measured after the
+    /// failure, [`super::amg::Amg::cycle_growth`]): the cause to report with it.
+    #[error(
+        "{failure}; the multigrid is unstable on this system: one V-cycle, as a stationary iteration, \
+         amplifies an error {growth:.1e}-fold (it should shrink it; block Gauss-Seidel diverges next to \
+         boundary nodes that carry only traction rows, such as the ghost-free boundary around a re-entrant \
+         corner: README, Known limits)"
+    )]
+    UnstableMultigrid {
+        /// The solve's own failure.
+        failure: Box<SolveError>,
+        /// `‖e₃‖ / ‖e₂‖` over three cycles on `A e = 0` (> 1).
+        growth: f64,
+    },
+    /// `auto`'s iterative method failed and so did its fallback.
+    #[error("{first}; retried with {retry_method}, which failed too: {retry}")]
+    FallbackFailed {
+        /// Why the first method failed.
+        first: Box<SolveError>,
+        /// The fallback, e.g. `BiCGSTAB+ILU(0)`.
+        retry_method: String,
+        /// Why the fallback failed.
+        retry: Box<SolveError>,
+    },
     /// PETSc or MPI failed (not a convergence failure: those are
     /// [`SolveError::NoConvergence`] with PETSc's converged reason).
     #[error("PETSc: {detail}")]

@@ -30,6 +30,10 @@ pub(super) struct TradeoffRequest {
 const RUN_SHARE: f64 = 0.97;
 
 /// Warnings that make a run's errors untrustworthy (the solve itself is in doubt).
+/// `solver-error` is not one of them: a converged solve whose own error is above a
+/// tenth of the discretisation's is reproducible, and its exact or estimated errors
+/// are of the solution it returned, solver's error included; the sweep reports what
+/// the configuration delivers.
 const DOUBTFUL_SOLVE: [&str; 3] = ["residual", "conditioning", "underflow"];
 
 /// How a configuration ended.
