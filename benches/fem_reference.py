@@ -10,6 +10,8 @@ size, the node count, the tip deflection uy(0.2, 0.17) and the von Mises stress 
     pip install scikit-fem gmsh
     python3 benches/fem_reference.py holes base        # the shipped bracket
     python3 benches/fem_reference.py noholes base      # the L alone
+    python3 benches/fem_reference.py noholes base 0.06,0.14 0.2,0.17   # and u there
+With points (x,y) after the clamp, also the displacement (ux, uy) at each.
 """
 import sys
 
@@ -60,7 +62,7 @@ def mesh(h, holes):
     return skfem.MeshTri(x[used].T.copy(), renumber[triangles].T.copy())
 
 
-def solve(h, holes, clamp):
+def solve(h, holes, clamp, points=()):
     m = mesh(h, holes)
     element = skfem.ElementVector(skfem.ElementTriP2())
     basis = skfem.Basis(m, element, intorder=4)
@@ -83,12 +85,17 @@ def solve(h, holes, clamp):
     syy = lam * exx + (lam + 2 * mu) * eyy
     sxy = 2 * mu * exy
     von_mises = np.sqrt(sxx**2 - sxx * syy + syy**2 + 3 * sxy**2)
-    return m.p.shape[1], uy, von_mises
+    at = np.array(points, float).T.reshape(2, -1) - np.array([[1e-12], [0.0]])
+    displacement = (basis.probes(at) @ u).reshape(2, -1).T if len(points) else []
+    return m.p.shape[1], uy, von_mises, displacement
 
 
 if __name__ == "__main__":
     holes = sys.argv[1] == "holes" if len(sys.argv) > 1 else True
     clamp = sys.argv[2] if len(sys.argv) > 2 else "base"
+    points = [tuple(map(float, p.split(","))) for p in sys.argv[3:]]
     for h in [0.004, 0.002, 0.001, 0.0005]:
-        nodes, uy, vm = solve(h, holes, clamp)
+        nodes, uy, vm, displacement = solve(h, holes, clamp, points)
         print(f"h = {h}: {nodes} nodes, tip uy = {uy:.6e} m, von Mises at hole1 = {vm:.6e} Pa", flush=True)
+        for (x, y), (ux, uy_) in zip(points, displacement):
+            print(f"  u({x}, {y}) = ({ux:.6e}, {uy_:.6e}) m", flush=True)
