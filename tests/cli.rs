@@ -1324,6 +1324,27 @@ fn a_failed_fallback_reports_both_failures_and_the_multigrids_instability() {
     assert!(!res.join("solution.vtu").exists() && !res.join("summary.json").exists());
 }
 
+/// `--target-error` on a scene with singular corners aims at half the target in u
+/// (the estimate there is low by about 2x, README): the bracket's first step at 2 mm
+/// estimates 1.42e-2, under a target of 2e-2 but not under 1e-2, so the loop does not
+/// stop as reached; it says why in a note. (The budget of 1 s ends it after the first
+/// step.)
+#[test]
+fn a_target_on_a_scene_with_singular_corners_counts_the_estimate_double() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "bracket.toml", &shipped("bracket"));
+    let res = tmp.path().join("res");
+    let args = ["--quiet", "run", "bracket.toml", "--target-error", "2e-2", "--budget", "1s", "--out", res.to_str().unwrap()];
+    let o = mlsm(tmp.path(), &args);
+    assert!(o.status.success(), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    let first = s["target"]["steps"][0]["estimate"].as_f64().unwrap();
+    assert!((1e-2..2e-2).contains(&first), "the bracket's estimate moved: {first:e}");
+    assert_eq!(s["target"]["reached"], false, "{}", s["target"]);
+    let notes = s["target"]["notes"].as_array().unwrap();
+    assert!(notes.iter().any(|n| n.as_str().unwrap().contains("the displacement estimate counts x2")), "{notes:?}");
+}
+
 /// A dynamic run imposes no sector balance, and says so: the bracket in time names its
 /// re-entrant corner and both holes in a note and in summary.json's `unbalanced`, with
 /// the reason (before, a dynamic run said nothing of them).

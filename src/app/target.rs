@@ -40,13 +40,18 @@ pub(super) struct TargetReport {
     #[serde(flatten)]
     stop: Stop,
     message: String,
+    /// What the loop changed or assumed (the estimate switched on, a grid refined
+    /// uniformly, an estimate counted double at singular corners), as on the terminal.
+    notes: Vec<String>,
+    /// The step written (the smallest estimate), counted from 1.
+    best_step: usize,
     steps: Vec<Step>,
 }
 
 impl TargetReport {
     /// The warning of a target that was not reached (the best estimate and why).
     pub(super) fn warning(&self) -> Option<Warning> {
-        let best = self.steps.last()?;
+        let best = self.steps.get(self.best_step.checked_sub(1)?)?;
         (!self.reached).then(|| Warning {
             check: "target",
             message: format!(
@@ -101,6 +106,8 @@ pub(super) fn pursue(p: &Problem, target: &Target, quiet: bool) -> Result<(Outco
         reached: matches!(outcome.stop, Stop::Reached),
         stop: outcome.stop.clone(),
         message: outcome.stop.describe(),
+        notes: outcome.notes.clone(),
+        best_step: outcome.best + 1,
         steps: outcome.history.clone(),
     };
     Ok((outcome, report))
@@ -147,4 +154,36 @@ pub(super) fn write_csv(dir: &Path, report: &TargetReport) -> Result<(), AppErro
         &rows,
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::post::ErrorNorms;
+
+    fn step(nodes: usize, estimate: f64) -> Step {
+        let norms = ErrorNorms { e_inf_u: estimate, e_inf_sigma: None, rel_l2_u: estimate, rel_l2_sigma: None };
+        Step { nodes, spacing_min: 1.0, spacing_max: 1.0, seconds: 1.0, estimate, error: None, estimated: norms, errors: None }
+    }
+
+    /// A target not reached names the step that was written (the smallest estimate),
+    /// not the last one: on the bracket's local loop the second step rose to 3.5e-1
+    /// after 1.5e-1, and the warning named the 3.5e-1.
+    #[test]
+    fn the_warning_names_the_best_step_not_the_last() {
+        let report = TargetReport {
+            tolerance: 1e-2,
+            norm: TargetNorm::EInfU,
+            refinement: Refinement::Local,
+            budget_s: None,
+            reached: false,
+            stop: Stop::Stalled,
+            message: Stop::Stalled.describe(),
+            notes: Vec::new(),
+            best_step: 1,
+            steps: vec![step(1161, 0.147), step(15511, 0.346)],
+        };
+        let w = report.warning().expect("not reached");
+        assert!(w.message.contains("the best estimate is 1.47e-1 at 1161 nodes"), "{}", w.message);
+    }
 }

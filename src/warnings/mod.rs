@@ -63,6 +63,24 @@ use crate::problem::Problem;
 use crate::resources;
 use serde::Serialize;
 
+/// Factor the estimated displacement error counts for, against the threshold and
+/// against `--target-error`, where the scene has singular corners: there the
+/// higher-degree reference gains no order (its stencils meet the same singularity)
+/// and is about as wrong as the run. Against finite elements on the L bracket the
+/// estimate of e_inf(u) was 0.45 of the true error at 2 mm and 0.55 graded at the
+/// corners, and 0.55 on the bracket at 2 mm (README, "Error estimate"; BENCHMARKS.md,
+/// "The bracket's estimate under corner refinement").
+pub const SINGULAR_ESTIMATE_FACTOR: f64 = 2.0;
+
+/// [`SINGULAR_ESTIMATE_FACTOR`] when `corners` is not empty, else 1.
+pub fn displacement_estimate_factor(corners: &[SingularCorner]) -> f64 {
+    if corners.is_empty() {
+        1.0
+    } else {
+        SINGULAR_ESTIMATE_FACTOR
+    }
+}
+
 /// Radius of the neighbourhood of a singular corner that the stress check skips, in
 /// local node spacings (on the steel plate, h = 0.01, the estimated stress error falls
 /// from 0.36 at the clamped corners to 2.2e-3 at ten spacings).
@@ -301,9 +319,18 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
     match &sol.estimate {
         Estimate::Done(e) => {
             let mut over = Vec::new();
-            if exceeds(e.norms.e_inf_u, threshold) {
+            let factor = displacement_estimate_factor(&checks.singular_corners);
+            if exceeds(factor * e.norms.e_inf_u, threshold) {
+                let counted = if factor == 1.0 {
+                    String::new()
+                } else {
+                    format!(
+                        ", counted as {:.1e} (x{factor}: at the singular corners the reference is about as wrong as the run)",
+                        factor * e.norms.e_inf_u
+                    )
+                };
                 over.push(format!(
-                    "e_inf(u) ~ {:.1e} (largest at ({:.4e}, {:.4e}))",
+                    "e_inf(u) ~ {:.1e}{counted} (largest at ({:.4e}, {:.4e}))",
                     e.norms.e_inf_u, e.largest_u_at[0], e.largest_u_at[1]
                 ));
             }
