@@ -176,12 +176,17 @@ impl Bordered {
             let inverse_largest = inv.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             largest > 0.0 && inverse_largest.is_finite() && inverse_largest * largest < 1e14
         });
-        let t_inverse = t_inverse.ok_or_else(|| SolveError::Singular {
-            detail: format!(
-                "the {k} constraint rows of the bordered system are dependent as the preconditioner sees them \
-                 (their Schur complement C M^-1 G is singular, largest entry {largest:.3e}); try lu"
-            ),
-        })?;
+        // A multigrid whose cycle diverges makes `C M⁻¹ G` meaningless (entries up to
+        // 5.8e24 on the bracket at 1 mm): the failure then names that cause.
+        let Some(t_inverse) = t_inverse else {
+            let singular = SolveError::Singular {
+                detail: format!(
+                    "the {k} constraint rows of the bordered system are dependent as the preconditioner sees them \
+                     (their Schur complement C M^-1 G is singular, largest entry {largest:.3e}); try lu"
+                ),
+            };
+            return Err(singular.with_cycle_growth(inner.multigrid()));
+        };
         Ok(Bordered { inner, columns, t_inverse, workspace: std::sync::Mutex::new(Vec::new()) })
     }
 

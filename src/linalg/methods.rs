@@ -267,39 +267,20 @@ pub(super) fn solve_gmres_multigrid(
     let amg = Box::new(amg::Amg::build_from_rows(finest, layout.map(NodeLayout::nodes_only), amg::AmgParams::default(), keep));
     let pc = match system.as_ref().filter(|_| multipliers > 0) {
         None => precond::BuiltPreconditioner::Amg(amg),
-        Some(rows) => {
-            // The multigrid is handed to the border and comes back inside it; on a
-            // failure its growth is measured first (it explains a singular-looking
-            // Schur complement).
-            let growth = amg.cycle_growth();
-            match border::Bordered::build(rows, multipliers, precond::BuiltPreconditioner::Amg(amg)) {
-                Ok(b) => precond::BuiltPreconditioner::Bordered(Box::new(b)),
-                Err(e) => {
-                    let e = with_cycle_growth(e, growth);
-                    return Err(Box::new((e, Leftover::Rows(system.expect("a bordered system is kept")))));
-                }
-            }
-        }
+        Some(rows) => match border::Bordered::build(rows, multipliers, precond::BuiltPreconditioner::Amg(amg)) {
+            Ok(b) => precond::BuiltPreconditioner::Bordered(Box::new(b)),
+            Err(e) => return Err(Box::new((e, Leftover::Rows(system.expect("a bordered system is kept"))))),
+        },
     };
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
     run_gmres(rows, &pc, rhs, &start, settings, layout.as_ref()).map_err(|e| {
-        let e = with_cycle_growth(e, pc.multigrid().and_then(amg::Amg::cycle_growth));
+        let e = e.with_cycle_growth(pc.multigrid());
         let rows = system.unwrap_or_else(|| {
             let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
             amg.into_fine_operator().expect("kept as the system")
         });
         Box::new((e, Leftover::Rows(rows)))
     })
-}
-
-/// `failure`, with the multigrid's measured instability as its cause when one V-cycle
-/// amplifies an error (`growth > 1`, [`amg::Amg::cycle_growth`]); as it stands when
-/// the cycle converges by itself (then the Krylov method's limits are the story).
-fn with_cycle_growth(failure: SolveError, growth: Option<f64>) -> SolveError {
-    match growth {
-        Some(growth) if growth > 1.0 => SolveError::UnstableMultigrid { failure: Box::new(failure), growth },
-        _ => failure,
-    }
 }
 
 /// GMRES on the solved rows of a displacement-pressure system with the block-triangular

@@ -146,3 +146,17 @@ pub enum SolveError {
         detail: String,
     },
 }
+
+impl SolveError {
+    /// This failure with the multigrid's measured instability as its cause
+    /// ([`SolveError::UnstableMultigrid`]) when `multigrid`'s V-cycle amplifies an error
+    /// ([`super::amg::Amg::cycle_growth`] above 1); as it stands when the cycle
+    /// converges by itself (then the Krylov method's limits are the story) or there is
+    /// no multigrid. Measured here, after the failure: a solve that succeeds pays nothing.
+    pub(super) fn with_cycle_growth(self, multigrid: Option<&super::amg::Amg>) -> SolveError {
+        match multigrid.and_then(super::amg::Amg::cycle_growth) {
+            Some(growth) if growth > 1.0 => SolveError::UnstableMultigrid { failure: Box::new(self), growth },
+            _ => self,
+        }
+    }
+}
