@@ -26,7 +26,7 @@
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 use super::blocks::Transfer;
 pub use super::csr::product;
-use super::csr::{Csr, RowsRef};
+use super::csr::{to_csr, Csr, RowsRef};
 use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
 use super::smoother::{gauss_seidel, inverse_diagonal_blocks, Sweep};
 use super::SparseMatrix;
@@ -177,45 +177,6 @@ pub struct Amg {
     operator_complexity: f64,
     /// The cycle's vectors.
     work: std::sync::Mutex<Workspace>,
-}
-
-/// `a` (CSC) as a CSR matrix, transposed straight from faer's columns by a counting
-/// sort on the row (columns come out sorted).
-pub fn to_csr(a: &SparseMatrix) -> Csr {
-    let (n, m) = (a.nrows(), a.ncols());
-    let mut offsets = vec![0usize; n + 1];
-    for j in 0..m {
-        for &i in a.symbolic().row_idx_of_col_raw(j) {
-            offsets[i + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        offsets[i + 1] += offsets[i];
-    }
-    let mut next = offsets[..n].to_vec();
-    let (mut cols, mut vals) = (vec![0u32; offsets[n]], vec![0.0f64; offsets[n]]);
-    for j in 0..m {
-        for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
-            cols[next[i]] = j as u32;
-            vals[next[i]] = v;
-            next[i] += 1;
-        }
-    }
-    Csr::from_parts(n, m, offsets, cols, vals)
-}
-
-/// `a` (CSR) in compressed columns, by the counting sort of [`super::csr::transposed`]
-/// (rows come out sorted); `a` is consumed and freed once converted.
-pub fn columns_of(a: Csr) -> SparseMatrix {
-    let (n, m) = (a.nrows(), a.ncols());
-    let (mut rows, mut values) = (vec![0usize; a.nnz()], vec![0.0f64; a.nnz()]);
-    let col_ptr = super::csr::transposed(m, a.row_offsets(), a.col_indices(), |i, k, slot| {
-        rows[slot] = i;
-        values[slot] = a.values()[k];
-    });
-    drop(a);
-    let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(n, m, col_ptr, None, rows);
-    SparseMatrix::new(symbolic, values)
 }
 
 /// The block-diagonal matrix of `inv_diag`.

@@ -1,6 +1,7 @@
 //! Tests of the smoothed-aggregation multigrid ([`super`]).
 
 use super::*;
+use crate::linalg::csr::{columns_of, to_csr};
 use crate::linalg::{assemble, gmres, scaling, Triplets};
 
 /// Rows and back to columns gives the matrix bit for bit (pattern and values), and

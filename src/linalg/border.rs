@@ -222,7 +222,7 @@ impl Bordered {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{amg, gmres, Preconditioner};
+    use super::super::{csr, gmres, Preconditioner};
     use super::*;
     use nalgebra::DVector;
 
@@ -285,7 +285,7 @@ mod tests {
         let mut dense = DMatrix::<f64>::zeros(63, 63);
         k.entries().for_each(|(i, j, v)| dense[(i, j)] += v);
         let exact = dense.lu().solve(&DVector::from_column_slice(&rhs)).expect("a regular bordered system");
-        let lead = amg::columns_of(leading_block(&k, 3));
+        let lead = csr::columns_of(leading_block(&k, 3));
         for (kind, most) in [(Preconditioner::Ilu0, 60), (Preconditioner::Ilut { drop: 0.0, fill: 60 }, 2)] {
             let inner = BuiltPreconditioner::build(&lead, kind, None).expect("a regular leading block");
             let pc = Bordered::build(&k, 3, inner).expect("independent constraints");
@@ -303,7 +303,7 @@ mod tests {
         let (a, b, mut border) = example(30);
         border.rows[2] = border.rows[1].clone();
         let (k, _) = border.bordered(a, &b);
-        let inner = BuiltPreconditioner::build(&amg::columns_of(leading_block(&k, 3)), Preconditioner::Ilu0, None).unwrap();
+        let inner = BuiltPreconditioner::build(&csr::columns_of(leading_block(&k, 3)), Preconditioner::Ilu0, None).unwrap();
         assert!(matches!(Bordered::build(&k, 3, inner), Err(SolveError::Singular { .. })));
     }
 }

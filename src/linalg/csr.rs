@@ -9,6 +9,7 @@
 //! its row pointers would be 32-bit too and its API is built around views; the few
 //! operations the multigrid needs are written here.
 
+use super::SparseMatrix;
 use rayon::prelude::*;
 
 /// A value a [`Csr`] stores: `f64`, or `f32` where half the precision does (the
@@ -347,6 +348,45 @@ pub fn row_dot<V: Value>(cols: &[u32], vals: &[V], x: &[f64]) -> f64 {
         }
     }
     (sums[0] + sums[1]) + (sums[2] + sums[3]) + tail
+}
+
+/// `a` (CSC) as a CSR matrix, transposed straight from faer's columns by a counting
+/// sort on the row (columns come out sorted).
+pub fn to_csr(a: &SparseMatrix) -> Csr {
+    let (n, m) = (a.nrows(), a.ncols());
+    let mut offsets = vec![0usize; n + 1];
+    for j in 0..m {
+        for &i in a.symbolic().row_idx_of_col_raw(j) {
+            offsets[i + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut next = offsets[..n].to_vec();
+    let (mut cols, mut vals) = (vec![0u32; offsets[n]], vec![0.0f64; offsets[n]]);
+    for j in 0..m {
+        for (&i, &v) in a.symbolic().row_idx_of_col_raw(j).iter().zip(a.val_of_col(j)) {
+            cols[next[i]] = j as u32;
+            vals[next[i]] = v;
+            next[i] += 1;
+        }
+    }
+    Csr::from_parts(n, m, offsets, cols, vals)
+}
+
+/// `a` (CSR) in compressed columns, by the counting sort of [`transposed`]
+/// (rows come out sorted); `a` is consumed and freed once converted.
+pub fn columns_of(a: Csr) -> SparseMatrix {
+    let (n, m) = (a.nrows(), a.ncols());
+    let (mut rows, mut values) = (vec![0usize; a.nnz()], vec![0.0f64; a.nnz()]);
+    let col_ptr = transposed(m, a.row_offsets(), a.col_indices(), |i, k, slot| {
+        rows[slot] = i;
+        values[slot] = a.values()[k];
+    });
+    drop(a);
+    let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(n, m, col_ptr, None, rows);
+    SparseMatrix::new(symbolic, values)
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use super::csr::Csr;
-use super::{amg, bicgstab, border, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error};
+use super::{amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error};
 use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
@@ -120,7 +120,7 @@ pub(super) fn solved_rows(a: Cow<'_, Csr>, rhs: &Rhs) -> Csr {
 /// [`solved_rows`] in columns, for the solvers that work on columns (LU, the one-level
 /// preconditioners); the rows are freed once converted.
 pub(super) fn working(a: Cow<'_, Csr>, rhs: &Rhs) -> SparseMatrix {
-    amg::columns_of(solved_rows(a, rhs))
+    csr::columns_of(solved_rows(a, rhs))
 }
 
 /// A solution and its report.
@@ -141,7 +141,7 @@ impl Leftover {
     pub(super) fn into_columns(self) -> SparseMatrix {
         match self {
             Leftover::Columns(c) => c,
-            Leftover::Rows(r) => amg::columns_of(r),
+            Leftover::Rows(r) => csr::columns_of(r),
         }
     }
 }
@@ -317,7 +317,7 @@ pub(super) fn solve_krylov_gmres(
     layout: Option<NodeLayout>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let pc = precond::BuiltPreconditioner::build(a, settings.preconditioner, layout)?;
-    let rows = amg::to_csr(a);
+    let rows = csr::to_csr(a);
     run_gmres(&rows, &pc, rhs, start, settings, layout.as_ref())
 }
 

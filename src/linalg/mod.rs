@@ -131,7 +131,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// 1e300 then give the same digits (no overflow or underflow in the residual norms),
 /// and a solution beyond the double range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    solve_nodal(Cow::Owned(amg::to_csr(a)), b, params, None, None)
+    solve_nodal(Cow::Owned(csr::to_csr(a)), b, params, None, None)
 }
 
 /// A second operator on the same unknowns and rows for the multigrid preconditioner

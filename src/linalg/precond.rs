@@ -100,8 +100,8 @@ impl BuiltPreconditioner {
     /// Errors: [`SolveError::Singular`] for zero pivots / missing diagonals.
     pub fn build(a: &SparseMatrix, kind: Preconditioner, layout: Option<NodeLayout>) -> Result<Self, SolveError> {
         if let Some(l) = layout.filter(|l| l.multipliers > 0) {
-            let rows = super::amg::to_csr(a);
-            let lead = super::amg::columns_of(super::border::leading_block(&rows, l.multipliers));
+            let rows = super::csr::to_csr(a);
+            let lead = super::csr::columns_of(super::border::leading_block(&rows, l.multipliers));
             let inner = Self::build(&lead, kind, Some(l.nodes_only()))?;
             drop(lead);
             return Ok(BuiltPreconditioner::Bordered(Box::new(super::border::Bordered::build(&rows, l.multipliers, inner)?)));

@@ -267,7 +267,7 @@ fn condensed<'a>(
 ) -> Result<NavierDynamics<'a>, RunError> {
     let system = System { case, disc, exact };
     let (rows, rhs) = system.assemble()?;
-    let matrix = crate::linalg::amg::columns_of(rows);
+    let matrix = crate::linalg::csr::columns_of(rows);
     let is_dynamic: Vec<bool> = (0..rhs.len())
         .map(|g| {
             let (node, c) = disc.dofs.location(g);

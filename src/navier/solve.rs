@@ -240,7 +240,7 @@ pub(super) fn assemble_and_solve(
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, lambda, report, kept), note))
     })?;
-    let system = kept.map(|matrix| (linalg::amg::columns_of(matrix), rhs));
+    let system = kept.map(|matrix| (linalg::csr::columns_of(matrix), rhs));
     Ok(Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced })
 }
 
