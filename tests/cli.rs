@@ -1297,7 +1297,7 @@ fn auto_falls_back_from_an_unconverged_multigrid_to_ilu0() {
 /// ILU(0) fallback both fail, the error reports both, and the multigrid's failure
 /// with its measured cause: on the bracket (2 mm, 4 444 nodes, a 60 MB memory limit)
 /// GMRES(30) + AMG stagnates at 0.38 because one V-cycle amplifies an error (measured
-/// 1.1e4-fold; block Gauss-Seidel diverges next to the re-entrant corner's ghost-free
+/// 1.6e4-fold; block Gauss-Seidel diverges next to the re-entrant corner's ghost-free
 /// boundary, BENCHMARKS.md), and BiCGSTAB + ILU(0) then diverges. Before, only the
 /// fallback's failure was reported. Exit 3, and nothing is written.
 #[test]

@@ -107,7 +107,7 @@ fn a_preconditioner_only_hierarchy_applies_the_same_cycle() {
 }
 
 /// [`Amg::cycle_growth`] tells a converging cycle from a diverging one. On the vector
-/// Laplacian (65² nodes) one V-cycle shrinks an error (measured 0.145). Shifted by
+/// Laplacian (65² nodes) one V-cycle shrinks an error (measured 0.146). Shifted by
 /// `+1/(2h²)` on the interior rows the operator is indefinite (the shift exceeds its
 /// smallest eigenvalues' magnitude, `2π²`, by far), its smooth modes are no longer
 /// damped by the smoother nor fixed by the coarse levels, and the cycle amplifies an
