@@ -57,9 +57,22 @@ pub fn refinement_factor(eta: f64, tau: f64, order: f64) -> f64 {
 }
 
 /// The adapted spacing of nodes at `positions` with spacing `spacing` and
-/// `indicator`, graded with growth `g` (module docs).
-pub fn adapted_spacing(positions: &[Point], spacing: &[f64], indicator: &[f64], tau: f64, order: f64, g: f64) -> SpacingSamples {
-    let wish: Vec<f64> = spacing.iter().zip(indicator).map(|(h, eta)| h * refinement_factor(*eta, tau, order)).collect();
+/// `indicator`, graded with growth `g` (module docs). The nodes in `pinned` (those
+/// next to singular corners, where the indicator cannot see the error) are refined
+/// by the smallest factor of any node.
+pub fn adapted_spacing(
+    positions: &[Point],
+    spacing: &[f64],
+    indicator: &[f64],
+    (tau, order, g): (f64, f64, f64),
+    pinned: &[usize],
+) -> SpacingSamples {
+    let factor: Vec<f64> = indicator.iter().map(|eta| refinement_factor(*eta, tau, order)).collect();
+    let smallest = factor.iter().copied().fold(1.0, f64::min);
+    let mut wish: Vec<f64> = spacing.iter().zip(&factor).map(|(h, f)| h * f).collect();
+    for &i in pinned {
+        wish[i] = wish[i].min(spacing[i] * smallest);
+    }
     SpacingSamples { points: positions.to_vec(), spacing: graded_envelope(positions, &wish, g) }
 }
 
@@ -105,6 +118,19 @@ mod tests {
         assert_eq!(refinement_factor(1.0, 1e-3, 2.0), MIN_FACTOR, "far above: clamped");
         assert_eq!(refinement_factor(f64::NAN, 1e-3, 2.0), MIN_FACTOR, "a NaN indicator refines");
         assert_eq!(refinement_factor(0.0, 1e-3, 2.0), 1.0);
+    }
+
+    /// A pinned node with a small indicator is refined as much as the node whose
+    /// indicator asks the most; the others keep their own factors.
+    #[test]
+    fn a_pinned_node_takes_the_smallest_factor() {
+        let positions: Vec<Point> = (0..3).map(|i| [10.0 * i as f64, 0.0]).collect();
+        let spacing = [0.1; 3];
+        // Order 1, tolerance 1e-3: node 1 asks for (0.5e-3 / 1e-3) = 0.5, the others keep
+        // theirs; nodes 10 apart at growth 1 do not grade into each other.
+        let indicator = [1e-5, 1e-3, 1e-5];
+        let h = adapted_spacing(&positions, &spacing, &indicator, (1e-3, 1.0, 1.0), &[2]).spacing;
+        assert_eq!(h, vec![0.1, 0.05, 0.05]);
     }
 
     /// On a line of nodes 0.1 apart with one small wish, the envelope rises by g per
