@@ -11,6 +11,7 @@ use crate::navier::{Estimate, Solution};
 use crate::output::{self, FieldValues, PointField};
 use crate::peridynamics::PdSolution;
 use crate::post::ExactFields;
+use std::borrow::Cow;
 use std::path::Path;
 
 /// A vector array (3 components, z = 0, as ParaView expects).
@@ -28,9 +29,10 @@ pub(super) fn integer(name: &str, v: impl Iterator<Item = i32>) -> PointField {
     PointField { name: name.into(), components: 1, values: FieldValues::I32(v.collect()) }
 }
 
-/// Write `points` with `fields` to a .vtu, with Delaunay triangles inside the solid for viewing.
+/// Write `points` with `fields` to a .vtu, with Delaunay triangles inside the solid for
+/// viewing (triangulated while the fields are encoded).
 pub(super) fn write_points_vtu(path: &Path, points: &[[f64; 2]], domain: &Domain, fields: Vec<PointField>) -> Result<(), AppError> {
-    Ok(output::write_vtu(path, points, &cells_inside(domain, points), fields)?)
+    Ok(output::write_vtu_with(path, points, || Cow::Owned(cells_inside(domain, points)), fields)?)
 }
 
 /// Strain, stress and von Mises arrays, as far as the scene asks for them.

@@ -35,7 +35,7 @@ pub use memory::{available_memory_bytes, peak_memory_bytes, peak_since, restart_
 pub use plot::{svg_to_png, write_front_plot, write_loglog_svg, FrontPanel, PointGroup, Series};
 pub use staged::{remove_uncommitted, Owns, StagedDir};
 pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};
-pub use vtk::{read_vtu, write_pvd, write_vtu, FieldValues, PointField, VtuContents};
+pub use vtk::{read_vtu, write_pvd, write_vtu, write_vtu_with, FieldValues, PointField, VtuContents};
 
 /// Error returned by every fallible function of this module.
 #[derive(Debug, thiserror::Error)]

@@ -5,36 +5,43 @@
 //! fields are `Float64` and `I32` fields `Int32`, so everything round-trips bit-exactly.
 //! Cells use `UInt64` connectivity/offsets and `UInt8` types (5 = triangle).
 //!
+//! Each array is encoded by vtkio (`xml::DataArray::from_io_buffer`: the size header,
+//! base64 and the range) and its element serialised by vtkio's serde model through
+//! quick-xml, in parallel over the arrays and while the triangulation runs; only the
+//! five enclosing tags (`VTKFile`, `UnstructuredGrid`, `Piece`, `PointData`, `Points` /
+//! `Cells`) are written here, with the attributes vtkio gives them: the file is byte for
+//! byte what `Vtk::write_xml` makes (test `the_file_is_what_vtkio_writes`).
+//!
 //! vtkio quirks worked around here:
-//! * Its XML writer (`xml::se::to_writer`) calls `Write::write` instead of `write_all` and lets
-//!   its `BufWriter` flush on drop, so short writes and flush errors to a file would be lost
-//!   silently. We therefore hand it a writer that turns every `write` into `write_all` and
-//!   keeps the first error, which is checked after the serialisation (the file is written
-//!   atomically, [`write_atomic_with`]).
+//! * quick-xml's serialiser buffers the content of every element in a string of its own
+//!   until the element ends, so `Vtk::write_xml` copied each array once per enclosing
+//!   element (five times, with the doublings of each string): at 1e6 nodes (334 MB) the
+//!   output stage took 5.5-5.9 s and peaked at 1.30 GB, against 3.1 s and 0.70 GB now
+//!   (BENCHMARKS.md). Its writer also called `Write::write` instead of `write_all`; the
+//!   payloads now go to the file with `write_all`.
 //! * It `unwrap`s `u32::try_from` of the point and cell counts, so more than `u32::MAX` points
 //!   or triangles would panic; we reject them with an error first.
 //! * On reading, it silently drops point-data arrays it cannot decode, and it panics on some
 //!   malformed input (e.g. a piece without `<Points>`). [`read_vtu`] counts the arrays in the
 //!   raw XML to detect dropped ones and turns panics into [`OutputError::Vtk`].
 //! * It writes `RangeMin`/`RangeMax` with Rust float formatting (`NaN`, `inf`), which VTK
-//!   cannot parse; such attributes are removed after serialisation. (For multi-component
+//!   cannot parse; an array whose range is not finite gets none. (For multi-component
 //!   arrays vtkio's range is the component-wise min/max, whereas VTK's own writer uses the
 //!   magnitude range; the attributes are optional hints and left as they are.)
-//! * It converts the whole model to base64 strings before writing (about 1.4x the raw array
-//!   bytes); the fields' values are moved into it, not copied. A file with a non-finite value
-//!   (see below) is built in memory once more, to strip its ranges.
+//! * Encoded arrays are held as base64 strings until written (about 1.4x the raw bytes);
+//!   each field's values are moved into its encoding and freed there.
 //! * It has no model of the `Collection` (`.pvd`) file type (an unknown `type` is even parsed
 //!   as `UnstructuredGrid`), so [`write_pvd`] writes that small XML file by hand.
 
+use std::borrow::Cow;
 use std::collections::{BTreeMap, HashSet};
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
-use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, ElementType, IOBuffer, UnstructuredGridPiece, Version,
-    VertexNumbers, Vtk,
-};
+use rayon::prelude::*;
+use vtkio::model::{Attribute, ByteOrder, CellType, DataSet, IOBuffer, Vtk};
+use vtkio::xml::{self, Compressor, EncodingInfo, ScalarType};
 
 use super::atomic::write_atomic_with;
 use super::{format_f64, write_atomic, OutputError};
@@ -114,11 +121,11 @@ fn pad_to_3<T: Copy + Default>(v: &[T]) -> Vec<T> {
     v.chunks_exact(2).flat_map(|c| [c[0], c[1], T::default()]).collect()
 }
 
-/// Validates `fields` against `n` points and converts them to `vtkio` attributes, each
-/// field's values moved, not copied (two-component ones are padded to three).
-fn point_attributes(fields: Vec<PointField>, n: usize) -> Result<Vec<Attribute>, OutputError> {
+/// Checks `fields` against `n` points: names non-empty and unique, components
+/// positive, `components * n` values.
+fn check_fields(fields: &[PointField], n: usize) -> Result<(), OutputError> {
     let mut seen = HashSet::new();
-    for f in &fields {
+    for f in fields {
         let bad = |detail: String| OutputError::InvalidField { name: f.name.clone(), detail };
         if f.name.is_empty() {
             return Err(bad("field name is empty".into()));
@@ -143,53 +150,93 @@ fn point_attributes(fields: Vec<PointField>, n: usize) -> Result<Vec<Attribute>,
             return Err(bad("too many components".into()));
         }
     }
-    Ok(fields
-        .into_iter()
-        .map(|f| {
-            let comps = if f.components == 2 { 3 } else { f.components };
-            let data: IOBuffer = match (f.values, f.components) {
-                (FieldValues::F64(v), 2) => pad_to_3(&v).into(),
-                (FieldValues::I32(v), 2) => pad_to_3(&v).into(),
-                (FieldValues::F64(v), _) => v.into(),
-                (FieldValues::I32(v), _) => v.into(),
-            };
-            let elem = match comps {
-                1 => ElementType::Scalars { num_comp: 1, lookup_table: None },
-                3 => ElementType::Vectors,
-                _ => ElementType::Generic(comps as u32),
-            };
-            Attribute::DataArray(DataArray { name: f.name, elem, data })
-        })
-        .collect())
+    Ok(())
 }
 
-/// A writer that passes every `write` on as `write_all` and keeps the first error:
-/// vtkio's XML writer calls `write` (a short write would lose bytes) and flushes its
-/// own buffer when dropped (a failed flush would pass silently); here the caller reads
-/// the error afterwards.
-struct Complete<W: Write> {
-    inner: W,
-    error: Option<std::io::Error>,
+/// How ParaView is told to read a point-data array: the first one-component array is
+/// its default scalar, the first three-component one its default vector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Role {
+    Scalar,
+    Vector,
+    Generic,
 }
 
-impl<W: Write> Write for Complete<W> {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        if self.error.is_some() {
-            return Err(std::io::Error::other("an earlier write failed"));
-        }
-        match self.inner.write_all(buf) {
-            Ok(()) => Ok(buf.len()),
-            Err(e) => {
-                let kind = e.kind();
-                self.error = Some(e);
-                Err(kind.into())
-            }
-        }
-    }
+/// One `<DataArray>` element, encoded by vtkio (header, base64, attributes), held as
+/// its opening tag and its payload so that the payload goes to the file once.
+struct EncodedArray {
+    name: String,
+    role: Role,
+    open: String,
+    payload: String,
+}
 
-    fn flush(&mut self) -> std::io::Result<()> {
-        self.inner.flush()
+/// Closing tag of an array, and the stand-in payload whose element vtkio serialises.
+const CLOSE: &str = "</DataArray>";
+const STAND_IN: &str = "#";
+
+/// `data` as a little-endian, `UInt64`-headed, uncompressed base64 `<DataArray>` named
+/// `name` with `components` components, by vtkio; a range that is not finite is left
+/// out (VTK cannot parse `NaN` or `inf` there; the attributes are optional hints).
+fn encode(name: &str, components: u32, data: IOBuffer) -> Result<EncodedArray, String> {
+    let ei = EncodingInfo {
+        byte_order: ByteOrder::LittleEndian,
+        header_type: ScalarType::UInt64,
+        compressor: Compressor::None,
+        compression_level: 0,
+    };
+    let mut array = xml::DataArray::from_io_buffer(data, ei).map_err(|e| e.to_string())?.with_name(name).with_num_comp(components);
+    if !(array.range_min.is_some_and(f64::is_finite) && array.range_max.is_some_and(f64::is_finite)) {
+        (array.range_min, array.range_max) = (None, None);
     }
+    let payload = match array.data.pop() {
+        Some(xml::Data::Data(s)) => s,
+        _ => String::new(),
+    };
+    array.data = vec![xml::Data::Data(STAND_IN.into())];
+    let element = quick_xml::se::to_string_with_root("DataArray", &array).map_err(|e| e.to_string())?;
+    let open = element
+        .strip_suffix(CLOSE)
+        .and_then(|e| e.strip_suffix(STAND_IN))
+        .ok_or_else(|| format!("unexpected serialisation of array `{name}`"))?
+        .to_string();
+    let role = match components {
+        1 => Role::Scalar,
+        3 => Role::Vector,
+        _ => Role::Generic,
+    };
+    Ok(EncodedArray { name: name.to_string(), role, open, payload })
+}
+
+/// A point field as an encoded array (two components padded to three).
+fn encode_field(f: PointField) -> Result<EncodedArray, String> {
+    let (comps, data): (usize, IOBuffer) = match (f.values, f.components) {
+        (FieldValues::F64(v), 2) => (3, pad_to_3(&v).into()),
+        (FieldValues::I32(v), 2) => (3, pad_to_3(&v).into()),
+        (FieldValues::F64(v), c) => (c, v.into()),
+        (FieldValues::I32(v), c) => (c, v.into()),
+    };
+    encode(&f.name, comps as u32, data)
+}
+
+/// The points (z = 0) and the triangles' connectivity, offsets and types (5).
+fn encode_mesh(points: &[[f64; 2]], triangles: &[[usize; 3]]) -> Result<Vec<EncodedArray>, String> {
+    let m = triangles.len() as u64;
+    let ((points, connectivity), (offsets, types)) = rayon::join(
+        || {
+            rayon::join(
+                || encode("Points", 3, points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect::<Vec<f64>>().into()),
+                || encode("connectivity", 1, triangles.iter().flatten().map(|&i| i as u64).collect::<Vec<u64>>().into()),
+            )
+        },
+        || {
+            rayon::join(
+                || encode("offsets", 1, (1..=m).map(|k| 3 * k).collect::<Vec<u64>>().into()),
+                || encode("types", 1, vec![CellType::Triangle as u8; m as usize].into()),
+            )
+        },
+    );
+    Ok(vec![points?, connectivity?, offsets?, types?])
 }
 
 /// Unstructured grid: points (z = 0), triangle cells, point data. Atomic.
@@ -201,102 +248,73 @@ impl<W: Write> Write for Complete<W> {
 /// field). Non-finite field values are allowed and written as they are. The file is
 /// written with [`write_atomic`].
 pub fn write_vtu(path: &Path, points: &[[f64; 2]], triangles: &[[usize; 3]], fields: Vec<PointField>) -> Result<(), OutputError> {
+    write_vtu_with(path, points, || Cow::Borrowed(triangles), fields)
+}
+
+/// [`write_vtu`] with the triangles made by `triangles` while the fields are encoded
+/// (a Delaunay triangulation of 1e6 points takes about as long as their encoding).
+pub fn write_vtu_with<'t>(
+    path: &Path,
+    points: &[[f64; 2]],
+    triangles: impl FnOnce() -> Cow<'t, [[usize; 3]]> + Send,
+    fields: Vec<PointField>,
+) -> Result<(), OutputError> {
     let n = points.len();
-    if u32::try_from(n).is_err() || u32::try_from(triangles.len()).is_err() {
+    if u32::try_from(n).is_err() {
         return Err(OutputError::invalid(path, "vtkio supports at most u32::MAX points and cells per file"));
     }
     if let Some(i) = points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
         return Err(OutputError::invalid(path, format!("point {i} has a non-finite coordinate {:?}", points[i])));
     }
+    check_fields(&fields, n)?;
+    let (triangles, arrays) = rayon::join(triangles, || fields.into_par_iter().map(encode_field).collect::<Result<Vec<_>, _>>());
+    let arrays = arrays.map_err(|e| OutputError::vtk(path, e))?;
+    if u32::try_from(triangles.len()).is_err() {
+        return Err(OutputError::invalid(path, "vtkio supports at most u32::MAX points and cells per file"));
+    }
     if let Some(k) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
         return Err(OutputError::invalid(path, format!("triangle {k} {:?} refers to a point >= {n} (number of points)", triangles[k])));
     }
-    // Only an array holding NaN or inf gets a range to strip (the scan of the whole file
-    // took 0.4 s at 1e6 nodes).
-    let nonfinite = fields.iter().any(|f| matches!(&f.values, FieldValues::F64(v) if v.iter().any(|x| !x.is_finite())));
-    let point_data = point_attributes(fields, n)?;
-
-    let vtk = unstructured_grid(points, triangles, point_data);
-    if nonfinite {
-        // In memory, to strip the ranges vtkio writes as `NaN` or `inf`.
-        let mut bytes = Vec::new();
-        vtk.write_xml(&mut bytes).map_err(|e| OutputError::vtk(path, e))?;
-        bytes.push(b'\n');
-        return write_atomic(path, &strip_nonfinite_ranges(&bytes));
-    }
-    // Straight to the file (module docs): the cantilever at 1e6 nodes writes 334 MB,
-    // which in memory first cost up to twice that on top of vtkio's own copy.
-    write_atomic_with(path, |w| write_streamed(vtk, w, path))
+    let mesh = encode_mesh(points, &triangles).map_err(|e| OutputError::vtk(path, e))?;
+    let head = format!(
+        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\
+         <UnstructuredGrid><Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{}\">",
+        triangles.len()
+    );
+    write_atomic_with(path, |w| write_grid(w, &head, arrays, mesh).map_err(|e| OutputError::io(path, e)))
 }
 
-/// The `vtkio` model of `points` (z = 0), triangle cells and `point_data`.
-fn unstructured_grid(points: &[[f64; 2]], triangles: &[[usize; 3]], point_data: Vec<Attribute>) -> Vtk {
-    let piece = UnstructuredGridPiece {
-        points: points.iter().flat_map(|p| [p[0], p[1], 0.0]).collect::<Vec<f64>>().into(),
-        cells: Cells {
-            cell_verts: VertexNumbers::XML {
-                connectivity: triangles.iter().flatten().map(|&i| i as u64).collect(),
-                offsets: (1..=triangles.len() as u64).map(|k| 3 * k).collect(),
-            },
-            types: vec![CellType::Triangle; triangles.len()],
-        },
-        data: Attributes { point: point_data, cell: Vec::new() },
+/// The file: `head`, the point data, the points and the cells, each array's payload
+/// written straight from its string.
+fn write_grid(w: &mut impl Write, head: &str, fields: Vec<EncodedArray>, mesh: Vec<EncodedArray>) -> std::io::Result<()> {
+    let write = |w: &mut dyn Write, a: EncodedArray| -> std::io::Result<()> {
+        w.write_all(a.open.as_bytes())?;
+        w.write_all(a.payload.as_bytes())?;
+        w.write_all(CLOSE.as_bytes())
     };
-    Vtk {
-        version: Version::new_xml(1, 0),
-        byte_order: ByteOrder::LittleEndian,
-        title: String::new(),
-        file_path: None,
-        data: DataSet::inline(piece),
-    }
-}
-
-/// Serialise `vtk` into `w` and a final newline through [`Complete`]: the first write
-/// error is the result, whatever vtkio made of it (`path` names the file in errors).
-fn write_streamed(vtk: Vtk, w: impl Write, path: &Path) -> Result<(), OutputError> {
-    let mut out = Complete { inner: w, error: None };
-    let written = vtk.write_xml(&mut out);
-    if let Some(e) = out.error {
-        return Err(OutputError::io(path, e));
-    }
-    written.map_err(|e| OutputError::vtk(path, e))?;
-    out.inner.write_all(b"\n").map_err(|e| OutputError::io(path, e))?;
-    out.inner.flush().map_err(|e| OutputError::io(path, e))
-}
-
-/// Removes `RangeMin`/`RangeMax` attributes whose value is not a finite number.
-///
-/// vtkio writes the range of each array with Rust's float formatting, so an array holding
-/// NaN or ±inf gets `RangeMin="NaN"` or `RangeMax="inf"`, which VTK's attribute parser does
-/// not understand. The attributes are optional hints, so dropping them is always valid. (Base64
-/// payloads contain neither spaces nor quotes, and quotes in names are escaped, so the
-/// pattern can only match real attributes.)
-fn strip_nonfinite_ranges(xml: &[u8]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(xml.len());
-    let mut at = 0;
-    while let Some(p) = find(xml, b" Range", at) {
-        out.extend_from_slice(&xml[at..p]);
-        at = p;
-        for key in [&b" RangeMin=\""[..], &b" RangeMax=\""[..]] {
-            if !xml[p..].starts_with(key) {
-                continue;
-            }
-            let v0 = p + key.len();
-            if let Some(v1) = find(xml, b"\"", v0) {
-                let value = std::str::from_utf8(&xml[v0..v1]).ok();
-                let finite = value.and_then(|v| v.parse::<f64>().ok()).is_some_and(f64::is_finite);
-                if !finite {
-                    at = v1 + 1; // skip the whole attribute
-                }
+    w.write_all(head.as_bytes())?;
+    if !fields.is_empty() {
+        let mut tag = String::from("<PointData");
+        for (role, attribute) in [(Role::Scalar, "Scalars"), (Role::Vector, "Vectors")] {
+            if let Some(a) = fields.iter().find(|a| a.role == role) {
+                tag.push_str(&format!(" {attribute}=\"{}\"", xml_escape(&a.name)));
             }
         }
-        if at == p {
-            out.extend_from_slice(b" Range");
-            at = p + b" Range".len();
+        tag.push('>');
+        w.write_all(tag.as_bytes())?;
+        for a in fields {
+            write(w, a)?;
         }
+        w.write_all(b"</PointData>")?;
     }
-    out.extend_from_slice(&xml[at..]);
-    out
+    let mut mesh = mesh.into_iter();
+    w.write_all(b"<Points>")?;
+    write(w, mesh.next().expect("points"))?;
+    w.write_all(b"</Points><Cells>")?;
+    for a in mesh {
+        write(w, a)?;
+    }
+    w.write_all(b"</Cells></Piece></UnstructuredGrid></VTKFile>\n")
 }
 
 /// Position of `needle` in `hay` at or after `from`.
