@@ -258,19 +258,22 @@ impl Amg {
             if count * k >= current.nrows() {
                 break;
             }
-            if levels.is_empty() {
-                left = left_near_null(&current, blocks, &inv_diag, &null, k, LEFT_NULL_ITERATIONS);
-            }
-            let (t, coarse_null) = tentative(&null, k, blocks, &agg, count);
-            let (t_left, coarse_left) = tentative(&left, k, blocks, &agg, count);
             let d = block_diagonal(&inv_diag, blocks);
-            let rho = spectral_radius(&current, &d).max(f64::MIN_POSITIVE);
-            let omega = 4.0 / (3.0 * rho);
             // P = T − ω (D⁻¹ A) T and R = Tᵀ − ω (Tᵀ A) D⁻¹, each formed row by row
             // in single precision (`spgemm::smoothed`): what the cycle applies and what
-            // the coarse operator is formed with.
-            let p = spgemm::smoothed(&t, omega, &d, &current, &t);
-            drop(t);
+            // the coarse operator is formed with. The finest level's left near-null
+            // space (serial sweeps) is grown on one thread while `P` is formed.
+            let grow_left = || levels.is_empty().then(|| left_near_null(&current, blocks, &inv_diag, &null, k, LEFT_NULL_ITERATIONS));
+            let (grown, (p, coarse_null, omega)) = rayon::join(grow_left, || {
+                let (t, coarse_null) = tentative(&null, k, blocks, &agg, count);
+                let rho = spectral_radius(&current, &d).max(f64::MIN_POSITIVE);
+                let omega = 4.0 / (3.0 * rho);
+                (spgemm::smoothed(&t, omega, &d, &current, &t), coarse_null, omega)
+            });
+            if let Some(grown) = grown {
+                left = grown;
+            }
+            let (t_left, coarse_left) = tentative(&left, k, blocks, &agg, count);
             let r = {
                 let tt = t_left.transpose();
                 drop(t_left);
