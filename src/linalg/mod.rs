@@ -308,7 +308,8 @@ pub(crate) fn solve_with_memory(
                     )),
                     Some((tolerance, max_iterations)),
                 ) => {
-                    let why = format!("{}; {e}; retried with BiCGSTAB+ILU(0)", start.choice.clone().unwrap_or_default());
+                    let retry_method = format!("BiCGSTAB+{}", Preconditioner::Ilu0.display_name());
+                    let why = format!("{}; {e}; retried with {retry_method}", start.choice.clone().unwrap_or_default());
                     let columns = leftover.into_columns();
                     let retry = Start {
                         method: SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance, max_iterations }.label(),
@@ -318,13 +319,8 @@ pub(crate) fn solve_with_memory(
                     };
                     // A failed fallback reports both failures: the first is the one
                     // that says what is wrong with the system.
-                    solve_krylov_bicgstab(&columns, &rhs, &retry, (Preconditioner::Ilu0, tolerance, max_iterations), layout).map_err(
-                        |retry| SolveError::FallbackFailed {
-                            first: Box::new(e),
-                            retry_method: "BiCGSTAB+ILU(0)".into(),
-                            retry: Box::new(retry),
-                        },
-                    )
+                    solve_krylov_bicgstab(&columns, &rhs, &retry, (Preconditioner::Ilu0, tolerance, max_iterations), layout)
+                        .map_err(|retry| SolveError::FallbackFailed { first: Box::new(e), retry_method, retry: Box::new(retry) })
                 }
                 (Err((e, _)), _) => Err(e),
             }
