@@ -158,4 +158,12 @@ fn a_study_outside_the_asymptotic_range_is_warned() {
     let t = json(&res.join("convergence.json"));
     assert!(!t["warnings"].as_array().unwrap().is_empty(), "{t}");
     assert_eq!(t["probes"][0]["name"], "tip_deflection");
+    // The displacement estimate counts double there, as in `run`'s estimate check: the
+    // coarsest level's is twice that of a run at the same spacing, and a note says so.
+    assert!(t["notes"].as_array().unwrap().iter().any(|n| n.as_str().unwrap().contains("singular corners")), "{}", t["notes"]);
+    let run = tmp.path().join("run");
+    let o = mlsm(tmp.path(), &["--quiet", "run", "bracket.toml", "--out", run.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let raw = json(&run.join("summary.json"))["estimated_errors"]["e_inf_u"].as_f64().unwrap();
+    assert_eq!(t["levels"][0]["estimated_e_inf_u"].as_f64().unwrap(), 2.0 * raw);
 }

@@ -194,3 +194,27 @@ fn preset_errors_name_the_field() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("s.toml") && stderr(&o).contains("preset") && stderr(&o).contains("\"accurate\""), "{}", stderr(&o));
 }
+
+/// On a scene with singular corners the sweep counts the displacement estimate as the
+/// run's `estimate` check does (x2): each finished run's estimated e_inf(u) is twice
+/// what its own summary.json reports, and a note says why. The bracket from its
+/// coarsest ladder level; 8 s see a few runs.
+#[test]
+fn tradeoff_counts_the_displacement_estimate_double_at_singular_corners() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = mlsm(&["--quiet", "tradeoff", &problem("bracket"), "--budget", "8", "--out", out.to_str().unwrap()], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = read_json(&out.join("tradeoff.json"));
+    assert!(s["notes"].as_array().unwrap().iter().any(|n| n.as_str().unwrap().contains("singular corners")), "{}", s["notes"]);
+    let ok: Vec<&Value> = s["runs"].as_array().unwrap().iter().filter(|r| r["status"] == "ok").collect();
+    assert!(!ok.is_empty());
+    for r in ok {
+        let own = read_json(&out.join("runs").join(r["id"].as_str().unwrap()).join("summary.json"));
+        let raw = own["estimated_errors"]["e_inf_u"].as_f64().unwrap();
+        let counted = r["estimated"]["e_inf_u"].as_f64().unwrap();
+        assert_eq!(counted, 2.0 * raw, "{}", r["id"]);
+        // The stress estimate is not counted.
+        assert_eq!(r["estimated"]["e_inf_sigma"].as_f64().unwrap(), own["estimated_errors"]["e_inf_sigma"].as_f64().unwrap());
+    }
+}

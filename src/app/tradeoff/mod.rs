@@ -14,6 +14,7 @@ use crate::problem::{validate, Model, Problem, ProblemError};
 use crate::resources::{self, MemoryEstimate};
 use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
 use crate::tradeoff::variant::{Edits, Setting};
+use crate::warnings::SINGULAR_ESTIMATE_FACTOR;
 use child::{Ending, Norms};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -28,6 +29,9 @@ pub(super) struct TradeoffRequest {
 
 /// Share of the budget given to runs; the rest is kept for writing the results.
 const RUN_SHARE: f64 = 0.97;
+
+/// Start of the note of a sweep whose runs found singular corners.
+const SINGULAR_NOTE: &str = "the scene has singular corners";
 
 /// Warnings that make a run's errors untrustworthy (the solve itself is in doubt).
 /// `solver-error` is not one of them: a converged solve whose own error is above a
@@ -202,7 +206,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
     for sub in ["configs", "runs"] {
         super::create_dir(&dir.join(sub))?;
     }
-    let (families, notes) = families(&p, &text);
+    let (families, mut notes) = families(&p, &text);
     if !quiet {
         eprintln!(
             "tradeoff of {} within {:.0} s: {} families ({})",
@@ -263,6 +267,12 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
                     (row.nodes, row.seconds, row.estimate_seconds) = (Some(r.nodes), Some(r.seconds), Some(r.estimate_seconds));
                     (row.wall_seconds, row.peak_memory_bytes, row.warnings) = (Some(wall), r.peak_memory_bytes, r.warnings);
                     (row.exact, row.estimated) = (r.exact, r.estimated);
+                    if r.singular_corners && !notes.iter().any(|n| n.starts_with(SINGULAR_NOTE)) {
+                        notes.push(format!(
+                            "{SINGULAR_NOTE}: the estimated e_inf(u) and rel_l2(u) count x{SINGULAR_ESTIMATE_FACTOR} \
+                             (the reference is about as wrong as the run there; README, \"Error estimate\")"
+                        ));
+                    }
                     let error = if row.trusted() { row.measure() } else { None };
                     sweep.record(f, Measured { work: pl.estimate.nonzeros, seconds: wall, error });
                 }
