@@ -8,7 +8,7 @@
 //! Each array is encoded by vtkio (`xml::DataArray::from_io_buffer`: the size header,
 //! base64 and the range) and its element serialised by vtkio's serde model through
 //! quick-xml, in parallel over the arrays and while the triangulation runs; only the
-//! five enclosing tags (`VTKFile`, `UnstructuredGrid`, `Piece`, `PointData`, `Points` /
+//! six enclosing tags (`VTKFile`, `UnstructuredGrid`, `Piece`, `PointData`, `Points`,
 //! `Cells`) are written here, with the attributes vtkio gives them: the file is byte for
 //! byte what `Vtk::write_xml` makes (test `the_file_is_what_vtkio_writes`).
 //!
