@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Each preset on each shipped static scene with an exact solution, against the front
-# that benches/tradeoff.sh measured (output/bench_tradeoff/<scene>/tradeoff.json; run
+# Each preset, and the scene's own setting ("shipped"), on each shipped static scene
+# with an exact solution, against the front that benches/tradeoff.sh measured (output/bench_tradeoff/<scene>/tradeoff.json; run
 # it first, on the same machine). For a preset run of t seconds and error e, the front
 # time is that of the cheapest swept run with an error <= e; the ratio t / front time
 # must be <= 1.5 (issue 13). "ahead" = no swept run reached e.
@@ -15,8 +15,10 @@ mkdir -p "$out"
 echo "| scene | preset | nodes | seconds | e_inf(sigma) | front seconds at that error | ratio |"
 echo "|---|---|---|---|---|---|---|"
 for scene in "${scenes[@]}"; do
-  for preset in fast balanced accurate; do
-    ./target/release/mlsm --quiet run "problems/$scene.toml" --preset "$preset" --out "$out/${scene}_$preset" 2> /dev/null || true
+  for preset in shipped fast balanced accurate; do
+    args=(--preset "$preset")
+    [ "$preset" = shipped ] && args=()
+    ./target/release/mlsm --quiet run "problems/$scene.toml" "${args[@]}" --out "$out/${scene}_$preset" 2> /dev/null || true
     python3 - "$out/${scene}_$preset/summary.json" "output/bench_tradeoff/$scene/tradeoff.json" "$scene" "$preset" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))

@@ -8,7 +8,9 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use super::csr::Csr;
-use super::{amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error};
+use super::{
+    amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error, subtract_column_product,
+};
 use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
@@ -193,8 +195,12 @@ pub(super) fn solve_krylov_bicgstab(
     match out.status {
         bicgstab::Status::Converged => {
             let (_, original_relative_residual) = rhs.residuals(&last_residual);
-            let zeros = vec![0.0; out.x.len()];
-            let product = |x: &[f64], y: &mut [f64]| y.iter_mut().zip(residual(a, x, &zeros)).for_each(|(y, r)| *y = -r);
+            // `y = A x` as `−(0 − A x)`, without a vector allocated per product.
+            let product = |x: &[f64], y: &mut [f64]| {
+                y.fill(0.0);
+                subtract_column_product(a, x, y);
+                y.iter_mut().for_each(|v| *v = -*v);
+            };
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(&pc, (setup_seconds, solve_seconds), counts);
             let report = with_own_error(report, product, &last_residual, &pc, &out.x, layout.as_ref());

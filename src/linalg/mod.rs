@@ -80,9 +80,8 @@ pub type SparseMatrix = faer::sparse::SparseColMat<usize, f64>;
 /// is garbage, so [`solve`] reports [`SolveError::Singular`] instead.
 pub const LU_RESIDUAL_LIMIT: f64 = 1e-6;
 
-/// The residual `b − A x`, `A` in columns.
-fn residual(a: &SparseMatrix, x: &[f64], b: &[f64]) -> Vec<f64> {
-    let mut r = b.to_vec();
+/// `y ← y − A x`, `A` in columns (each column scattered into the rows it touches).
+fn subtract_column_product(a: &SparseMatrix, x: &[f64], y: &mut [f64]) {
     for (j, &xj) in x.iter().enumerate() {
         if xj == 0.0 {
             continue;
@@ -90,9 +89,15 @@ fn residual(a: &SparseMatrix, x: &[f64], b: &[f64]) -> Vec<f64> {
         let rows = a.symbolic().row_idx_of_col_raw(j);
         let vals = a.val_of_col(j);
         for (&i, &v) in rows.iter().zip(vals) {
-            r[i] -= v * xj;
+            y[i] -= v * xj;
         }
     }
+}
+
+/// The residual `b − A x`, `A` in columns.
+fn residual(a: &SparseMatrix, x: &[f64], b: &[f64]) -> Vec<f64> {
+    let mut r = b.to_vec();
+    subtract_column_product(a, x, &mut r);
     r
 }
 
