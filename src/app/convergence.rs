@@ -29,7 +29,7 @@ use crate::post::probe::ProbeQuantity;
 use crate::post::relative_errors;
 use crate::post::richardson::{extrapolate, Extrapolation};
 use crate::problem::Problem;
-use crate::warnings::{displacement_estimate_factor, singular_corners, SINGULAR_ESTIMATE_FACTOR};
+use crate::warnings::{displacement_estimate_factor, singular_corners, singular_estimate_note};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -167,10 +167,7 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
             }
         }
         if k == 0 && fields.regular.iter().any(|r| !r) {
-            let note = format!(
-                "the scene has singular corners: the estimated e_inf(u) counts x{SINGULAR_ESTIMATE_FACTOR} \
-                 (the reference is about as wrong as the run there; README, \"Error estimate\")"
-            );
+            let note = singular_estimate_note("the estimated e_inf(u) counts");
             if !quiet {
                 eprintln!("note: {note}");
             }

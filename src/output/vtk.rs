@@ -171,6 +171,9 @@ struct EncodedArray {
     payload: String,
 }
 
+/// Why a grid with more than `u32::MAX` points or triangles is refused.
+const TOO_MANY: &str = "vtkio supports at most u32::MAX points and cells per file";
+
 /// Closing tag of an array, and the stand-in payload whose element vtkio serialises.
 const CLOSE: &str = "</DataArray>";
 const STAND_IN: &str = "#";
@@ -261,7 +264,7 @@ pub fn write_vtu_with<'t>(
 ) -> Result<(), OutputError> {
     let n = points.len();
     if u32::try_from(n).is_err() {
-        return Err(OutputError::invalid(path, "vtkio supports at most u32::MAX points and cells per file"));
+        return Err(OutputError::invalid(path, TOO_MANY));
     }
     if let Some(i) = points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite())) {
         return Err(OutputError::invalid(path, format!("point {i} has a non-finite coordinate {:?}", points[i])));
@@ -270,7 +273,7 @@ pub fn write_vtu_with<'t>(
     let (triangles, arrays) = rayon::join(triangles, || fields.into_par_iter().map(encode_field).collect::<Result<Vec<_>, _>>());
     let arrays = arrays.map_err(|e| OutputError::vtk(path, e))?;
     if u32::try_from(triangles.len()).is_err() {
-        return Err(OutputError::invalid(path, "vtkio supports at most u32::MAX points and cells per file"));
+        return Err(OutputError::invalid(path, TOO_MANY));
     }
     if let Some(k) = triangles.iter().position(|t| t.iter().any(|&i| i >= n)) {
         return Err(OutputError::invalid(path, format!("triangle {k} {:?} refers to a point >= {n} (number of points)", triangles[k])));

@@ -81,6 +81,15 @@ pub fn displacement_estimate_factor(corners: &[SingularCorner]) -> f64 {
     }
 }
 
+/// The note of a report whose displacement estimates count
+/// [`SINGULAR_ESTIMATE_FACTOR`] times (`what`: "the estimated e_inf(u) counts", ...).
+pub fn singular_estimate_note(what: &str) -> String {
+    format!(
+        "the scene has singular corners: {what} x{SINGULAR_ESTIMATE_FACTOR} \
+         (the reference is about as wrong as the run there; README, \"Error estimate\")"
+    )
+}
+
 /// Radius of the neighbourhood of a singular corner that the stress check skips, in
 /// local node spacings (on the steel plate, h = 0.01, the estimated stress error falls
 /// from 0.36 at the clamped corners to 2.2e-3 at ten spacings).

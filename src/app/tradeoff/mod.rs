@@ -14,7 +14,7 @@ use crate::problem::{validate, Model, Problem, ProblemError};
 use crate::resources::{self, MemoryEstimate};
 use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
 use crate::tradeoff::variant::{Edits, Setting};
-use crate::warnings::SINGULAR_ESTIMATE_FACTOR;
+use crate::warnings::singular_estimate_note;
 use child::{Ending, Norms};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -29,9 +29,6 @@ pub(super) struct TradeoffRequest {
 
 /// Share of the budget given to runs; the rest is kept for writing the results.
 const RUN_SHARE: f64 = 0.97;
-
-/// Start of the note of a sweep whose runs found singular corners.
-const SINGULAR_NOTE: &str = "the scene has singular corners";
 
 /// Warnings that make a run's errors untrustworthy (the solve itself is in doubt).
 /// `solver-error` is not one of them: a converged solve whose own error is above a
@@ -219,6 +216,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             eprintln!("note: {n}");
         }
     }
+    let singular_note = singular_estimate_note("the estimated e_inf(u) and rel_l2(u) count");
     let mut sweep = Sweep::new(families.iter().map(|f| f.0.clone()).collect());
     let mut plans: Vec<Option<Plan>> = families.iter().map(|_| None).collect();
     let mut rows: Vec<Row> = Vec::new();
@@ -267,11 +265,8 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
                     (row.nodes, row.seconds, row.estimate_seconds) = (Some(r.nodes), Some(r.seconds), Some(r.estimate_seconds));
                     (row.wall_seconds, row.peak_memory_bytes, row.warnings) = (Some(wall), r.peak_memory_bytes, r.warnings);
                     (row.exact, row.estimated) = (r.exact, r.estimated);
-                    if r.singular_corners && !notes.iter().any(|n| n.starts_with(SINGULAR_NOTE)) {
-                        notes.push(format!(
-                            "{SINGULAR_NOTE}: the estimated e_inf(u) and rel_l2(u) count x{SINGULAR_ESTIMATE_FACTOR} \
-                             (the reference is about as wrong as the run there; README, \"Error estimate\")"
-                        ));
+                    if r.singular_corners && !notes.contains(&singular_note) {
+                        notes.push(singular_note.clone());
                     }
                     let error = if row.trusted() { row.measure() } else { None };
                     sweep.record(f, Measured { work: pl.estimate.nonzeros, seconds: wall, error });
