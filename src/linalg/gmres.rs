@@ -8,8 +8,8 @@
 //! the residual norm of the unpreconditioned system, and `x = x₀ + M⁻¹ V y` at each
 //! restart. GMRES minimises that residual over the space, so unlike BiCGSTAB it never
 //! breaks down on a nonsingular system and its residual never grows; a cycle that
-//! gains less than [`STAGNATION`] is reported as a stall rather than run to the
-//! iteration limit.
+//! leaves more than `stall` of the residual (by default [`STAGNATION`]) is reported as
+//! a stall rather than run to the iteration limit.
 //!
 //! faer 0.24 has no GMRES; the method is short enough to keep here with its checks.
 
@@ -24,7 +24,7 @@ pub enum Status {
     Converged,
     /// The iteration budget was spent above the tolerance.
     IterationLimit,
-    /// A whole restart cycle reduced the true residual by less than [`STAGNATION`].
+    /// A whole restart cycle left more than `stall` of the true residual.
     Stalled,
     /// The iterate became NaN or infinite.
     Breakdown,
@@ -114,7 +114,7 @@ fn true_residual(apply: &impl Fn(&[f64], &mut [f64]), x: &[f64], b: &[f64], r: &
 
 /// Solve `a x = b` from `x₀ = 0` by GMRES(`restart`) preconditioned on the right by
 /// `precondition` (`v ← M⁻¹ v`), until the true relative residual is `≤ tolerance`,
-/// `max_iterations` inner steps are spent, or a cycle stalls.
+/// `max_iterations` inner steps are spent, or a cycle stalls ([`STAGNATION`]).
 pub fn solve_gmres(
     a: &Csr,
     b: &[f64],
@@ -123,10 +123,14 @@ pub fn solve_gmres(
     max_iterations: usize,
     restart: usize,
 ) -> GmresOutcome {
-    solve_gmres_with(|x, y| product(a, x, y), b, precondition, tolerance, max_iterations, restart)
+    solve_gmres_with(|x, y| product(a, x, y), b, precondition, tolerance, max_iterations, restart, STAGNATION)
 }
 
-/// [`solve_gmres`] with the matrix given by its product `apply(x, y)`: `y ← A x`.
+/// [`solve_gmres`] with the matrix given by its product `apply(x, y)`: `y ← A x`, and
+/// a stall declared when a whole restart cycle leaves more than `stall` (in `(0, 1]`)
+/// of the true residual it started from (a cycle cut short by convergence, more than
+/// [`STAGNATION`]).
+#[allow(clippy::too_many_arguments)]
 pub fn solve_gmres_with(
     apply: impl Fn(&[f64], &mut [f64]),
     b: &[f64],
@@ -134,6 +138,7 @@ pub fn solve_gmres_with(
     tolerance: f64,
     max_iterations: usize,
     restart: usize,
+    stall: f64,
 ) -> GmresOutcome {
     let n = b.len();
     // More Krylov vectors than iterations or unknowns would only allocate.
@@ -225,7 +230,10 @@ pub fn solve_gmres_with(
         let previous = beta;
         beta = true_residual(&apply, &x, b, &mut w);
         out.history.push(beta / b_norm);
-        if beta / b_norm > tolerance && beta > STAGNATION * previous {
+        // A cycle cut short by the estimate reaching the tolerance may leave the true
+        // residual just above it: only the default stall applies to it.
+        let limit = if steps == m { stall } else { stall.max(STAGNATION) };
+        if beta / b_norm > tolerance && beta > limit * previous {
             out.status = Status::Stalled;
             out.relative_residual = beta / b_norm;
             break;

@@ -242,6 +242,9 @@ pub(super) struct GmresSettings {
     pub(super) tolerance: f64,
     pub(super) max_iterations: usize,
     pub(super) restart: usize,
+    /// The largest share of its residual a restart cycle may leave
+    /// ([`gmres::solve_gmres_with`]).
+    pub(super) stall: f64,
 }
 
 /// GMRES with the multigrid built on the solved operator in rows (`D A`, kept as its
@@ -333,12 +336,13 @@ pub(super) fn run_gmres(
     pc: &precond::BuiltPreconditioner,
     rhs: &Rhs,
     start: &Start,
-    GmresSettings { preconditioner, tolerance, max_iterations, restart }: GmresSettings,
+    GmresSettings { preconditioner, tolerance, max_iterations, restart, stall }: GmresSettings,
     layout: Option<&NodeLayout>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
-    let out = gmres::solve_gmres(rows, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart);
+    let apply = |x: &[f64], y: &mut [f64]| amg::product(rows, x, y);
+    let out = gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart, stall);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
     let r = row_residual(rows, &out.x, &rhs.solved);
@@ -355,7 +359,7 @@ pub(super) fn run_gmres(
             limit: if out.status == gmres::Status::IterationLimit {
                 iteration_limit(max_iterations)
             } else {
-                format!("stagnation (a restart cycle reduced the residual by less than {:.0} %)", 100.0 * (1.0 - gmres::STAGNATION))
+                format!("stagnation (a restart cycle reduced the residual by less than {:.0} %)", 100.0 * (1.0 - stall))
             },
             restarts: out.restarts,
             iterations: out.iterations,

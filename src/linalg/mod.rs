@@ -63,8 +63,8 @@ use methods::{
 pub use amg::NodeLayout;
 pub use csr::Csr;
 pub use params::{
-    lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_LU_SHARE, GMRES_RESTART,
-    SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
+    lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
+    AUTO_LU_SHARE, GMRES_RESTART, SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
 };
 pub use report::{SolveError, SolveReport};
 pub use rowmat::{mul_add, row_matrix, RowMatrix};
@@ -202,9 +202,9 @@ pub fn solve_nodal(
 ///    and a NaN/inf iterate is [`SolveError::Singular`].
 ///
 /// When `auto` goes iterative and its Krylov solver (or the multigrid's setup) stops
-/// or breaks down, it tries BiCGSTAB with ILU(0) on the same equilibrated operator
-/// before giving up (on the cantilever grid ILUT diverges where ILU(0) converges;
-/// BENCHMARKS.md), and says so in `choice`.
+/// or breaks down, it tries [`SolverKind::auto_fallback`] on the same equilibrated
+/// operator before giving up (LU where the factors fit, else BiCGSTAB with ILU(0)), and
+/// says so in `choice`.
 ///
 /// Only LU can *prove* trouble: a Krylov method on a singular but consistent system
 /// (e.g. pure traction with self-equilibrated loads) may converge to one of
@@ -220,11 +220,10 @@ pub(crate) fn solve_with_memory(
     available: Option<f64>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let saddle_point = layout.filter(|l| l.has_pressure());
-    let (kind, choice) = params.kind.resolve_system(a.nrows() as f64, a.nnz() as f64, saddle_point.is_some(), available);
-    let fallback = match (params.kind, kind) {
-        (SolverKind::Auto { tolerance, max_iterations, .. }, SolverKind::Gmres { .. }) if saddle_point.is_none() => {
-            Some((tolerance, max_iterations))
-        }
+    let (unknowns, nonzeros) = (a.nrows() as f64, a.nnz() as f64);
+    let (kind, choice) = params.kind.resolve_system(unknowns, nonzeros, saddle_point.is_some(), available);
+    let fallback = match kind {
+        SolverKind::Gmres { .. } => params.kind.auto_fallback(unknowns, nonzeros, saddle_point.is_some(), available),
         _ => None,
     };
     if let SolverKind::Petsc { .. } = kind {
@@ -277,7 +276,9 @@ pub(crate) fn solve_with_memory(
             solve_krylov_bicgstab(&working(a, &rhs), &rhs, &start, (preconditioner, tolerance, max_iterations), layout)
         }
         SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart } => {
-            let settings = GmresSettings { preconditioner, tolerance, max_iterations, restart };
+            // GMRES chosen for time gives way to LU as soon as a cycle shows it is slow.
+            let stall = if fallback == Some(SolverKind::Lu) { AUTO_KRYLOV_PACE } else { gmres::STAGNATION };
+            let settings = GmresSettings { preconditioner, tolerance, max_iterations, restart, stall };
             let attempt = if preconditioner == Preconditioner::Amg {
                 // The auxiliary operator in the system's row scale, so that its
                 // multigrid approximates the inverse of the solved (equilibrated) rows.
@@ -311,21 +312,24 @@ pub(crate) fn solve_with_memory(
                         e @ (SolveError::NoConvergence { .. } | SolveError::Singular { .. } | SolveError::UnstableMultigrid { .. }),
                         leftover,
                     )),
-                    Some((tolerance, max_iterations)),
+                    Some(retry_kind),
                 ) => {
-                    let retry_method = format!("BiCGSTAB+{}", Preconditioner::Ilu0.display_name());
+                    let retry_method = match retry_kind {
+                        SolverKind::Bicgstab { preconditioner, .. } => format!("BiCGSTAB+{}", preconditioner.display_name()),
+                        other => other.label(),
+                    };
                     let why = format!("{}; {e}; retried with {retry_method}", start.choice.clone().unwrap_or_default());
                     let columns = leftover.into_columns();
-                    let retry = Start {
-                        method: SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance, max_iterations }.label(),
-                        choice: Some(why),
-                        setup: Instant::now(),
-                        ..start
-                    };
+                    let retry = Start { method: retry_kind.label(), choice: Some(why), setup: Instant::now(), ..start };
                     // A failed fallback reports both failures: the first is the one
                     // that says what is wrong with the system.
-                    solve_krylov_bicgstab(&columns, &rhs, &retry, (Preconditioner::Ilu0, tolerance, max_iterations), layout)
-                        .map_err(|retry| SolveError::FallbackFailed { first: Box::new(e), retry_method, retry: Box::new(retry) })
+                    let retried = match retry_kind {
+                        SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
+                            solve_krylov_bicgstab(&columns, &rhs, &retry, (preconditioner, tolerance, max_iterations), layout)
+                        }
+                        _ => solve_lu(&columns, &rhs, &retry),
+                    };
+                    retried.map_err(|retry| SolveError::FallbackFailed { first: Box::new(e), retry_method, retry: Box::new(retry) })
                 }
                 (Err((e, _)), _) => Err(e),
             }

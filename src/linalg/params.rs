@@ -97,8 +97,8 @@ pub enum SolverKind {
         /// LU choice over MPI ranks.
         direct: bool,
     },
-    /// LU while its factors fit comfortably, else BiCGSTAB with these settings
-    /// ([`SolverKind::resolve`]).
+    /// GMRES with these settings when the LU factors would not fit comfortably or
+    /// would be slow to make, else LU ([`SolverKind::resolve_system`]).
     Auto {
         /// Right preconditioner of the iterative choice.
         preconditioner: Preconditioner,
@@ -131,6 +131,22 @@ pub const SADDLE_POINT_ITERATIONS: usize = 2000;
 /// Fraction of the available memory that `auto` lets the LU factors take.
 pub const AUTO_LU_SHARE: f64 = 0.5;
 
+/// Estimated LU factor bytes ([`lu_factor_bytes`]) above which `auto` solves a
+/// displacement system by GMRES + multigrid even though the factors fit, and falls
+/// back to LU if the iteration fails. Measured on the shipped scenes (2-core AMD EPYC,
+/// BENCHMARKS.md "auto by time"): the solve stage was equal at 14-16 MB (manufactured,
+/// 441-1681 nodes), 1.2x faster by GMRES + AMG at 47 MB (Kirsch, 1 283 nodes), 2.1x at
+/// 72 MB, 4.3x at 230 MB (Kirsch as shipped) and 19x at 2.3 GB (Kirsch, PHS degree 6,
+/// 18 942 nodes: 14.4 against 0.77 s).
+pub const AUTO_KRYLOV_BYTES: f64 = 4e7;
+
+/// The largest share of its residual a whole restart cycle of the GMRES that `auto`
+/// chose for time ([`AUTO_KRYLOV_BYTES`]) may leave before LU takes over. A working
+/// multigrid left 8e-10 to 2e-5 per cycle of 30 on the shipped scenes (35-65 iterations
+/// to 1e-10, up to 5e4 nodes); the bracket's (unstable at its re-entrant corner) left
+/// 0.40 of it after the first cycle, which cost as much as its LU.
+pub const AUTO_KRYLOV_PACE: f64 = 0.1;
+
 impl SolverKind {
     /// Its name in a scene.
     pub fn method(&self) -> SolverMethod {
@@ -158,11 +174,12 @@ impl SolverKind {
         }
     }
 
-    /// The solver that runs on a system of `unknowns` rows and `nonzeros` entries with
-    /// `available` bytes of memory, and for `Auto` why: LU when its estimated factors
-    /// ([`lu_factor_bytes`]) take at most [`AUTO_LU_SHARE`] of the available memory
+    /// `auto`'s choice by memory alone, and why: LU when its estimated factors
+    /// ([`lu_factor_bytes`]) take at most [`AUTO_LU_SHARE`] of the `available` memory
     /// (or the available memory is unknown), else GMRES([`GMRES_RESTART`]) with the
-    /// `Auto` settings.
+    /// `Auto` settings. This is the choice between MUMPS and a Krylov method over MPI
+    /// ranks, where no fallback follows a failed iteration; an explicit kind is
+    /// returned unchanged.
     pub fn resolve(&self, unknowns: f64, nonzeros: f64, available: Option<f64>) -> (SolverKind, Option<String>) {
         let SolverKind::Auto { preconditioner, tolerance, max_iterations } = *self else { return (*self, None) };
         let factors = lu_factor_bytes(nonzeros, unknowns);
@@ -188,12 +205,29 @@ impl SolverKind {
         }
     }
 
-    /// [`SolverKind::resolve`] for a system that may be a saddle point (the
-    /// displacement-pressure form): there `auto`, gone iterative, runs
+    /// The solver that runs in this process on a system of `unknowns` rows and
+    /// `nonzeros` entries with `available` bytes of memory, and for `Auto` why:
+    /// [`SolverKind::resolve`]'s choice by memory, except that a displacement system
+    /// whose factors fit but are estimated above [`AUTO_KRYLOV_BYTES`] is solved by
+    /// GMRES([`GMRES_RESTART`]) for time (LU is then the fallback,
+    /// [`SolverKind::auto_fallback`]). A saddle point (the displacement-pressure form)
+    /// keeps LU while it fits; gone iterative by memory, it runs
     /// [`SolverKind::for_saddle_point`]'s longer GMRES and says so in the reason.
     pub fn resolve_system(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> (SolverKind, Option<String>) {
         let (kind, mut choice) = self.resolve(unknowns, nonzeros, available);
-        if !saddle_point || !matches!(self, SolverKind::Auto { .. }) {
+        let SolverKind::Auto { preconditioner, tolerance, max_iterations } = *self else { return (kind, choice) };
+        let factors = lu_factor_bytes(nonzeros, unknowns);
+        if kind == SolverKind::Lu && !saddle_point && factors > AUTO_KRYLOV_BYTES {
+            let why = format!(
+                "{}, but above {:.0} MB, where GMRES+{} is faster: GMRES+{}, LU if it fails",
+                choice.unwrap_or_default(),
+                AUTO_KRYLOV_BYTES / 1e6,
+                preconditioner.display_name(),
+                preconditioner.display_name()
+            );
+            return (SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART }, Some(why));
+        }
+        if !saddle_point {
             return (kind, choice);
         }
         let longer = kind.for_saddle_point();
@@ -203,6 +237,22 @@ impl SolverKind {
             ));
         }
         (longer, choice)
+    }
+
+    /// What `auto` tries when the GMRES it chose for this system fails: LU when the
+    /// factors fit ([`SolverKind::resolve`] chose LU: GMRES was chosen for time),
+    /// else BiCGSTAB with ILU(0) and the `Auto` tolerance and iteration budget (on the
+    /// cantilever grid ILUT diverges where ILU(0) converges; BENCHMARKS.md). `None`
+    /// for an explicit kind and for a saddle point.
+    pub fn auto_fallback(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> Option<SolverKind> {
+        let SolverKind::Auto { tolerance, max_iterations, .. } = *self else { return None };
+        if saddle_point {
+            return None;
+        }
+        Some(match self.resolve(unknowns, nonzeros, available).0 {
+            SolverKind::Lu => SolverKind::Lu,
+            _ => SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance, max_iterations },
+        })
     }
 
     /// The GMRES that `auto`, gone iterative, runs on a displacement-pressure system:

@@ -405,6 +405,36 @@ fn auto_resolves_by_the_memory_of_the_factors() {
     assert_eq!(SolverKind::Lu.resolve(n, nnz, Some(1.0)), (SolverKind::Lu, None));
 }
 
+/// In this process `auto` also leaves LU for GMRES when the factors fit but are
+/// estimated above [`AUTO_KRYLOV_BYTES`] (for time, with LU as the fallback), except on
+/// a saddle point; gone iterative for memory, its fallback is BiCGSTAB+ILU(0). Over MPI
+/// ranks ([`SolverKind::resolve`]) only memory counts.
+#[test]
+fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
+    use super::params::AUTO_KRYLOV_BYTES;
+    let auto = SolverKind::Auto { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 };
+    let gmres = SolverKind::Gmres { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500, restart: GMRES_RESTART };
+    let n = 1e4;
+    let nnz = |bytes: f64| bytes / lu_factor_bytes(1.0, n);
+    let roomy = Some(1e12);
+    let (kind, why) = auto.resolve_system(n, nnz(0.9 * AUTO_KRYLOV_BYTES), false, roomy);
+    assert_eq!(kind, SolverKind::Lu, "{why:?}");
+    assert_eq!(auto.auto_fallback(n, nnz(0.9 * AUTO_KRYLOV_BYTES), false, roomy), Some(SolverKind::Lu));
+    let (kind, why) = auto.resolve_system(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, roomy);
+    assert_eq!(kind, gmres);
+    assert!(why.unwrap().contains("where GMRES+AMG is faster: GMRES+AMG, LU if it fails"));
+    assert_eq!(auto.auto_fallback(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, roomy), Some(SolverKind::Lu));
+    assert_eq!(auto.resolve(n, nnz(1.1 * AUTO_KRYLOV_BYTES), roomy).0, SolverKind::Lu, "MPI: memory only");
+    assert_eq!(auto.resolve_system(n, nnz(1.1 * AUTO_KRYLOV_BYTES), true, roomy).0, SolverKind::Lu, "saddle point");
+    let tight = Some(AUTO_KRYLOV_BYTES);
+    assert_eq!(auto.resolve_system(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, tight).0, gmres);
+    assert_eq!(
+        auto.auto_fallback(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, tight),
+        Some(SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 500 })
+    );
+    assert_eq!(SolverKind::Lu.auto_fallback(n, 1.0, false, roomy), None);
+}
+
 /// `auto` gone iterative retries with BiCGSTAB+ILU(0) when its GMRES stops: with a
 /// 300-iteration budget Jacobi does not converge on the collocation-like system of the
 /// test above (it needs 548 iterations there), ILU(0) does (135), and the choice says
