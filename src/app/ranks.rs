@@ -58,7 +58,8 @@ pub(super) fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<(), AppEr
                 (kind, "solver.kind = \"lu\": MUMPS's distributed sparse LU in PETSc".to_string())
             }
             SolverKind::Auto { preconditioner, tolerance, max_iterations } if preconditioner.petsc_name().is_some() => {
-                // The same rule as in one process: LU while its factors fit.
+                // LU while its factors fit (memory only: no fallback follows a failed
+                // PETSc iteration, so the in-process choice by time does not apply).
                 let estimate = crate::resources::of(p);
                 let available = crate::output::available_memory_bytes();
                 let direct = matches!(active_solver(p).kind.resolve(estimate.unknowns, estimate.nonzeros, available).0, SolverKind::Lu);

@@ -303,7 +303,7 @@ impl SolverKind {
 choice! {
     /// The name of a solver in a scene (`solver.kind`); its settings are their own fields.
     pub enum SolverMethod("solver.kind", default Some(SolverMethod::Auto), note "\"auto\"; in [peridynamics.solver] \"gmres\" with \"amg\"") {
-        Auto = "auto" => "LU while its estimated factors take at most half the available memory, else GMRES with the preconditioner, tolerance and max_iterations given (on the displacement-pressure form GMRES(100), at least 2000 iterations); reason in summary.json, `solver.choice`",
+        Auto = "auto" => "LU while its estimated factors are at most 40 MB; above, GMRES with the preconditioner, tolerance and max_iterations given, LU if a restart cycle leaves more than 0.1 of the residual; GMRES alone (then BiCGSTAB+ILU(0)) once the factors would take more than half the available memory (the displacement-pressure form: LU while it fits, else GMRES(100), at least 2000 iterations); reason in summary.json, `solver.choice`",
         Lu = "lu" => "sparse direct LU (faer, COLAMD ordering): robust, memory grows fastest with the node count",
         Bicgstab = "bicgstab" => "right-preconditioned BiCGSTAB to a true relative residual `tolerance`",
         Gmres = "gmres" => "right-preconditioned restarted GMRES(`restart`, default 30) to a true relative residual `tolerance`; stops when a restart cycle gains less than 1 %",
