@@ -233,6 +233,33 @@ fn degenerate_support_is_reported() {
     }
 }
 
+/// An RBF-FD support that stays degenerate after its three widenings is reported with
+/// the node (the only rank test of RBF-FD is the one before the shapes): a strip three
+/// grid rows high cannot determine the monomials y^3 and y^4 of degree 4, however wide
+/// the stencil (123 nodes after widening; smallest relative QR pivot about 1e-21).
+#[test]
+fn degenerate_rbf_support_is_reported_after_widening() {
+    let boundary: String = ["left", "right", "top", "bottom"]
+        .iter()
+        .map(|part| format!("[[boundary]]\npart = \"{part}\"\nkind = \"displacement\"\nvalue = [0.0, 0.0]\n"))
+        .collect();
+    let text = format!(
+        "name = \"strip\"\nbody_force = [0.0, -1.0]\n[[domain.region]]\nshape = \"rectangle\"\nmin = [0.0, 0.0]\nmax = [10.0, 0.2]\n\
+         [nodes]\nspacing = 0.1\nfill = \"grid\"\n[approximation]\nbasis = \"phs\"\ndegree = 4\n\
+         [material]\nE = 1.0\nnu = 0.3\nplane = \"stress\"\n{boundary}"
+    );
+    let p = mlsm::problem::Problem::from_str(&text, std::path::Path::new("strip.toml")).unwrap();
+    match mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent) {
+        Err(mlsm::pipeline::RunError::Shape(e)) => {
+            let msg = e.to_string();
+            assert!(msg.contains("degenerate support at node") && msg.contains("rank < 15"), "{msg}");
+            assert!(e.support > 37 && e.ratio < 1e-10, "{e:?}");
+        }
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("three grid rows cannot carry a degree-4 polynomial part"),
+    }
+}
+
 /// A polygon with a concave corner and two holes, scattered nodes, tractions
 /// everywhere but the clamped base: at the concave corner the ghosts of the two
 /// edges coincided and made the matrix singular before ghosts were deduplicated.

@@ -22,11 +22,10 @@
 //!   `1/sqrt(r^2 + c^2)`, with `c` in local units (the scene gives it in units of the
 //!   local spacing).
 
-use super::basis::monomial_exponents;
+use super::basis::{monomial_exponents, LocalBasis};
 use super::ops::Op;
-use super::wls::{rank_ratio, LocalFrame, RankDeficient, RANK_TOLERANCE};
+use super::wls::{monomial_matrix, LocalFrame, RankDeficient};
 use super::Basis;
-use nalgebra::DMatrix;
 use serde::Serialize;
 
 /// Largest `|w| |M| / |rhs|` accepted (in max norms): a lower bound of the condition
@@ -104,7 +103,8 @@ impl Radial {
     /// `(L phi(|z - zj|))` at `z = 0`.
     fn operator_at_centre(&self, op: Op, zj: [f64; 2], c: f64) -> f64 {
         let d = [-zj[0], -zj[1]];
-        let (f, f1, f2) = self.profile(d[0].hypot(d[1]), c);
+        // Local coordinates (within the unit disc): no overflow for `sqrt` to guard against.
+        let (f, f1, f2) = self.profile((d[0] * d[0] + d[1] * d[1]).sqrt(), c);
         match op {
             Op::Value => f,
             Op::Dx => f1 * d[0],
@@ -136,36 +136,32 @@ pub fn shape_functions(
     let c = radial.shape().map_or(0.0, |shape| shape * h_p / s);
     let exps = monomial_exponents(&Basis::Monomials { degree });
     let m = exps.len();
-    let monomial = |p: [f64; 2], (a, b): (u32, u32)| p[0].powi(a as i32) * p[1].powi(b as i32);
-
-    // The polynomial part must determine every coefficient.
-    let mut p_mat = DMatrix::<f64>::zeros(n, m);
-    for j in 0..n {
-        for (k, &e) in exps.iter().enumerate() {
-            p_mat[(j, k)] = monomial(z[j], e);
-        }
+    // The rank of the polynomial part is tested once per support, before the shapes
+    // (`shapes::degenerate_supports`, which the discretisation runs on every RBF-FD
+    // support): testing it here again was a tenth of a Kirsch run at degree 6 with its
+    // degree-8 estimate. A singular saddle system shows as amplification below.
+    if n < m {
+        return Err(RankDeficient { ratio: 0.0, basis_size: m });
     }
-    let ratio = rank_ratio(&p_mat);
-    if n < m || ratio.is_nan() || ratio <= RANK_TOLERANCE {
-        return Err(RankDeficient { ratio, basis_size: m });
-    }
-
+    let p = monomial_matrix(&LocalBasis::new(&Basis::Monomials { degree }), &z);
     let size = n + m;
     // faer's dense LU (blocked, vectorised): about twice as fast as nalgebra's at
     // these sizes (n + m ~ 50; BENCHMARKS.md, "Shapes per node").
     let mut sys = faer::Mat::<f64>::zeros(size, size);
     for i in 0..n {
-        // A is symmetric: evaluate each pair once.
+        // A is symmetric: evaluate each pair once. The local coordinates are within the
+        // unit disc, so `sqrt` needs none of `hypot`'s guards against overflow (which
+        // made it 11 % of a Kirsch run with its estimate).
         for j in 0..i {
-            let r = (z[i][0] - z[j][0]).hypot(z[i][1] - z[j][1]);
-            let v = radial.profile(r, c).0;
+            let (dx, dy) = (z[i][0] - z[j][0], z[i][1] - z[j][1]);
+            let v = radial.profile((dx * dx + dy * dy).sqrt(), c).0;
             sys[(i, j)] = v;
             sys[(j, i)] = v;
         }
         sys[(i, i)] = radial.profile(0.0, c).0;
         for k in 0..m {
-            sys[(i, n + k)] = p_mat[(i, k)];
-            sys[(n + k, i)] = p_mat[(i, k)];
+            sys[(i, n + k)] = p[k * n + i];
+            sys[(n + k, i)] = p[k * n + i];
         }
     }
     let fact = |k: u32| (1..=k).product::<u32>() as f64;

@@ -1,13 +1,12 @@
 //! Shape functions of all nodes, computed in parallel (rayon) for exactly the
 //! operators each node needs, and stored node by node.
 
-use super::basis::{monomial_exponents, Basis};
+use super::basis::{Basis, LocalBasis};
 use super::ops::{Op, OpSet};
-use super::wls::{rank_ratio, shape_functions, RANK_TOLERANCE};
+use super::wls::{monomial_matrix, rank_ratio, shape_functions, LocalFrame, RANK_TOLERANCE};
 use super::Approximation;
 use crate::domain::neighbors::Supports;
 use crate::domain::Point;
-use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 /// A support whose local least-squares matrix is rank deficient.
@@ -102,30 +101,27 @@ impl Shapes {
 }
 
 /// The nodes that need shapes (`needs[i]` not empty) and whose support cannot
-/// determine the polynomial part of `basis`: the monomials at the support nodes, in
-/// local coordinates, have numerical rank below their count (a one-sided lattice
-/// stencil spanning fewer than `p + 1` rows, for instance).
-pub fn degenerate_supports(positions: &[Point], supports: &Supports, basis: &Basis, needs: &[OpSet]) -> Vec<usize> {
-    let exponents = monomial_exponents(basis);
+/// determine the polynomial part of `basis`, each with the smallest relative QR pivot
+/// of its monomials at the support nodes in local coordinates (numerical rank below
+/// their count: a one-sided lattice stencil spanning fewer than `p + 1` rows, for
+/// instance; 0 for a support with fewer nodes than monomials). For RBF-FD this is the
+/// only rank test: the discretisation runs it on every support before the shapes.
+pub fn degenerate_supports(positions: &[Point], supports: &Supports, basis: &Basis, needs: &[OpSet]) -> Vec<(usize, f64)> {
+    let local = LocalBasis::new(basis);
     (0..supports.len())
         .into_par_iter()
-        .filter(|&i| {
+        .filter_map(|i| {
             if needs[i].is_empty() {
-                return false;
+                return None;
             }
             let support = supports.of(i);
-            if support.len() < exponents.len() {
-                return true;
+            if support.len() < local.len() {
+                return Some((i, 0.0));
             }
-            let c = positions[i];
-            let s = support.iter().map(|&j| (positions[j as usize][0] - c[0]).hypot(positions[j as usize][1] - c[1])).fold(0.0, f64::max);
-            let p = DMatrix::from_fn(support.len(), exponents.len(), |r, k| {
-                let x = positions[support[r] as usize];
-                let z = [(x[0] - c[0]) / s, (x[1] - c[1]) / s];
-                z[0].powi(exponents[k].0 as i32) * z[1].powi(exponents[k].1 as i32)
-            });
-            let ratio = rank_ratio(&p);
-            ratio.is_nan() || ratio <= RANK_TOLERANCE
+            let points: Vec<[f64; 2]> = support.iter().map(|&j| positions[j as usize]).collect();
+            let mut p = monomial_matrix(&local, &LocalFrame::new(positions[i], &points).z);
+            let ratio = rank_ratio(&mut p, support.len(), local.len());
+            (ratio.is_nan() || ratio <= RANK_TOLERANCE).then_some((i, ratio))
         })
         .collect()
 }

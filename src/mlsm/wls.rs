@@ -12,7 +12,6 @@
 
 use super::basis::{Basis, LocalBasis, Weight};
 use super::ops::Op;
-use nalgebra::DMatrix;
 
 /// Why a local fit failed.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,10 +37,28 @@ fn pivot_ratio(diag: impl Iterator<Item = f64> + Clone) -> f64 {
     }
 }
 
-/// Smallest relative QR pivot `|R_kk| / max |R_kk|` of `b`: its numerical rank test.
-pub fn rank_ratio(b: &DMatrix<f64>) -> f64 {
-    let r = b.clone().qr().r();
-    pivot_ratio((0..r.nrows().min(r.ncols())).map(|k| r[(k, k)]))
+/// Smallest relative QR pivot `|R_kk| / max |R_kk|` of the column-major `n x m`
+/// matrix `b` (`n >= m`; overwritten by its factorisation): its numerical rank test.
+/// By [`householder_qr`] (faer's blocked QR was no faster at these sizes, nalgebra's
+/// slower: BENCHMARKS.md, "Shapes: the rank test").
+pub fn rank_ratio(b: &mut [f64], n: usize, m: usize) -> f64 {
+    let (mut diag, mut beta) = (vec![0.0; m], vec![0.0; m]);
+    householder_qr(b, n, m, &mut diag, &mut beta);
+    pivot_ratio(diag.iter().copied())
+}
+
+/// The monomials of `local` at the local coordinates `z`: the column-major
+/// `z.len() x m` matrix `P_jk = b_k(z_j)`.
+pub fn monomial_matrix(local: &LocalBasis, z: &[[f64; 2]]) -> Vec<f64> {
+    let (n, m) = (z.len(), local.len());
+    let (mut p, mut row) = (vec![0.0; n * m], vec![0.0; m]);
+    for (j, &zj) in z.iter().enumerate() {
+        local.values(zj, &mut row);
+        for k in 0..m {
+            p[k * n + j] = row[k];
+        }
+    }
+    p
 }
 
 /// Shape functions of `ops` at `centre` for the support `points` (the centre first),
@@ -173,6 +190,7 @@ impl LocalFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::DMatrix;
 
     /// The Householder kernel gives `phi = W (W B)^+T l`, checked against nalgebra's
     /// SVD pseudo-inverse on jittered-lattice supports of 13, 20 and 30 nodes for the monomial

@@ -25,7 +25,7 @@ use crate::exact::ExactSolution;
 use crate::linalg::distributed::agree;
 use crate::linalg::partition::morton_owners;
 use crate::linalg::SolverKind;
-use crate::mlsm::{compute_shapes, degenerate_supports, Approximation, Basis, Op, OpSet, Shapes};
+use crate::mlsm::{compute_shapes, degenerate_supports, Approximation, Basis, Op, OpSet, ShapeError, Shapes};
 use crate::pipeline::{stage, RunError, Stage, StageTimer};
 
 /// Ghost placement and support search.
@@ -123,8 +123,10 @@ impl Discretisation {
                 ops
             };
             let every = only_own(shape_needs(&nodes, &boundary_equations, &ghost, positions.len(), (unknowns, gradient)));
-            let (supports, widened) =
-                widen_degenerate(Supports::nearest_where(&positions, n_support, own), &positions, &params.approximation.basis, &every);
+            let (supports, widened) = agree(
+                widen_degenerate(Supports::nearest_where(&positions, n_support, own), &positions, &params.approximation.basis, &every)
+                    .map_err(RunError::from),
+            )?;
             let now = gradient && (case.dynamics.is_some() || keeps_gradient_shapes(&params.approximation.basis));
             let needs = if now == gradient {
                 every.clone()
@@ -186,7 +188,7 @@ impl Discretisation {
         let positions: Vec<Point> = (0..self.dofs.nodes()).map(|i| self.point(i)).collect();
         let needs = shape_needs(&self.nodes, &self.boundary_equations, &self.ghost, positions.len(), (self.dofs.unknowns(), false));
         let size = approximation.support.min(positions.len());
-        let (supports, _) = widen_degenerate(Supports::nearest(&positions, size), &positions, &approximation.basis, &needs);
+        let (supports, _) = widen_degenerate(Supports::nearest(&positions, size), &positions, &approximation.basis, &needs)?;
         let shapes = compute_shapes(&positions, &supports, approximation, &needs)?;
         let scene_supports = std::mem::replace(&mut self.supports, supports);
         let scene_shapes = std::mem::replace(&mut self.shapes, shapes);
@@ -398,24 +400,36 @@ fn ghosts(
 
 /// RBF-FD only: supports that cannot determine the polynomial part of the basis
 /// (one-sided lattice stencils at high degree) are widened by half, at most three
-/// times; returns the supports and how many were widened. A support still degenerate
-/// after that is reported when its shapes are computed.
-fn widen_degenerate(mut supports: Supports, positions: &[Point], basis: &Basis, needs: &[OpSet]) -> (Supports, usize) {
+/// times; returns the supports and how many were widened, or the first support still
+/// degenerate after that (the shapes of RBF-FD do not test the rank again).
+fn widen_degenerate(mut supports: Supports, positions: &[Point], basis: &Basis, needs: &[OpSet]) -> Result<(Supports, usize), ShapeError> {
     if !matches!(basis, Basis::RbfFd { .. }) {
-        return (supports, 0);
+        return Ok((supports, 0));
     }
     let mut widened = std::collections::BTreeSet::new();
     let mut size = supports.requested();
+    let mut bad = degenerate_supports(positions, &supports, basis, needs);
     for _ in 0..3 {
-        let bad = degenerate_supports(positions, &supports, basis, needs);
         if bad.is_empty() {
             break;
         }
         size += size / 2;
-        supports = supports.widened(positions, &bad, size);
-        widened.extend(bad);
+        let nodes: Vec<usize> = bad.iter().map(|&(i, _)| i).collect();
+        supports = supports.widened(positions, &nodes, size);
+        widened.extend(nodes);
+        bad = degenerate_supports(positions, &supports, basis, needs);
     }
-    (supports, widened.len())
+    match bad.first() {
+        None => Ok((supports, widened.len())),
+        Some(&(node, ratio)) => Err(ShapeError {
+            node,
+            x: positions[node][0],
+            y: positions[node][1],
+            basis_size: basis.size(),
+            support: supports.of(node).len(),
+            ratio,
+        }),
+    }
 }
 
 /// The operators each of the `total` nodes and ghosts needs (module docs); `d1` at
