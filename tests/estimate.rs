@@ -88,8 +88,13 @@ fn near_incompressible_runs_are_warned_with_a_faithful_estimate() {
 }
 
 /// A cantilever of aspect ratio 200 with 5 nodes across the depth: degree-2 least
-/// squares is warned (e_inf(u) 2.6e-2), PHS degree 4 is accurate (3.8e-6) and not
-/// warned; both estimates are within the bands.
+/// squares is warned (e_inf(u) 2.6e-2) with an estimate within the bands. PHS degree 4
+/// is accurate to round-off of its system, which is warned as such: κ₁ ≈ 3.9e12
+/// (`conditioning`, κ₁ ε = 8.6e-4). There both the error and the estimate are
+/// round-off: one-ulp changes in the stencil distances moved e_inf(u) between 7.1e-7,
+/// 1.3e-6 and 3.8e-6 and the estimate between 7.8e-8 and 4.5e-6, so no effectivity
+/// is asserted; both must stay below 1e-5, 2 600 times below degree 2's error (and the
+/// estimate must not warn a run that is this accurate).
 #[test]
 fn a_thin_cantilever_is_accurate_or_warned() {
     let thin = |basis: &str, degree: i64| {
@@ -103,13 +108,21 @@ fn a_thin_cantilever_is_accurate_or_warned() {
             ],
         )
     };
-    for (basis, degree, warned) in [("monomials", 2, true), ("phs", 4, false)] {
+    for (basis, degree) in [("monomials", 2), ("phs", 4)] {
         let mut p = thin(basis, degree);
         p.case.domain = mlsm::domain::Domain::rectangle([0.0, -0.075], [30.0, 0.075]);
         let (sol, checks) = run(&p);
         assert_eq!(sol.nodes.len(), 4005, "801 x 5 grid");
-        effectivities(&format!("thin cantilever {basis} {degree}"), &sol);
-        assert_eq!(checks.warnings.iter().any(|w| w.check == "estimate"), warned, "{basis}: {:?}", checks.warnings);
+        let warned = |check: &str| checks.warnings.iter().any(|w| w.check == check);
+        if degree == 2 {
+            effectivities(&format!("thin cantilever {basis} {degree}"), &sol);
+            assert!(warned("estimate"), "{basis}: {:?}", checks.warnings);
+        } else {
+            let (e, est) = (sol.errors.expect("exact").e_inf_u, sol.estimate.done().expect("estimated").norms.e_inf_u);
+            eprintln!("thin cantilever {basis} {degree}: e_inf(u) {e:.2e}, estimated {est:.2e}");
+            assert!(e < 1e-5 && est < 1e-5, "{basis}: e_inf(u) {e:.2e}, estimated {est:.2e}");
+            assert!(!warned("estimate") && warned("conditioning"), "{basis}: {:?}", checks.warnings);
+        }
     }
 }
 
