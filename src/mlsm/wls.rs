@@ -136,7 +136,7 @@ fn householder_qr(a: &mut [f64], n: usize, m: usize, diag: &mut [f64], beta: &mu
     for j in 0..m {
         let (done, rest) = a.split_at_mut((j + 1) * n);
         let v = &mut done[j * n + j..];
-        let norm = v.iter().map(|t| t * t).sum::<f64>().sqrt();
+        let norm = dot(v, v).sqrt();
         if norm == 0.0 {
             (diag[j], beta[j]) = (0.0, 0.0);
             continue;
@@ -154,10 +154,25 @@ fn householder_qr(a: &mut [f64], n: usize, m: usize, diag: &mut [f64], beta: &mu
 
 /// `x <- (I - beta v v^T) x`.
 fn reflect(v: &[f64], beta: f64, x: &mut [f64]) {
-    let s = beta * v.iter().zip(x.iter()).map(|(a, b)| a * b).sum::<f64>();
+    let s = beta * dot(v, x);
     for (xi, vi) in x.iter_mut().zip(v) {
         *xi -= s * vi;
     }
+}
+
+/// `a . b` with four partial sums, so that the additions need not wait for each other
+/// (a single running sum is a chain of dependent additions the compiler may not
+/// reorder: the rank test of degree-8 stencils was 11 % of a run with it).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut sums = [0.0f64; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = a4.remainder().iter().zip(b4.remainder()).map(|(x, y)| x * y).sum();
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            sums[k] += x[k] * y[k];
+        }
+    }
+    (sums[0] + sums[1]) + (sums[2] + sums[3]) + tail
 }
 
 /// A stencil in local coordinates: `z_j = (x_j - centre) / radius`, `radius` the
