@@ -11,8 +11,14 @@ fn main() -> ExitCode {
     // after which freed vectors of a few MB stay in its heaps: 0.07 GB of the peak at
     // 1e6 nodes (BENCHMARKS.md); the multigrid keeps its cycle's vectors, so the solve
     // does not map and fault in fresh pages at every iteration.
-    // The other two are glibc's defaults, set again because a library may have changed
-    // them before `main`: with the `petsc` feature, SuperLU_DIST's load-time constructor
+    // A thread's heap gives its top back to the system only when more than 2 MB of it
+    // is free: at glibc's 128 kB the small buffers of every RBF-FD stencil (tens of kB
+    // at degree 8) were returned and faulted in again node after node (page faults,
+    // zeroing and TLB shootdowns were 10-15 % of a Kirsch run); the balanced preset on
+    // Kirsch took 2.42 s instead of 3.75-3.79, the 1e6-node cantilever's peak stayed at
+    // 1.93 GB (1.89-1.93 before; BENCHMARKS.md, "Allocator trimming").
+    // M_MMAP_MAX is glibc's default, set again, as M_TRIM_THRESHOLD was, because a
+    // library may have changed them before `main`: with the `petsc` feature, SuperLU_DIST's load-time constructor
     // (linked in by PETSc) sets M_MMAP_MAX = 0 and M_TRIM_THRESHOLD = -1, so that freed
     // memory never went back to the system: the cantilever at 1e6 nodes in one process
     // peaked at 2.31-2.40 GB with the feature against 1.96 GB without, and rank 0 of a
@@ -22,7 +28,7 @@ fn main() -> ExitCode {
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 128 * 1024);
         libc::mallopt(libc::M_MMAP_MAX, 65536);
-        libc::mallopt(libc::M_TRIM_THRESHOLD, 128 * 1024);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 2 * 1024 * 1024);
     }
     // Piping into `head` closes stdout early: end quietly like other command-line
     // tools instead of panicking in println! (Rust ignores SIGPIPE by default).
