@@ -17,8 +17,8 @@ fn main() -> ExitCode {
     // zeroing and TLB shootdowns were 10-15 % of a Kirsch run); the balanced preset on
     // Kirsch took 2.42 s instead of 3.75-3.79, the 1e6-node cantilever's peak stayed at
     // 1.93 GB (1.89-1.93 before; BENCHMARKS.md, "Allocator trimming").
-    // M_MMAP_MAX is glibc's default, set again, as M_TRIM_THRESHOLD was, because a
-    // library may have changed them before `main`: with the `petsc` feature, SuperLU_DIST's load-time constructor
+    // M_MMAP_MAX is glibc's default, set again because a library may have changed it
+    // (and the trim threshold) before `main`: with the `petsc` feature, SuperLU_DIST's load-time constructor
     // (linked in by PETSc) sets M_MMAP_MAX = 0 and M_TRIM_THRESHOLD = -1, so that freed
     // memory never went back to the system: the cantilever at 1e6 nodes in one process
     // peaked at 2.31-2.40 GB with the feature against 1.96 GB without, and rank 0 of a

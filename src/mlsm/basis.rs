@@ -140,6 +140,11 @@ impl LocalBasis {
         self.exponents.len()
     }
 
+    /// The exponents `(a, b)` of its monomials `z1^a z2^b`, in the order of [`LocalBasis::values`].
+    pub fn exponents(&self) -> &[(u32, u32)] {
+        &self.exponents
+    }
+
     /// Whether the basis is empty.
     pub fn is_empty(&self) -> bool {
         self.exponents.is_empty()

@@ -22,7 +22,7 @@
 //!   `1/sqrt(r^2 + c^2)`, with `c` in local units (the scene gives it in units of the
 //!   local spacing).
 
-use super::basis::{monomial_exponents, LocalBasis};
+use super::basis::LocalBasis;
 use super::ops::Op;
 use super::wls::{monomial_matrix, LocalFrame, RankDeficient};
 use super::Basis;
@@ -134,8 +134,8 @@ pub fn shape_functions(
     let n = points.len();
     let LocalFrame { radius: s, nearest: h_p, z, .. } = LocalFrame::new(centre, points);
     let c = radial.shape().map_or(0.0, |shape| shape * h_p / s);
-    let exps = monomial_exponents(&Basis::Monomials { degree });
-    let m = exps.len();
+    let local = LocalBasis::new(&Basis::Monomials { degree });
+    let (exps, m) = (local.exponents(), local.len());
     // The rank of the polynomial part is tested once per support, before the shapes
     // (`shapes::degenerate_supports`, which the discretisation runs on every RBF-FD
     // support): testing it here again was a tenth of a Kirsch run at degree 6 with its
@@ -143,7 +143,7 @@ pub fn shape_functions(
     if n < m {
         return Err(RankDeficient { ratio: 0.0, basis_size: m });
     }
-    let p = monomial_matrix(&LocalBasis::new(&Basis::Monomials { degree }), &z);
+    let p = monomial_matrix(&local, &z);
     let size = n + m;
     // faer's dense LU (blocked, vectorised): about twice as fast as nalgebra's at
     // these sizes (n + m ~ 50; BENCHMARKS.md, "Shapes per node").
