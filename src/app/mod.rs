@@ -8,6 +8,7 @@ mod compare;
 mod convergence;
 mod export;
 mod fields;
+mod preset_trial;
 mod ranks;
 mod run;
 mod series;

@@ -2,6 +2,7 @@
 //! `summary.json` (and the series of a time-dependent run), print a short result.
 
 use super::fields::{navier_fields, pd_fields, write_points_vtu};
+use super::preset_trial::{self, TrialReport};
 use super::series::Series;
 use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::target::{self, TargetReport};
@@ -154,14 +155,30 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
     if let Some(t) = &req.target {
         let (outcome, report) = target::pursue(&p, t, quiet)?;
         target::write_csv(&dir, &report)?;
-        return write_navier_static(&outcome.problem, outcome.solution, staged, t0, &req, Some(&report), term, quiet);
+        let before = Before { target: Some(&report), trial: None };
+        return write_navier_static(&outcome.problem, outcome.solution, staged, t0, &req, before, term, quiet);
+    }
+    let mut trial_report = None;
+    if let Some(trial) = preset_trial::trial_problem(&p, &req.scene, req.export_system.is_some(), req.target.is_some())? {
+        if !quiet {
+            eprintln!("note: the \"fast\" preset is tried first, with its error estimate (a preset's trial)");
+        }
+        let (kept, report) = preset_trial::attempt(&p, trial, term)?;
+        if let Some(k) = kept {
+            let before = Before { target: None, trial: Some(&report) };
+            return write_navier_static(&k.problem, k.solution, staged, t0, &req, before, term, quiet);
+        }
+        trial_report = Some(report);
     }
     let mut series = Series::new(&dir, &p.case.domain);
     let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     // Each branch starts the output stage where its output begins (after the
     // estimate of a peridynamic run, which is timed as its own stage).
     match outcome {
-        Outcome::NavierStatic(sol) => write_navier_static(&p, sol, staged, t0, &req, None, term, quiet)?,
+        Outcome::NavierStatic(sol) => {
+            let before = Before { target: None, trial: trial_report.as_ref() };
+            write_navier_static(&p, sol, staged, t0, &req, before, term, quiet)?
+        }
         Outcome::PdStatic(mut sol) => {
             let n = sol.nodes.free;
             let free = &sol.nodes.positions[..n];
@@ -242,8 +259,17 @@ impl OutputStage {
     }
 }
 
+/// What ran before the solve that is written: the steps of `--target-error`, or a
+/// preset's trial.
+#[derive(Clone, Copy)]
+struct Before<'a> {
+    target: Option<&'a TargetReport>,
+    trial: Option<&'a TrialReport>,
+}
+
 /// Write `solution.vtu` and `summary.json` of a static Navier run (with the history of
-/// `--target-error`), export its system if asked, print its result and checks.
+/// `--target-error` or the preset's trial), export its system if asked, print its
+/// result and checks.
 #[allow(clippy::too_many_arguments)]
 fn write_navier_static(
     p: &Problem,
@@ -251,7 +277,7 @@ fn write_navier_static(
     staged: StagedDir,
     t0: Instant,
     req: &RunRequest,
-    target: Option<&TargetReport>,
+    Before { target, trial }: Before,
     term: &Terminal,
     quiet: bool,
 ) -> Result<(), AppError> {
@@ -260,10 +286,12 @@ fn write_navier_static(
     let mut checks = warnings::navier_static(&sol, &p.navier, &p.case);
     checks.warnings.extend(warnings::memory(p));
     checks.warnings.extend(target.and_then(TargetReport::warning));
+    checks.notes.extend(trial.map(|t| t.reason.clone()));
     write_points_vtu(&dir.join("solution.vtu"), &sol.nodes.positions, &p.case.domain, navier_fields(&p.case, &sol))?;
     output.record(&mut sol.timings);
     let mut summary = NavierSummary::new(p, &sol, &checks, t0);
     summary.target = target;
+    summary.preset_trial = trial;
     let written = publish(staged, &summary)?;
     term.line(OUTPUT, output.seconds(), &written.display().to_string());
     if let (Some(to), Some(system)) = (&req.export_system, &sol.system) {

@@ -120,6 +120,9 @@ pub(super) struct NavierSummary<'a> {
     /// The history of `--target-error`, when it was set.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) target: Option<&'a super::target::TargetReport>,
+    /// The trial run of a `balanced` or `accurate` preset, when one was made.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) preset_trial: Option<&'a super::preset_trial::TrialReport>,
 }
 
 impl<'a> NavierSummary<'a> {
@@ -149,6 +152,7 @@ impl<'a> NavierSummary<'a> {
             checks,
             outputs: p.case.outputs,
             target: None,
+            preset_trial: None,
         }
     }
 }

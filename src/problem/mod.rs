@@ -73,6 +73,8 @@ pub struct Problem {
     pub peridynamics: Option<PdParams>,
     /// Model of `mlsm run`.
     pub model: Model,
+    /// The preset that set the nodes and the approximation, if any.
+    pub preset: Option<preset::Preset>,
     /// What validation changed in the scene's values, to print (e.g. a Poisson ratio
     /// snapped to the value peridynamics represents).
     pub notes: Vec<String>,

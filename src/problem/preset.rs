@@ -4,7 +4,8 @@
 //! shortest rectangle side, disc radius or polygon edge); a graded spacing
 //! (`[nodes.refine]`) is scaled with it. The rules were read off the fronts that
 //! `mlsm tradeoff` measured on the shipped scenes (README, "Trading speed for
-//! accuracy", and BENCHMARKS.md).
+//! accuracy", and BENCHMARKS.md). A `balanced` or `accurate` run first tries `fast`
+//! (`app::preset_trial`).
 
 use super::spec::SceneSpec;
 use crate::choice::{choice, Choice};
@@ -13,9 +14,9 @@ use crate::domain::{Domain, Primitive};
 choice! {
     /// A named trade of speed for accuracy (`preset`).
     pub enum Preset("preset", default None, note "none: the scene's own [nodes] spacing and [approximation]", serde "lowercase") {
-        Fast = "fast" => "RBF-FD PHS r^3 + degree 4, default stencil, spacing L / 6 (L: the smallest feature of the domain) or small enough for 400 nodes; e_inf(sigma) 1e-4 to 3e-2 on the shipped scenes",
-        Balanced = "balanced" => "RBF-FD PHS r^3 + degree 6, default stencil, spacing L / 16 or small enough for 1500 nodes; e_inf(sigma) 1e-7 to 3e-4",
-        Accurate = "accurate" => "RBF-FD PHS r^3 + degree 6, default stencil, spacing L / 32 or small enough for 6000 nodes; e_inf(sigma) 1e-9 to 1e-5",
+        Fast = "fast" => "RBF-FD PHS r^3 + degree 4, default stencil, spacing L / 6 (L: the smallest feature of the domain) or small enough for 300 nodes; e_inf(sigma) 1e-4 to 3e-2 on the shipped scenes",
+        Balanced = "balanced" => "RBF-FD PHS r^3 + degree 6, default stencil, spacing L / 16 or small enough for 1500 nodes; e_inf(sigma) 1e-7 to 3e-4; \"fast\" is tried first and written instead when its estimate is below 1e-7 (a solution the basis reproduces)",
+        Accurate = "accurate" => "RBF-FD PHS r^3 + degree 6, default stencil, spacing L / 32 or small enough for 6000 nodes; e_inf(sigma) 1e-9 to 1e-5; \"fast\" is tried first and written instead when its estimate is below 1e-9",
     }
 }
 
@@ -38,9 +39,31 @@ impl Preset {
     /// The rule of this preset.
     pub fn rule(self) -> Rule {
         match self {
-            Preset::Fast => Rule { basis: "phs", degree: 4, divisions: 6.0, min_nodes: 400.0 },
+            Preset::Fast => Rule { basis: "phs", degree: 4, divisions: 6.0, min_nodes: 300.0 },
             Preset::Balanced => Rule { basis: "phs", degree: 6, divisions: 16.0, min_nodes: 1500.0 },
             Preset::Accurate => Rule { basis: "phs", degree: 6, divisions: 32.0, min_nodes: 6000.0 },
+        }
+    }
+}
+
+impl Preset {
+    /// The band `(floor, ceiling)` of e_inf(sigma) this preset landed in on the shipped
+    /// scenes with non-polynomial exact solutions (README, "Presets").
+    pub fn band(self) -> (f64, f64) {
+        match self {
+            Preset::Fast => (1e-4, 3e-2),
+            Preset::Balanced => (1e-7, 3e-4),
+            Preset::Accurate => (1e-9, 1e-5),
+        }
+    }
+
+    /// The cheaper preset whose run, with its error estimate, is tried first
+    /// (`app::preset_trial`): when its estimate is already below this preset's floor,
+    /// the basis reproduces the solution and more nodes would add only round-off.
+    pub fn trial(self) -> Option<Preset> {
+        match self {
+            Preset::Fast => None,
+            Preset::Balanced | Preset::Accurate => Some(Preset::Fast),
         }
     }
 }

@@ -207,6 +207,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
         navier: NavierParams { fill, approximation, formulation, pressure_stabilisation, solver, multigrid, estimate, keep_system: false },
         peridynamics,
         model,
+        preset,
         notes,
     })
 }
