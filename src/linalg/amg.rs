@@ -26,13 +26,13 @@
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 use super::blocks::Transfer;
 pub use super::csr::product;
-use super::csr::{to_csr, Csr, RowsRef};
+use super::csr::{to_csr, Csr};
+use super::level_operator::LevelOperator;
 use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
-use super::smoother::{gauss_seidel, inverse_diagonal_blocks, Sweep};
+use super::smoother::{inverse_diagonal_blocks, Sweep};
 use super::SparseMatrix;
 use super::{gmres, spgemm, vector_state};
 use nalgebra::DMatrix;
-use rayon::prelude::*;
 
 /// Where the unknowns of a system live, for the near-null space: `per_node`
 /// interleaved unknowns per node (`u, v[, p]`), node `i` at `positions[i]`.
@@ -99,48 +99,6 @@ const GROWTH_CYCLES: usize = 3;
 
 /// Seed of [`Amg::cycle_growth`]'s start vector.
 const GROWTH_SEED: u64 = 12;
-
-/// A level's operator as the cycle applies it, its values in single precision: the
-/// cycle need only be a fixed linear map, and the smoother and residual passes are
-/// memory-bound (an entry in 8 bytes instead of 12). Measured with the block-stored
-/// transfers (BENCHMARKS.md, "Single-precision cycle"): the cantilever at 1e6 nodes
-/// iterates in 0.91x the time; a low-order operator that only preconditions is held
-/// once, in single precision (Kirsch at 3e5 nodes: peak 1.21 -> 1.10 GB).
-#[derive(Debug)]
-enum LevelOperator {
-    /// The level's operator rounded to single precision.
-    Single(Csr<f32>),
-    /// The system's rows ([`Finest::System`]) and their values rounded to single
-    /// precision, which share the rows' structure.
-    System { rows: Csr, single: Vec<f32> },
-}
-
-impl LevelOperator {
-    fn new(a: Csr, keep: Finest) -> Self {
-        match keep {
-            Finest::System => {
-                let single = a.values().par_iter().with_min_len(4096).map(|&v| v as f32).collect();
-                LevelOperator::System { rows: a, single }
-            }
-            Finest::PreconditionerOnly => LevelOperator::Single(a.into_single()),
-        }
-    }
-
-    /// The operator the cycle applies.
-    fn cycle(&self) -> RowsRef<'_, f32> {
-        match self {
-            LevelOperator::Single(a) => a.into(),
-            LevelOperator::System { rows, single } => rows.with_values(single),
-        }
-    }
-
-    fn nnz(&self) -> usize {
-        match self {
-            LevelOperator::Single(a) => a.nnz(),
-            LevelOperator::System { rows, .. } => rows.nnz(),
-        }
-    }
-}
 
 /// One level: its operator, the inverses of its diagonal blocks, and the transfers to
 /// the next coarser level.
@@ -282,7 +240,7 @@ impl Amg {
             drop(d);
             let coarse = spgemm::triple_product(&r, &current, &p);
             let (p, r) = (Transfer::new(p, (1, k)), Transfer::new(r, (k, 1)));
-            let a = LevelOperator::new(current, if levels.is_empty() { keep } else { Finest::PreconditionerOnly });
+            let a = LevelOperator::new(current, if levels.is_empty() { keep } else { Finest::PreconditionerOnly }, blocks);
             levels.push(Level { a, blocks, inv_diag, p, r });
             sizes.push(coarse.nrows());
             current = coarse;
@@ -318,8 +276,7 @@ impl Amg {
     /// hierarchy was built with [`Finest::System`].
     pub fn fine_operator(&self) -> Option<&Csr> {
         match self.levels.first() {
-            Some(Level { a: LevelOperator::System { rows, .. }, .. }) => Some(rows),
-            Some(_) => None,
+            Some(level) => level.a.system_rows(),
             None => self.single.as_ref(),
         }
     }
@@ -329,8 +286,7 @@ impl Amg {
     /// another method).
     pub fn into_fine_operator(self) -> Option<Csr> {
         match self.levels.into_iter().next() {
-            Some(Level { a: LevelOperator::System { rows, .. }, .. }) => Some(rows),
-            Some(_) => None,
+            Some(level) => level.a.into_system_rows(),
             None => self.single,
         }
     }
@@ -362,7 +318,7 @@ impl Amg {
                 break;
             }
             e.iter_mut().for_each(|v| *v /= before);
-            product(level.a.cycle(), &e, &mut ae);
+            level.a.product(&e, &mut ae);
             self.solve_into(&ae, &mut z);
             e.iter_mut().zip(&z).for_each(|(e, z)| *e -= z);
             growth = super::norm2(&e);
@@ -400,7 +356,7 @@ impl Amg {
         z.fill(0.0);
         level.gauss_seidel(f, z, Sweep::ForwardFromZero, copies);
         level.gauss_seidel(f, z, Sweep::Backward, copies);
-        product(level.a.cycle(), z, r);
+        level.a.product(z, r);
         r.iter_mut().zip(f).for_each(|(r, f)| *r = f - *r);
         level.r.product(r, fc);
         self.cycle(l + 1, fc, zc, coarser);
@@ -414,7 +370,7 @@ impl Amg {
 impl Level {
     /// One block Gauss–Seidel sweep of this level ([`gauss_seidel`]).
     fn gauss_seidel(&self, f: &[f64], z: &mut [f64], direction: Sweep, copies: &mut Vec<Vec<f64>>) {
-        gauss_seidel(self.a.cycle(), self.blocks, &self.inv_diag, f, z, direction, copies);
+        self.a.gauss_seidel((self.blocks, &self.inv_diag), f, z, direction, copies);
     }
 }
 

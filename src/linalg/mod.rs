@@ -32,6 +32,7 @@ pub mod csr;
 pub mod distributed;
 pub mod gmres;
 pub mod ilut;
+mod level_operator;
 pub mod lu;
 mod methods;
 pub mod near_null;

@@ -2,6 +2,7 @@
 //! blocks of a level, with the (pseudo-)inverses of its diagonal blocks.
 
 use super::aggregation::Blocks;
+use super::blocks::BlockRows;
 use super::csr::{row_dot, Csr, RowsRef, Value};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -101,8 +102,8 @@ pub(super) enum Sweep {
 /// array without testing where a column lies (the test was 40 % of the sweep's
 /// samples); the first range is swept in the iterate itself, which no other range
 /// writes, and the other ranges are then copied back.
-pub(super) fn gauss_seidel<'a, V: Value>(
-    a: impl Into<RowsRef<'a, V>>,
+pub(super) fn gauss_seidel<A: NodeResidual>(
+    a: A,
     blocks: Blocks,
     inv_diag: &[f64],
     f: &[f64],
@@ -110,7 +111,6 @@ pub(super) fn gauss_seidel<'a, V: Value>(
     direction: Sweep,
     copies: &mut Vec<Vec<f64>>,
 ) {
-    let a = a.into();
     let nodes = blocks.nodes;
     let parts = if nodes >= PARALLEL_SWEEP_NODES { rayon::current_num_threads().max(1) } else { 1 };
     if parts == 1 {
@@ -138,10 +138,50 @@ pub(super) fn gauss_seidel<'a, V: Value>(
     });
 }
 
+/// What a Gauss–Seidel sweep reads of an operator: the residual of one node's rows.
+pub(super) trait NodeResidual: Copy + Send + Sync {
+    /// `s_m = f_{bI+m} − (A x)_{bI+m}` for the `b` unknowns of node `I`; with
+    /// `lower`, only the columns of the nodes before `I` count (a forward sweep from a
+    /// zero iterate reads the others as zeros).
+    fn node_residual(&self, node: usize, b: usize, f: &[f64], x: &[f64], lower: bool, s: &mut [f64]);
+}
+
+impl<V: Value> NodeResidual for RowsRef<'_, V> {
+    fn node_residual(&self, node: usize, b: usize, f: &[f64], x: &[f64], lower: bool, s: &mut [f64]) {
+        let (ptr, idx, val) = self.parts();
+        for (m, sm) in s.iter_mut().enumerate().take(b) {
+            let row = node * b + m;
+            let mut entries = ptr[row]..ptr[row + 1];
+            if lower {
+                entries.end = entries.start + idx[entries.clone()].partition_point(|&c| (c as usize) < node * b);
+            }
+            *sm = f[row] - row_dot(&idx[entries.clone()], &val[entries], x);
+        }
+    }
+}
+
+impl<V: Value> NodeResidual for &Csr<V> {
+    fn node_residual(&self, node: usize, b: usize, f: &[f64], x: &[f64], lower: bool, s: &mut [f64]) {
+        RowsRef::from(*self).node_residual(node, b, f, x, lower, s);
+    }
+}
+
+/// Square node blocks ([`BlockRows::square`]); the 2 x 2 blocks of a displacement
+/// system with the block size known to the compiler.
+impl NodeResidual for &BlockRows {
+    fn node_residual(&self, node: usize, b: usize, f: &[f64], x: &[f64], lower: bool, s: &mut [f64]) {
+        match b {
+            2 => BlockRows::node_residual::<2>(self, node, f, x, lower, s),
+            3 => BlockRows::node_residual::<3>(self, node, f, x, lower, s),
+            _ => unreachable!("square blocks of 2 or 3 unknowns per node"),
+        }
+    }
+}
+
 /// One Gauss–Seidel sweep over the nodes of `range` of the iterate `x`, in the order
 /// of `direction`: `x_I += D_I⁺ (f − A x)_I`.
-fn sweep<V: Value>(
-    a: RowsRef<V>,
+fn sweep<A: NodeResidual>(
+    a: A,
     blocks: Blocks,
     inv_diag: &[f64],
     f: &[f64],
@@ -150,18 +190,10 @@ fn sweep<V: Value>(
     direction: Sweep,
 ) {
     let b = blocks.block;
-    let (ptr, idx, val) = a.parts();
+    let lower = direction == Sweep::ForwardFromZero;
     let mut s = [0.0f64; MAX_BLOCK];
     let mut update = |node: usize| {
-        for (m, sm) in s.iter_mut().enumerate().take(b) {
-            let row = node * b + m;
-            let mut entries = ptr[row]..ptr[row + 1];
-            if direction == Sweep::ForwardFromZero {
-                entries.end = entries.start + idx[entries.clone()].partition_point(|&c| (c as usize) < node * b);
-            }
-            let sum = row_dot(&idx[entries.clone()], &val[entries], x);
-            *sm = f[row] - sum;
-        }
+        a.node_residual(node, b, f, x, lower, &mut s);
         let inv = &inv_diag[node * b * b..(node + 1) * b * b];
         for m in 0..b {
             x[node * b + m] += (0..b).map(|c| inv[m * b + c] * s[c]).sum::<f64>();
@@ -224,6 +256,32 @@ mod tests {
             let worst = full.iter().zip(&lower).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
             assert!(worst <= 1e-14 * full.iter().fold(0.0f64, |m, x| m.max(x.abs())), "{nodes} nodes: {worst:e}");
             assert!(full.iter().any(|&x| x != 0.0));
+        }
+    }
+
+    /// The sweeps read node blocks ([`BlockRows::square`]) as they read rows: the same
+    /// iterate to round-off (the sums are grouped differently) in each direction, on
+    /// one range and on one range per thread, with some nodes' rows reduced to their
+    /// diagonal (Dirichlet rows: their blocks store zeros).
+    #[test]
+    fn sweeps_on_node_blocks_equal_sweeps_on_rows() {
+        for nodes in [50, 2 * PARALLEL_SWEEP_NODES] {
+            let entries: Vec<_> = banded(nodes).entries().filter(|&(i, j, _)| (i / 2) % 7 != 3 || i == j).collect();
+            let a = Csr::from_triplets(2 * nodes, 2 * nodes, &entries);
+            let blocks = Blocks { block: 2, nodes };
+            let inv = inverse_diagonal_blocks(&a, blocks);
+            let square = BlockRows::square(&a, 2).expect("few zeros");
+            let single = a.clone().into_single();
+            let f: Vec<f64> = (0..2 * nodes).map(|k| ((k * 7919) % 13) as f64 - 6.0).collect();
+            let mut copies = Vec::new();
+            let (mut rows, mut by_blocks) = (vec![0.0; 2 * nodes], vec![0.0; 2 * nodes]);
+            for direction in [Sweep::ForwardFromZero, Sweep::Backward, Sweep::Forward] {
+                gauss_seidel(RowsRef::from(&single), blocks, &inv, &f, &mut rows, direction, &mut copies);
+                gauss_seidel(&square, blocks, &inv, &f, &mut by_blocks, direction, &mut copies);
+                let worst = rows.iter().zip(&by_blocks).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+                let scale = rows.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                assert!(worst <= 1e-13 * scale && scale > 0.0, "{nodes} nodes, {direction:?}: {worst:e} of {scale:e}");
+            }
         }
     }
 }
