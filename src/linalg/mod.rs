@@ -319,6 +319,7 @@ pub(crate) fn solve_with_memory(
                         SolverKind::Bicgstab { preconditioner, .. } => format!("BiCGSTAB+{}", preconditioner.display_name()),
                         other => other.label(),
                     };
+                    let e = e.without_hint();
                     let why = format!("{}; {e}; retried with {retry_method}", start.choice.clone().unwrap_or_default());
                     let columns = leftover.into_columns();
                     let retry = Start { method: retry_kind.label(), choice: Some(why), setup: Instant::now(), ..start };

@@ -79,10 +79,11 @@ pub enum SolveError {
     /// relative residual of the solved (equilibrated) system at the last iterate.
     #[error(
         "{method} did not converge in {iterations} iterations ({restarts} restarts), stopped by {limit}: \
-         true relative residual {relative_residual:.1e} (tolerance {tolerance:e}); {hint}"
+         true relative residual {relative_residual:.1e} (tolerance {tolerance:e}){}",
+        hint_suffix(.hint)
     )]
     NoConvergence {
-        /// What to try next.
+        /// What to try next (empty: nothing, `auto` tries it itself).
         hint: &'static str,
         /// Iterations performed (the budget, unless the restart limit was hit
         /// first).
@@ -147,7 +148,31 @@ pub enum SolveError {
     },
 }
 
+/// `"; hint"`, or nothing for an empty hint.
+fn hint_suffix(hint: &str) -> String {
+    if hint.is_empty() {
+        String::new()
+    } else {
+        format!("; {hint}")
+    }
+}
+
 impl SolveError {
+    /// This failure without its advice on what to try next: `auto`, which retries
+    /// with another method itself, reports the first failure so (its advice, "try
+    /// lu", would name the retry it already made).
+    pub(super) fn without_hint(self) -> SolveError {
+        match self {
+            SolveError::NoConvergence { iterations, restarts, limit, relative_residual, method, tolerance, .. } => {
+                SolveError::NoConvergence { hint: "", iterations, restarts, limit, relative_residual, method, tolerance }
+            }
+            SolveError::UnstableMultigrid { failure, growth } => {
+                SolveError::UnstableMultigrid { failure: Box::new(failure.without_hint()), growth }
+            }
+            other => other,
+        }
+    }
+
     /// This failure with the multigrid's measured instability as its cause
     /// ([`SolveError::UnstableMultigrid`]) when `multigrid`'s V-cycle amplifies an error
     /// ([`super::amg::Amg::cycle_growth`] above 1); as it stands when the cycle
