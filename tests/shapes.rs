@@ -141,3 +141,28 @@ fn collinear_support_is_reported_not_nan() {
     let r = shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, pts[0], &pts, &[Op::Dxx], &mut phi);
     assert!(r.is_err());
 }
+
+/// RBF-FD solves reuse one thread's buffers from stencil to stencil (`mlsm::rbffd`):
+/// a stencil's weights are the same, to the bit, whatever the thread solved before it:
+/// another stencil of the same size (its factors left in the buffer), and stencils of
+/// other sizes and degrees.
+#[test]
+fn rbf_fd_weights_do_not_depend_on_the_stencils_solved_before() {
+    let ring =
+        |twist: f64| -> Vec<(f64, f64)> { (1..80).map(|k| (1.0 + 0.37 * (k % 7) as f64 + 0.05 * k as f64, twist * k as f64)).collect() };
+    let ops = [Op::Dx, Op::Dy, Op::Dxx, Op::Dxy, Op::Dyy];
+    let weights = |degree: u32, n: usize, twist: f64| {
+        let pts = support([0.5, -0.25], 0.1, &ring(twist)[..n - 1]);
+        let mut w = vec![0.0; ops.len() * n];
+        let basis = Basis::RbfFd { radial: Radial::Phs { order: 3 }, degree };
+        shape_functions(&basis, &Weight::None, [0.5, -0.25], &pts, &ops, &mut w).unwrap();
+        w
+    };
+    let first = weights(4, 30, 2.399);
+    let other = weights(4, 30, 1.1);
+    assert_ne!(other, first, "a different stencil of the same size");
+    assert_eq!(weights(4, 30, 2.399), first);
+    let _ = weights(2, 12, 1.1);
+    let _ = weights(6, 56, 1.1);
+    assert_eq!(weights(4, 30, 2.399), first);
+}

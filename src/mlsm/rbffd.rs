@@ -145,60 +145,126 @@ pub fn shape_functions(
     }
     let p = monomial_matrix(&local, &z);
     let size = n + m;
-    // faer's dense LU (blocked, vectorised): about twice as fast as nalgebra's at
-    // these sizes (n + m ~ 50; BENCHMARKS.md, "Shapes per node").
-    let mut sys = faer::Mat::<f64>::zeros(size, size);
-    for i in 0..n {
-        // A is symmetric: evaluate each pair once. The local coordinates are within the
-        // unit disc, so `sqrt` needs none of `hypot`'s guards against overflow (which
-        // made it 11 % of a Kirsch run with its estimate).
-        for j in 0..i {
-            let (dx, dy) = (z[i][0] - z[j][0], z[i][1] - z[j][1]);
-            let v = radial.profile((dx * dx + dy * dy).sqrt(), c).0;
-            sys[(i, j)] = v;
-            sys[(j, i)] = v;
+    SCRATCH.with_borrow_mut(|scratch| {
+        let Scratch { sys, rhs, perm, perm_inv, buffer } = scratch.get_or_insert_with(|| Scratch {
+            sys: faer::Mat::new(),
+            rhs: faer::Mat::new(),
+            perm: Vec::new(),
+            perm_inv: Vec::new(),
+            buffer: None,
+        });
+        if sys.nrows() != size {
+            *sys = faer::Mat::zeros(size, size);
         }
-        sys[(i, i)] = radial.profile(0.0, c).0;
-        for k in 0..m {
-            sys[(i, n + k)] = p[k * n + i];
-            sys[(n + k, i)] = p[k * n + i];
-        }
-    }
-    let fact = |k: u32| (1..=k).product::<u32>() as f64;
-    let mut rhs = faer::Mat::<f64>::zeros(size, ops.len());
-    for (col, &op) in ops.iter().enumerate() {
-        for j in 0..n {
-            rhs[(j, col)] = radial.operator_at_centre(op, z[j], c);
-        }
-        let target = op.multi_index();
-        for (k, &(a, b)) in exps.iter().enumerate() {
-            rhs[(n + k, col)] = if (a, b) == target { fact(a) * fact(b) } else { 0.0 };
-        }
-    }
-    let norm = |m: &faer::Mat<f64>| {
-        let mut a = 0.0f64;
-        for j in 0..m.ncols() {
-            for v in m.col(j).iter() {
-                a = a.max(v.abs());
+        for i in 0..n {
+            // A is symmetric: evaluate each pair once. The local coordinates are within
+            // the unit disc, so `sqrt` needs none of `hypot`'s guards against overflow
+            // (which made it 11 % of a Kirsch run with its estimate).
+            for j in 0..i {
+                let (dx, dy) = (z[i][0] - z[j][0], z[i][1] - z[j][1]);
+                let v = radial.profile((dx * dx + dy * dy).sqrt(), c).0;
+                sys[(i, j)] = v;
+                sys[(j, i)] = v;
+            }
+            sys[(i, i)] = radial.profile(0.0, c).0;
+            for k in 0..m {
+                sys[(i, n + k)] = p[k * n + i];
+                sys[(n + k, i)] = p[k * n + i];
             }
         }
-        a
-    };
-    let w = faer::linalg::solvers::Solve::solve(&sys.partial_piv_lu(), &rhs);
-    crate::linalg::vector_state::clear_upper_halves();
-    let amplification = if (0..w.ncols()).all(|j| w.col(j).iter().all(|v| v.is_finite())) {
-        norm(&w) * norm(&sys) / norm(&rhs).max(f64::MIN_POSITIVE)
-    } else {
-        f64::INFINITY
-    };
-    if amplification > AMPLIFICATION_LIMIT {
-        return Err(RankDeficient { ratio: 1.0 / amplification, basis_size: m });
+        // The block of the polynomial part is zero (the buffer holds the last factors).
+        for j in n..size {
+            for i in n..size {
+                sys[(i, j)] = 0.0;
+            }
+        }
+        let fact = |k: u32| (1..=k).product::<u32>() as f64;
+        if (rhs.nrows(), rhs.ncols()) != (size, ops.len()) {
+            *rhs = faer::Mat::zeros(size, ops.len());
+        }
+        for (col, &op) in ops.iter().enumerate() {
+            for j in 0..n {
+                rhs[(j, col)] = radial.operator_at_centre(op, z[j], c);
+            }
+            let target = op.multi_index();
+            for (k, &(a, b)) in exps.iter().enumerate() {
+                rhs[(n + k, col)] = if (a, b) == target { fact(a) * fact(b) } else { 0.0 };
+            }
+        }
+        let (norm_sys, norm_rhs) = (max_abs(sys), max_abs(rhs));
+        solve_in_place(sys, rhs, (perm, perm_inv), buffer);
+        crate::linalg::vector_state::clear_upper_halves();
+        let w = &*rhs;
+        let amplification = if (0..w.ncols()).all(|j| w.col(j).iter().all(|v| v.is_finite())) {
+            max_abs(w) * norm_sys / norm_rhs.max(f64::MIN_POSITIVE)
+        } else {
+            f64::INFINITY
+        };
+        if amplification > AMPLIFICATION_LIMIT {
+            return Err(RankDeficient { ratio: 1.0 / amplification, basis_size: m });
+        }
+        for (col, &op) in ops.iter().enumerate() {
+            let scale = s.powi(-op.order());
+            for j in 0..n {
+                out[col * n + j] = w[(j, col)] * scale;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// The buffers of one thread's stencil solves, kept from node to node: faer's
+/// `partial_piv_lu` copied the saddle matrix and split its factors into two more, and
+/// at degree 8 (the error estimate's reference of degree-6 runs: 135 unknowns, 146 kB
+/// a matrix) each of those blocks was mapped and unmapped again at every node
+/// (glibc's mmap threshold of 128 kB, set in `main`; BENCHMARKS.md, "Stencil buffers
+/// kept per thread").
+struct Scratch {
+    sys: faer::Mat<f64>,
+    rhs: faer::Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    buffer: Option<(usize, usize, faer::dyn_stack::MemBuffer)>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Option<Scratch>> = const { std::cell::RefCell::new(None) };
+}
+
+/// `rhs <- sys⁻¹ rhs` by faer's LU with partial pivoting factored in place in `sys`
+/// (one thread: the nodes are the parallel loop), `buffer` its workspace for this
+/// size.
+fn solve_in_place(
+    sys: &mut faer::Mat<f64>,
+    rhs: &mut faer::Mat<f64>,
+    (perm, perm_inv): (&mut Vec<usize>, &mut Vec<usize>),
+    buffer: &mut Option<(usize, usize, faer::dyn_stack::MemBuffer)>,
+) {
+    use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+    use faer::linalg::lu::partial_pivoting::{factor, solve};
+    let (size, k, par) = (sys.nrows(), rhs.ncols(), faer::Par::Seq);
+    perm.resize(size, 0);
+    perm_inv.resize(size, 0);
+    if !matches!(buffer, Some((s, c, _)) if (*s, *c) == (size, k)) {
+        let req = StackReq::any_of(&[
+            factor::lu_in_place_scratch::<usize, f64>(size, size, par, Default::default()),
+            solve::solve_in_place_scratch::<usize, f64>(size, k, par),
+        ]);
+        *buffer = Some((size, k, MemBuffer::new(req)));
     }
-    for (col, &op) in ops.iter().enumerate() {
-        let scale = s.powi(-op.order());
-        for j in 0..n {
-            out[col * n + j] = w[(j, col)] * scale;
+    let stack = MemStack::new(&mut buffer.as_mut().expect("made above").2);
+    let (_, row_perm) = factor::lu_in_place(sys.as_mut(), perm, perm_inv, par, stack, Default::default());
+    // The factors are packed in `sys`: the unit lower triangle is L, the upper U.
+    solve::solve_in_place(sys.as_ref(), sys.as_ref(), row_perm, rhs.as_mut(), par, stack);
+}
+
+/// Largest `|a_ij|`.
+fn max_abs(a: &faer::Mat<f64>) -> f64 {
+    let mut largest = 0.0f64;
+    for j in 0..a.ncols() {
+        for v in a.col(j).iter() {
+            largest = largest.max(v.abs());
         }
     }
-    Ok(())
+    largest
 }
