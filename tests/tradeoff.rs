@@ -199,6 +199,23 @@ fn a_preset_keeps_its_fast_trial_only_below_its_floor() {
     assert!(accurate["errors"]["e_inf_sigma"].as_f64().unwrap() <= Preset::Accurate.band().0, "{}", accurate["errors"]);
     assert!(accurate["notes"].as_array().unwrap().iter().any(|n| n.as_str().unwrap().contains("reproduces")), "{}", accurate["notes"]);
 
+    // A preset named in the scene file is tried the same way; a spacing given on the
+    // command line is the user's, and no trial replaces it.
+    let scene = dir.path().join("c.toml");
+    std::fs::write(&scene, format!("preset = \"accurate\"\n{}", std::fs::read_to_string(problem("cantilever")).unwrap())).unwrap();
+    for (extra, trial) in [(&[][..], true), (&["--spacing", "0.5"][..], false)] {
+        let out = dir.path().join(format!("file_{trial}"));
+        let mut args = vec!["run", scene.to_str().unwrap(), "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let o = mlsm(&args, &[]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let summary = read_json(&out.join("summary.json"));
+        assert_eq!(summary.get("preset_trial").is_some(), trial, "{extra:?}");
+        if !trial {
+            assert_eq!(summary["nodes"], 61 * 11, "the spacing asked for");
+        }
+    }
+
     let balanced = run("lame", "balanced");
     let trial = &balanced["preset_trial"];
     assert_eq!(trial["kept"], false, "{trial}");

@@ -10,6 +10,7 @@
 //! grows with the node count); on scenes with non-polynomial solutions the trial adds
 //! the `fast` run and its estimate to the preset's time.
 
+use super::run::RunRequest;
 use super::AppError;
 use crate::choice::Choice;
 use crate::navier::{self, EstimateMethod};
@@ -17,7 +18,6 @@ use crate::pipeline::Progress;
 use crate::problem::preset::Preset;
 use crate::problem::{Model, Problem};
 use serde::Serialize;
-use std::path::Path;
 use std::time::Instant;
 
 /// `summary.json`'s `preset_trial`: what was tried and whether it was kept.
@@ -49,20 +49,18 @@ pub(super) struct Kept {
 }
 
 /// The trial problem of `p` when its preset has one: the scene read again with the
-/// trial's preset and the error estimate on; none for a scene without a preset or
-/// with `fast`, a run that exports its system or pursues an error target (the loop
-/// refines from the preset's nodes), or a PETSc solve.
-pub(super) fn trial_problem(p: &Problem, scene: &Path, exporting: bool, targeted: bool) -> Result<Option<Problem>, AppError> {
+/// trial's preset and the error estimate on. None for a scene without a preset or
+/// with `fast`, and for a run that sets its own spacing (`--spacing` on a scene whose
+/// file names a preset), exports its system, pursues an error target (the loop
+/// refines from the preset's nodes) or solves with PETSc.
+pub(super) fn trial_problem(p: &Problem, req: &RunRequest) -> Result<Option<Problem>, AppError> {
     let Some(trial) = p.preset.and_then(Preset::trial) else { return Ok(None) };
-    if p.model != Model::Navier
-        || p.case.dynamics.is_some()
-        || exporting
-        || targeted
-        || p.navier.solver.kind.method() == crate::linalg::SolverMethod::Petsc
-    {
+    let asked_otherwise = req.spacing.is_some() || req.export_system.is_some() || req.target.is_some();
+    let petsc = p.navier.solver.kind.method() == crate::linalg::SolverMethod::Petsc;
+    if p.model != Model::Navier || p.case.dynamics.is_some() || asked_otherwise || petsc {
         return Ok(None);
     }
-    let mut t = Problem::from_file_with_preset(scene, Some(trial))?;
+    let mut t = Problem::from_file_with_preset(&req.scene, Some(trial))?;
     t.model = Model::Navier;
     if !t.navier.estimate.method.static_navier_estimates() {
         t.navier.estimate.method = EstimateMethod::HigherDegree;

@@ -159,7 +159,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         return write_navier_static(&outcome.problem, outcome.solution, staged, t0, &req, before, term, quiet);
     }
     let mut trial_report = None;
-    if let Some(trial) = preset_trial::trial_problem(&p, &req.scene, req.export_system.is_some(), req.target.is_some())? {
+    if let Some(trial) = preset_trial::trial_problem(&p, &req)? {
         if !quiet {
             eprintln!("note: the \"fast\" preset is tried first, with its error estimate (a preset's trial)");
         }
