@@ -161,7 +161,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
     let mut trial_report = None;
     if let Some(trial) = preset_trial::trial_problem(&p, &req)? {
         if !quiet {
-            eprintln!("note: the \"fast\" preset is tried first, with its error estimate (a preset's trial)");
+            let name = trial.preset.map_or("?", |t| t.name());
+            eprintln!("note: the \"{name}\" preset is tried first, with its error estimate (a preset's trial)");
         }
         let (kept, report) = preset_trial::attempt(&p, trial, term)?;
         if let Some(k) = kept {

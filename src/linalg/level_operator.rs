@@ -28,9 +28,9 @@ pub(super) enum LevelOperator {
     /// The system's rows ([`Finest::System`]) and their values rounded to single
     /// precision, which share the rows' structure.
     System { rows: Csr, single: Vec<f32> },
-    /// In square node blocks in single precision; with the system's rows in double
-    /// precision when they are kept ([`Finest::System`]).
-    Blocks { rows: Option<Csr>, blocks: BlockRows },
+    /// In square node blocks in single precision (an operator that only
+    /// preconditions).
+    Blocks(BlockRows),
 }
 
 impl LevelOperator {
@@ -44,7 +44,7 @@ impl LevelOperator {
     pub(super) fn new(a: Csr, keep: Finest, blocks: Blocks) -> Self {
         if blocks.block == 2 && keep == Finest::PreconditionerOnly {
             if let Some(b) = BlockRows::square(&a, 2) {
-                return LevelOperator::Blocks { rows: None, blocks: b };
+                return LevelOperator::Blocks(b);
             }
         }
         match keep {
@@ -61,7 +61,7 @@ impl LevelOperator {
         match self {
             LevelOperator::Single(a) => product(a, x, y),
             LevelOperator::System { rows, single } => product(rows.with_values(single), x, y),
-            LevelOperator::Blocks { blocks, .. } => blocks.product(x, y),
+            LevelOperator::Blocks(b) => b.product(x, y),
         }
     }
 
@@ -72,7 +72,7 @@ impl LevelOperator {
         match self {
             LevelOperator::Single(a) => gauss_seidel(RowsRef::from(a), blocks, inv, f, z, direction, copies),
             LevelOperator::System { rows, single } => gauss_seidel(rows.with_values(single), blocks, inv, f, z, direction, copies),
-            LevelOperator::Blocks { blocks: b, .. } => gauss_seidel(b, blocks, inv, f, z, direction, copies),
+            LevelOperator::Blocks(b) => gauss_seidel(b, blocks, inv, f, z, direction, copies),
         }
     }
 
@@ -81,14 +81,14 @@ impl LevelOperator {
         match self {
             LevelOperator::Single(a) => a.nnz(),
             LevelOperator::System { rows, .. } => rows.nnz(),
-            LevelOperator::Blocks { blocks, .. } => blocks.nnz(),
+            LevelOperator::Blocks(b) => b.nnz(),
         }
     }
 
     /// The system's rows in double precision, when kept.
     pub(super) fn system_rows(&self) -> Option<&Csr> {
         match self {
-            LevelOperator::System { rows, .. } | LevelOperator::Blocks { rows: Some(rows), .. } => Some(rows),
+            LevelOperator::System { rows, .. } => Some(rows),
             _ => None,
         }
     }
@@ -96,7 +96,7 @@ impl LevelOperator {
     /// [`LevelOperator::system_rows`], the rest dropped.
     pub(super) fn into_system_rows(self) -> Option<Csr> {
         match self {
-            LevelOperator::System { rows, .. } | LevelOperator::Blocks { rows: Some(rows), .. } => Some(rows),
+            LevelOperator::System { rows, .. } => Some(rows),
             _ => None,
         }
     }
