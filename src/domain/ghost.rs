@@ -15,7 +15,8 @@
 //!   corner given as ghost-free, where the stress is singular: there the
 //!   extrapolation across the boundary is wrong by O(1) however fine the nodes (the
 //!   caller leaves out the corners whose spurious load the sector balance of
-//!   `navier::sector` takes, for RBF-FD, which needs its ghosts).
+//!   `navier::sector` takes: there the ghost-free edges were worse than the ghosts,
+//!   for RBF-FD and for least squares).
 //!
 //! Measured on the L bracket without holes (base clamped, tip shear, grid), tip
 //! deflection against a P2 finite-element reference of -4.894e-4 m

@@ -379,11 +379,11 @@ fn ghosts(
     } else {
         Vec::new()
     };
-    // Ghost-free around re-entrant corners (`domain::ghost`), except, for RBF-FD, where
-    // the sector balance of a static in-process solve takes the corner's spurious load
-    // (`super::sector`; dynamics assembles without it).
+    // Ghost-free around re-entrant corners (`domain::ghost`), except where the sector
+    // balance of a static in-process solve takes the corner's spurious load
+    // (`super::sector`; dynamics assembles without it, PETSc's rows have no border).
     let mut ghost_free = domain::corner::reentrant_corners(&case.domain, nodes);
-    if rbf_fd && !distributed && case.dynamics.is_none() {
+    if !distributed && case.dynamics.is_none() {
         let balanced = survey.balanced_corners();
         ghost_free.retain(|c| !balanced.contains(c));
     }

@@ -27,10 +27,13 @@
 //! zero pivot there, and BiCGSTAB + ILUT failed on the bracket. The bordered matrix
 //! also has 7 % fewer entries: the elimination filled the injected rows.)
 //!
-//! With RBF-FD the boundary nodes near a balanced corner keep their ghosts
-//! (`domain::ghost`, `navier::discrete`): without them its one-sided 30-node traction
-//! stencils made a spurious load of their own outside the sector (the L's tip
-//! -9.0e-4 m at 1 mm against -4.84e-4 m with them; finite elements -4.894e-4).
+//! The boundary nodes near a balanced corner keep their ghosts (`domain::ghost`,
+//! `navier::discrete`). Without them RBF-FD's one-sided 30-node traction stencils
+//! made a spurious load of their own outside the sector (the L's tip -9.0e-4 m at
+//! 1 mm against -4.84e-4 m with them; finite elements -4.894e-4), and least squares
+//! one at some spacings and node sets (the scattered bracket's tip 182 % off at
+//! 1.5 mm, 46 % at 3 mm; with the ghosts 1.9 % and 3.8 %), where the multigrid's
+//! block Gauss-Seidel also diverged next to the ghost-free edges.
 //!
 //! Applied when both edges at the corner are traction-free, there is no body force,
 //! and the unknowns are displacements; the radius is [`SECTOR_SPACINGS`] local
