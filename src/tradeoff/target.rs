@@ -10,11 +10,13 @@
 //! * `local` (default, scattered fills): every node asks for
 //!   `h_i (SAFETY tau / eta_i)^(1/q)` (clamped to `[1/4, 1]`), graded so that the
 //!   spacing grows at most [`GROWTH`] per unit of distance; the nodes next to a
-//!   singular corner (re-entrant, or clamped meeting traction) take the smallest
-//!   factor of any node: the estimate's reference is about as wrong as the run there,
-//!   so the indicator cannot see the error such a corner makes (on the bracket it
-//!   left the clamped base 4 mm coarse, and the step's estimate rose from 0.147 to
-//!   0.346; with the corners refined it fell to 2.35e-2);
+//!   singular corner (re-entrant, or clamped meeting traction) take the square of
+//!   the smallest factor of any node, down to a floor
+//!   ([`adapt::CORNER_POWER`], [`adapt::CORNER_FLOOR`]): the estimate's reference is
+//!   about as wrong as the run there, so the indicator cannot see the error such a
+//!   corner makes (on the bracket it left the clamped base 4 mm coarse, and the step's
+//!   estimate rose from 0.147 to 0.346), and a corner's error falls more slowly than
+//!   the rest's;
 //! * `uniform` (and any grid fill, which has one spacing): the whole spacing function
 //!   is scaled by the smallest of those factors.
 //!
