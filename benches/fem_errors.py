@@ -13,11 +13,8 @@ output/fem_bracket_H.pkl.
     pip install scikit-fem gmsh numpy
     python3 benches/fem_errors.py [--h 0.001] RUN/solution.vtu ...
 """
-import base64
 import os
 import pickle
-import re
-import struct
 import sys
 
 import numpy as np
@@ -25,24 +22,11 @@ import skfem
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fem_reference  # noqa: E402
+from section_forces import read_vtu  # noqa: E402
 
 CORNERS = [(0.06, 0.14), (0.0, 0.0), (0.06, 0.0)]
 HOLES = [((0.03, 0.05), 0.012), ((0.14, 0.17), 0.01)]
 TIP = (0.2, 0.17)
-
-
-def read_vtu(path):
-    """Points and point arrays of a vtkio VTU with inline binary (UInt64 header) arrays."""
-    text = open(path).read()
-    out = {}
-    kinds = {"Float64": "<f8", "Float32": "<f4", "Int32": "<i4", "Int64": "<i8", "UInt8": "u1", "UInt64": "<u8"}
-    pattern = r'<DataArray type="(\w+)" Name="(\w+)"(?: NumberOfComponents="(\d+)")? format="binary"[^>]*>([^<]*)<'
-    for kind, name, components, data in re.findall(pattern, text):
-        raw = base64.b64decode(data.strip())
-        size = struct.unpack("<Q", raw[:8])[0]
-        values = np.frombuffer(raw[8 : 8 + size], dtype=kinds[kind])
-        out[name] = values.reshape(-1, int(components)) if components else values
-    return out
 
 
 def finite_elements(h):
@@ -50,16 +34,7 @@ def finite_elements(h):
     cache = f"output/fem_bracket_{h}.pkl"
     if os.path.exists(cache):
         return pickle.load(open(cache, "rb"))
-    mesh = fem_reference.mesh(h, True)
-    element = skfem.ElementVector(skfem.ElementTriP2())
-    basis = skfem.Basis(mesh, element, intorder=4)
-    lam, mu = skfem.models.elasticity.lame_parameters(fem_reference.E, fem_reference.NU)
-    lam = 2 * mu * lam / (lam + 2 * mu)  # plane stress
-    stiffness = skfem.asm(skfem.models.elasticity.linear_elasticity(lam, mu), basis)
-    tip = skfem.FacetBasis(mesh, element, facets=mesh.facets_satisfying(lambda x: np.abs(x[0] - 0.2) < 1e-9), intorder=4)
-    load = skfem.asm(skfem.LinearForm(lambda v, w: fem_reference.SHEAR * v[1]), tip)
-    clamped = basis.get_dofs(lambda x: np.abs(x[1]) < 1e-9).all()
-    u = skfem.solve(*skfem.condense(stiffness, load, D=clamped))
+    mesh, _, u, _, _ = fem_reference.displacement_field(h, True, "base")
     os.makedirs("output", exist_ok=True)
     pickle.dump((mesh, u), open(cache, "wb"))
     return mesh, u

@@ -62,7 +62,8 @@ def mesh(h, holes):
     return skfem.MeshTri(x[used].T.copy(), renumber[triangles].T.copy())
 
 
-def solve(h, holes, clamp, points=()):
+def displacement_field(h, holes, clamp):
+    """The mesh, the P2 basis, the displacement and the plane-stress Lame parameters."""
     m = mesh(h, holes)
     element = skfem.ElementVector(skfem.ElementTriP2())
     basis = skfem.Basis(m, element, intorder=4)
@@ -74,6 +75,11 @@ def solve(h, holes, clamp, points=()):
     axis = 1 if clamp == "base" else 0
     clamped = basis.get_dofs(lambda x: np.abs(x[axis]) < 1e-9).all()
     u = skfem.solve(*skfem.condense(stiffness, load, D=clamped))
+    return m, basis, u, lam, mu
+
+
+def solve(h, holes, clamp, points=()):
+    m, basis, u, lam, mu = displacement_field(h, holes, clamp)
     uy = (basis.probes(np.array([[0.2 - 1e-12], [0.17]])) @ u)[1]
     # Von Mises from the P2 displacement gradient (P1 per triangle) at the probe point.
     gradient = skfem.Basis(m, skfem.ElementTriP1(), intorder=4)
