@@ -11,7 +11,10 @@ size, the node count, the tip deflection uy(0.2, 0.17) and the von Mises stress 
     python3 benches/fem_reference.py holes base        # the shipped bracket
     python3 benches/fem_reference.py noholes base      # the L alone
     python3 benches/fem_reference.py noholes base 0.06,0.14 0.2,0.17   # and u there
-With points (x,y) after the clamp, also the displacement (ux, uy) at each.
+    python3 benches/fem_reference.py holes base --shelf -1e6   # and a load on inner_h
+With points (x,y) after the clamp, also the displacement (ux, uy) at each. With
+`--shelf T`, also a vertical traction T (Pa) on the inner horizontal edge y = 0.14,
+one of the re-entrant corner's two edges.
 """
 import sys
 
@@ -62,6 +65,9 @@ def mesh(h, holes):
     return skfem.MeshTri(x[used].T.copy(), renumber[triangles].T.copy())
 
 
+SHELF = 0.0
+
+
 def displacement_field(h, holes, clamp):
     """The mesh, the P2 basis, the displacement and the plane-stress Lame parameters."""
     m = mesh(h, holes)
@@ -72,6 +78,10 @@ def displacement_field(h, holes, clamp):
     stiffness = skfem.asm(linear_elasticity(lam, mu), basis)
     tip = skfem.FacetBasis(m, element, facets=m.facets_satisfying(lambda x: np.abs(x[0] - 0.2) < 1e-9), intorder=4)
     load = skfem.asm(skfem.LinearForm(lambda v, w: SHEAR * v[1]), tip)
+    if SHELF:
+        on_shelf = lambda x: (np.abs(x[1] - 0.14) < 1e-9) & (x[0] > 0.06 - 1e-9)
+        shelf = skfem.FacetBasis(m, element, facets=m.facets_satisfying(on_shelf), intorder=4)
+        load = load + skfem.asm(skfem.LinearForm(lambda v, w: SHELF * v[1]), shelf)
     axis = 1 if clamp == "base" else 0
     clamped = basis.get_dofs(lambda x: np.abs(x[axis]) < 1e-9).all()
     u = skfem.solve(*skfem.condense(stiffness, load, D=clamped))
@@ -97,6 +107,10 @@ def solve(h, holes, clamp, points=()):
 
 
 if __name__ == "__main__":
+    if "--shelf" in sys.argv:
+        at = sys.argv.index("--shelf")
+        SHELF = float(sys.argv[at + 1])
+        del sys.argv[at:at + 2]
     holes = sys.argv[1] == "holes" if len(sys.argv) > 1 else True
     clamp = sys.argv[2] if len(sys.argv) > 2 else "base"
     points = [tuple(map(float, p.split(","))) for p in sys.argv[3:]]

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! [ A  G ] [ x      ]   [ b ]
-//! [ C  0 ] [ lambda ] = [ 0 ]
+//! [ C  0 ] [ lambda ] = [ d ]
 //! ```
 //!
 //! `A` the `n x n` system, `C` the `k x n` constraint rows, `G` the `n x k` columns that
@@ -37,6 +37,8 @@ pub struct Border {
     pub columns: Vec<Vec<(usize, f64)>>,
     /// `C` by rows: for each multiplier, its constraint `(unknown, coefficient)`.
     pub rows: Vec<Vec<(usize, f64)>>,
+    /// `d`: each constraint row's right-hand side.
+    pub values: Vec<f64>,
 }
 
 impl Border {
@@ -50,11 +52,12 @@ impl Border {
         self.rows.is_empty()
     }
 
-    /// `K = [A G; C 0]` and `[b; 0]` (module docs); `A` is consumed (held twice while
+    /// `K = [A G; C 0]` and `[b; d]` (module docs); `A` is consumed (held twice while
     /// its rows are copied).
     pub fn bordered(&self, a: Csr, b: &[f64]) -> (Csr, Vec<f64>) {
         let (n, k) = (a.nrows(), self.len());
         assert_eq!(self.columns.len(), k, "one column of G per constraint row");
+        assert_eq!(self.values.len(), k, "one right-hand side per constraint row");
         let mut in_row: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
         for (j, column) in self.columns.iter().enumerate() {
             for &(i, v) in column {
@@ -107,7 +110,7 @@ impl Border {
         }
         let mut rhs = Vec::with_capacity(n + k);
         rhs.extend_from_slice(b);
-        rhs.resize(n + k, 0.0);
+        rhs.extend_from_slice(&self.values);
         (Csr::from_parts(n + k, n + k, offsets, cols, vals), rhs)
     }
 }
@@ -233,7 +236,8 @@ mod tests {
     }
 
     /// A diagonally dominant `n x n` system with couplings, and three constraints on
-    /// the unknowns of its first third, whose rows 1..7 carry the multipliers.
+    /// the unknowns of its first third with nonzero right-hand sides, whose rows 1..7
+    /// carry the multipliers.
     fn example(n: usize) -> (Csr, Vec<f64>, Border) {
         let mut entries = Vec::new();
         for i in 0..n {
@@ -246,7 +250,8 @@ mod tests {
         let b: Vec<f64> = (0..n).map(|i| noise(100 + i)).collect();
         let rows = (0..3).map(|k| (0..n / 3).filter(|j| (j + k) % 2 == 0).map(|j| (j, noise(200 + 10 * k + j))).collect()).collect();
         let columns = (0..3).map(|k| [1, 2, 4, 5, 7].iter().map(|&r| (r, noise(300 + 10 * k + r))).collect()).collect();
-        (a, b, Border { columns, rows })
+        let values = (0..3).map(|k| noise(400 + k)).collect();
+        (a, b, Border { columns, rows, values })
     }
 
     /// The bordered matrix holds `A`, `G` and `C` where the module docs put them.
@@ -271,7 +276,7 @@ mod tests {
         }
         assert_eq!(kd.view((12, 12), (3, 3)), DMatrix::zeros(3, 3));
         assert_eq!(&rhs[..12], &b[..]);
-        assert!(rhs[12..].iter().all(|&v| v == 0.0));
+        assert_eq!(&rhs[12..], &border.values[..]);
     }
 
     /// GMRES on the bordered system with the block preconditioner around ILU(0) of

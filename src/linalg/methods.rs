@@ -310,10 +310,15 @@ pub(super) fn solve_gmres_saddle_point(
         None => start.method.clone(),
     };
     let start = Start { method, choice: start.choice.clone(), ..*start };
-    let built = super::saddle::SaddlePoint::build(&rows, auxiliary.as_ref(), layout)
+    // A bordered system's saddle point is its leading block (border module).
+    let lead = (layout.multipliers > 0).then(|| border::leading_block(&rows, layout.multipliers));
+    let built = super::saddle::SaddlePoint::build(lead.as_ref().unwrap_or(&rows), auxiliary.as_ref(), layout.nodes_only())
         .ok_or_else(|| SolveError::Dimension { detail: "the displacement-pressure preconditioner needs three unknowns per node".into() })?;
-    drop(auxiliary);
-    let pc = precond::BuiltPreconditioner::SaddlePoint(Box::new(built));
+    drop((auxiliary, lead));
+    let mut pc = precond::BuiltPreconditioner::SaddlePoint(Box::new(built));
+    if layout.multipliers > 0 {
+        pc = precond::BuiltPreconditioner::Bordered(Box::new(border::Bordered::build(&rows, layout.multipliers, pc)?));
+    }
     run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))
 }
 

@@ -102,7 +102,7 @@ impl Discretisation {
         // Placing ghosts is part of building the point cloud, so it is timed with the supports.
         let world = crate::petsc::world();
         let distributed = matches!(params.solver.kind, SolverKind::Petsc { .. });
-        let survey = super::sector::survey(case, &nodes, unknowns);
+        let survey = super::sector::survey(case, &nodes);
         let (positions, ghost, owner, supports, (every, needs, gradient_kept), widened) = timer.run(SUPPORTS, || {
             let (positions, ghost) = ghosts(case, params, &nodes, &boundary_equations, (distributed, &survey));
             // Distributed: a rank finds the supports and makes the shapes of its own

@@ -212,7 +212,7 @@ pub(super) fn assemble_and_solve(
     }
     let (matrix, rhs, sectors, unbalanced, multipliers) = timer.run(stage::ASSEMBLY, || {
         let (m, rhs) = System { case, disc, exact }.assemble()?;
-        let (balances, unbalanced) = sector::balances(case, disc, &m);
+        let (balances, unbalanced) = sector::balances(case, disc, &m, exact);
         let border = sector::border(&balances);
         let (m, rhs) = if border.is_empty() { (m, rhs) } else { border.bordered(m, &rhs) };
         let note = match border.len() {

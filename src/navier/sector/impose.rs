@@ -7,14 +7,16 @@ use super::SectorBalance;
 use crate::linalg::border::Border;
 
 /// The border of `balances`: per balance, the columns of `G` (force x, force y and
-/// couple multipliers in the injected rows) and the rows of `C` (force x, force y and
-/// moment of the arc's tractions).
+/// couple multipliers in the injected rows), the rows of `C` (force x, force y and
+/// moment of the arc's tractions) and their right-hand sides `d` (minus the loads
+/// inside the contour).
 pub fn border(balances: &[SectorBalance]) -> Border {
     let mut border = Border::default();
     for b in balances {
         for m in 0..3 {
             border.columns.push(b.injected.iter().map(|&(row, g)| (row, g[m])).collect());
             border.rows.push(b.rows[m].clone());
+            border.values.push(b.loads[m]);
         }
     }
     border
@@ -62,13 +64,15 @@ mod tests {
     fn the_border_holds_three_multipliers_per_balance() {
         let rows: [Vec<(usize, f64)>; 3] = std::array::from_fn(|k| vec![(k, 1.0 + k as f64), (7, -1.0)]);
         let injected = vec![(3, [1.0, 2.0, 3.0]), (5, [4.0, 5.0, 6.0])];
-        let balance = SectorBalance { around: Around::Corner, centre: [0.0, 0.0], radius: 1.0, rows: rows.clone(), injected };
+        let loads = [0.5, -0.25, 2.0];
+        let balance = SectorBalance { around: Around::Corner, centre: [0.0, 0.0], radius: 1.0, rows: rows.clone(), loads, injected };
         let border = border(&[balance.clone(), balance]);
         assert_eq!(border.len(), 6);
         assert_eq!(border.columns[1], vec![(3, 2.0), (5, 5.0)]);
         assert_eq!(border.columns[5], vec![(3, 3.0), (5, 6.0)]);
         assert_eq!(border.rows[2], rows[2]);
         assert_eq!(border.rows[3], rows[0]);
+        assert_eq!(border.values, vec![0.5, -0.25, 2.0, 0.5, -0.25, 2.0]);
     }
 
     /// Injections that cannot carry three independent multipliers are refused.

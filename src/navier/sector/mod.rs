@@ -12,15 +12,18 @@
 //! corner (its straight sides on the free edges) is imposed,
 //!
 //! ```text
-//! integral over the arc of sigma(u) n ds = 0,   integral over the arc of r x sigma(u) n ds = 0,
+//! integral over the arc of sigma(u) n ds = -F,   integral over the arc of r x sigma(u) n ds = -M,
 //! ```
 //!
-//! `n` the arc's outward normal, `r` from the corner, `sigma(u)` from a degree-2 least
+//! `F` and `M` the force and moment of the loads inside the sector: the tractions
+//! prescribed on its straight sides and the body force over it ([`loads`]; zero for a
+//! corner between free edges without body force), `n` the arc's outward normal, `r`
+//! from the corner, `sigma(u)` from a degree-2 least
 //! squares fit over the 12 nearest nodes at each point of a midpoint rule on the arc.
 //! Its three multipliers are a force and a couple injected into the Navier rows of
 //! the interior nodes within [`INJECTION_SPACINGS`] of the corner (each row's share
 //! scaled by its norm), and the system is bordered by them ([`border`],
-//! `linalg::border`): `A x + G lambda = b`, `C x = 0`. Sparse LU factors the bordered
+//! `linalg::border`): `A x + G lambda = b`, `C x = d`. Sparse LU factors the bordered
 //! matrix as it stands; the Krylov solvers take it with a block preconditioner around
 //! one of `A`. (Until 2026-11-27 the multipliers were eliminated on three pivot rows,
 //! which put the balance rows, without a diagonal entry, in their place: ILU met a
@@ -35,21 +38,26 @@
 //! 1.5 mm, 46 % at 3 mm; with the ghosts 1.9 % and 3.8 %), where the multigrid's
 //! block Gauss-Seidel also diverged next to the ghost-free edges.
 //!
-//! Applied when both edges at the corner are traction-free, there is no body force,
-//! and the unknowns are displacements; the radius is [`SECTOR_SPACINGS`] local
+//! In the displacement-pressure form `sigma = -p I + mu (grad u + grad u^T)`, with `p`
+//! fitted like `u`, and the multipliers go into the momentum rows.
+//!
+//! Applied when both edges at the corner carry tractions (until 2026-11-27 only free
+//! edges without body force, in the displacement form: the other corners stayed
+//! ghost-free, and there the multigrid diverged); the radius is [`SECTOR_SPACINGS`] local
 //! spacings of the nodes within it (on nodes graded towards the corner, the largest
 //! of their spacings, not the corner node's: an arc of 10 corner spacings crossed
 //! nodes 2 to 4 times coarser, and the graded bracket's tip at 0.5 mm was -1.8e-3 m
 //! instead of -5.4e-4), halved (down to [`MIN_SECTOR_SPACINGS`]) while the arc leaves
 //! the solid more than once or meets a boundary part other than the corner's two.
 //!
-//! **Holes.** A traction-free hole (an inner loop of the boundary whose parts are all
-//! free, `domain::corner::holes`) carries no resultant either, yet the discrete
-//! solution could put one on it where the hole spans few spacings: on the scattered
+//! **Holes.** A hole with traction edges (an inner loop of the boundary,
+//! `domain::corner::holes`) carries the resultant of its loads and no more, yet the
+//! discrete solution could put a spurious one on it where the hole spans few spacings: on the scattered
 //! bracket the holes (radius 6 and 5 spacings at 2 mm) carried 0.45 F (least
 //! squares) and 0.24 F (PHS, p = 4), which made PHS's tip deflection 14 % too large
 //! and with it the error estimate of the default run 0.17. The same three conditions
-//! are imposed on a whole circle around the hole (centred at its nodes' length-weighted mean, at
+//! are imposed (with the loads on the hole and the body force between it and the
+//! circle) on a whole circle around the hole (centred at its nodes' length-weighted mean, at
 //! [`RING_SPACINGS`] from its farthest node, inside the solid with no other boundary
 //! node within), the multipliers injected into the Navier rows of the interior nodes
 //! within [`INJECTION_SPACINGS`] of the hole's nodes.
@@ -62,7 +70,9 @@ use super::discrete::Discretisation;
 use crate::case::Case;
 use crate::domain::{NodeSet, Point};
 use crate::elasticity::conditions::ComponentCondition;
-use crate::elasticity::dofs::Unknowns;
+use crate::elasticity::dofs::{Unknowns, PRESSURE};
+use crate::elasticity::material::Lame;
+use crate::exact::ExactSolution;
 use crate::linalg::Csr;
 use crate::mlsm::{wls, Basis, Op, Weight};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -70,6 +80,7 @@ use std::collections::BTreeMap;
 use std::num::NonZeroUsize;
 
 mod impose;
+mod loads;
 pub use impose::border;
 use impose::has_rank_three;
 
@@ -109,6 +120,8 @@ pub struct SectorBalance {
     pub radius: f64,
     /// Force x, force y and moment of the arc's tractions, `(unknown, coefficient)`.
     rows: [Vec<(usize, f64)>; 3],
+    /// Their right-hand sides: minus the enclosed loads, in the rows' scale.
+    loads: [f64; 3],
     /// `(row, g)`: the row's share of the force x, force y and couple multipliers.
     injected: Vec<(usize, [f64; 3])>,
 }
@@ -132,8 +145,9 @@ impl SectorBalance {
 }
 
 /// A contour that qualifies for a balance: what it goes around, its centre, its arc,
-/// the local spacing there, and the points whose neighbourhood carries the
-/// multipliers (the corner, or the hole's boundary nodes).
+/// the local spacing there, the points whose neighbourhood carries the
+/// multipliers (the corner, or the hole's boundary nodes), and the boundary parts it
+/// encloses.
 #[derive(Debug, Clone)]
 struct Contour {
     around: Around,
@@ -141,6 +155,7 @@ struct Contour {
     arc: Arc,
     h: f64,
     seeds: Vec<Point>,
+    parts: Vec<usize>,
 }
 
 /// A re-entrant corner between traction edges or a hole with traction edges that gets
@@ -183,33 +198,23 @@ impl Survey {
     }
 }
 
-/// The [`Survey`] of `nodes` for a run with `unknowns`.
-pub fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Survey {
+/// The [`Survey`] of `nodes`.
+pub fn survey(case: &Case, nodes: &NodeSet) -> Survey {
     let traction = |part: usize| case.conditions.get(part).is_some_and(|c| c.is_all(ComponentCondition::Traction));
-    let free = |part: usize| traction(part) && case.conditions[part].value.is_zero();
     let corners =
         crate::domain::corner::corners(&case.domain, nodes).into_iter().filter(|c| c.reentrant && c.parts.iter().all(|&p| traction(p)));
     let holes = crate::domain::corner::holes(nodes)
         .into_iter()
         .filter(|hole| hole.iter().all(|&i| nodes.boundary[i].touches.iter().all(|&(p, _)| traction(p))));
-    let overall = if unknowns != Unknowns::Displacement {
-        Some("the displacement-pressure form is not balanced")
-    } else if !case.body_force.is_zero() {
-        Some("a body force acts")
-    } else {
-        None
-    };
     let (mut contours, mut unbalanced) = (Vec::new(), Vec::new());
     let mut refuse = |around: Around, at: Point, reason: &str| unbalanced.push(Unbalanced { around, at, reason: reason.into() });
     for c in corners {
-        let why = overall.or_else(|| (!c.parts.iter().all(|&p| free(p))).then_some("an edge at the corner is loaded"));
-        if let Some(why) = why {
-            refuse(Around::Corner, c.position, why);
-            continue;
-        }
         let h = spacing_at_arc(nodes, c.position, nodes.local_spacing[c.node]);
         match arc(case, nodes, c.position, c.parts, h) {
-            Some(arc) => contours.push(Contour { around: Around::Corner, centre: c.position, arc, h, seeds: vec![c.position] }),
+            Some(arc) => {
+                let parts = c.parts.to_vec();
+                contours.push(Contour { around: Around::Corner, centre: c.position, arc, h, seeds: vec![c.position], parts })
+            }
             None => refuse(
                 Around::Corner,
                 c.position,
@@ -219,12 +224,6 @@ pub fn survey(case: &Case, nodes: &NodeSet, unknowns: Unknowns) -> Survey {
     }
     for hole in holes {
         let mean = crate::domain::corner::mean_position(nodes, &hole);
-        let loaded = !hole.iter().all(|&i| nodes.boundary[i].touches.iter().all(|&(p, _)| free(p)));
-        let why = overall.or_else(|| loaded.then_some("the hole is loaded"));
-        if let Some(why) = why {
-            refuse(Around::Hole, mean, why);
-            continue;
-        }
         match ring(case, nodes, &hole) {
             Some(ring) => contours.push(ring),
             None => refuse(Around::Hole, mean, "no ring 3 to 10 spacings out fits in the solid without meeting another boundary"),
@@ -252,8 +251,14 @@ fn spacing_at_arc(nodes: &NodeSet, corner: Point, mut h: f64) -> f64 {
 }
 
 /// The balances of the case's re-entrant corners and holes that qualify (module docs),
-/// and those that get none, with the reason.
-pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> (Vec<SectorBalance>, Vec<Unbalanced>) {
+/// and those that get none, with the reason; `exact` gives the loads a scene takes
+/// from its exact solution.
+pub fn balances(
+    case: &Case,
+    disc: &Discretisation,
+    matrix: &Csr,
+    exact: Option<&dyn ExactSolution>,
+) -> (Vec<SectorBalance>, Vec<Unbalanced>) {
     let Survey { contours, mut unbalanced } = disc.survey.clone();
     if contours.is_empty() {
         return (Vec::new(), unbalanced);
@@ -265,7 +270,10 @@ pub fn balances(case: &Case, disc: &Discretisation, matrix: &Csr) -> (Vec<Sector
         let injected = injection(disc, matrix, c.centre, &c.seeds, c.h);
         match (rows, injected) {
             (Some(rows), Some(injected)) if has_rank_three(&injected) => {
-                balances.push(SectorBalance { around: c.around, centre: c.centre, radius: c.arc.radius, rows, injected })
+                let [fx, fy, m] = loads::enclosed(case, exact, c.centre, &c.arc, &c.parts);
+                let scale = row_scale(arc_lame(case, disc), c.arc.radius);
+                let loads = [-scale * fx, -scale * fy, -scale * m / c.arc.radius];
+                balances.push(SectorBalance { around: c.around, centre: c.centre, radius: c.arc.radius, rows, loads, injected })
             }
             (None, _) => unbalanced.push(Unbalanced { around: c.around, at: c.centre, reason: "the stress fit on its arc failed".into() }),
             _ => unbalanced.push(Unbalanced {
@@ -295,6 +303,9 @@ fn ring(case: &Case, nodes: &NodeSet, hole: &[usize]) -> Option<Contour> {
     let h = hole.iter().map(|&i| length(i) * nodes.local_spacing[i]).sum::<f64>() / hole.iter().map(|&i| length(i)).sum::<f64>();
     let reach = hole.iter().map(|&i| dist(nodes.positions[i], centre)).fold(0.0, f64::max);
     let own: std::collections::BTreeSet<usize> = hole.iter().copied().collect();
+    let mut parts: Vec<usize> = hole.iter().flat_map(|&i| nodes.boundary[i].touches.iter().map(|&(p, _)| p)).collect();
+    parts.sort_unstable();
+    parts.dedup();
     RING_SPACINGS.iter().find_map(|&s| {
         let radius = reach + s * h;
         let foreign = (0..nodes.boundary.len()).any(|b| !own.contains(&b) && dist(nodes.positions[b], centre) <= radius + 0.5 * h);
@@ -308,6 +319,7 @@ fn ring(case: &Case, nodes: &NodeSet, hole: &[usize]) -> Option<Contour> {
             arc: Arc { radius, angles: (0.0, std::f64::consts::TAU) },
             h,
             seeds: hole.iter().map(|&i| nodes.positions[i]).collect(),
+            parts: parts.clone(),
         })
     })
 }
@@ -379,15 +391,16 @@ fn arc_rows(
     arc: &Arc,
     h: f64,
 ) -> Option<[Vec<(usize, f64)>; 3]> {
-    let lame = case.material.lame();
+    let lame = arc_lame(case, disc);
+    let pressure = disc.dofs.unknowns() == Unknowns::DisplacementPressure;
+    let ops: &[Op] = if pressure { &[Op::Dx, Op::Dy, Op::Value] } else { &[Op::Dx, Op::Dy] };
     let (t0, t1) = arc.angles;
     let count = ((arc.radius * (t1 - t0) / (0.5 * h)).ceil() as usize).max(48);
     let dt = (t1 - t0) / count as f64;
     let fit = NonZeroUsize::new(FIT_NODES.min(disc.nodes.len()))?;
     let mut sums: [BTreeMap<usize, f64>; 3] = Default::default();
-    let (mut points, mut weights) = (Vec::with_capacity(FIT_NODES), vec![0.0; 2 * FIT_NODES]);
-    // Rows scaled to O(1) coefficients: the stress of a unit gradient times the arc.
-    let scale = 1.0 / ((lame.lambda + 2.0 * lame.mu) * arc.radius);
+    let (mut points, mut weights) = (Vec::with_capacity(FIT_NODES), vec![0.0; ops.len() * FIT_NODES]);
+    let scale = row_scale(lame, arc.radius);
     for k in 0..count {
         let t = t0 + (k as f64 + 0.5) * dt;
         let n = [t.cos(), t.sin()];
@@ -398,24 +411,48 @@ fn arc_rows(
         points.clear();
         points.extend(found.iter().map(|f| disc.nodes.positions[f.item as usize]));
         let m = points.len();
-        wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, q, &points, &[Op::Dx, Op::Dy], &mut weights[..2 * m]).ok()?;
+        wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, q, &points, ops, &mut weights[..ops.len() * m]).ok()?;
+        let mut add = |col: usize, (tx, ty): (f64, f64)| {
+            *sums[0].entry(col).or_default() += ds * tx;
+            *sums[1].entry(col).or_default() += ds * ty;
+            *sums[2].entry(col).or_default() += ds * (r[0] * ty - r[1] * tx) / arc.radius;
+        };
         for (j, f) in found.iter().enumerate() {
             let node = f.item as usize;
+            if pressure {
+                // -p n, the unknown being p / mu.
+                let v = -lame.mu * weights[2 * m + j];
+                add(disc.dofs.dof(node, PRESSURE), (v * n[0], v * n[1]));
+            }
             for comp in 0..2 {
                 // Traction t = sigma n of the gradient that component `comp` of node j
                 // contributes: its weights in row `comp` of grad u.
                 let mut g = [[0.0; 2]; 2];
                 g[comp] = [weights[j], weights[m + j]];
                 let [sxx, syy, sxy] = lame.stress(g);
-                let (tx, ty) = (sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]);
-                let col = disc.dofs.dof(node, comp);
-                *sums[0].entry(col).or_default() += ds * tx;
-                *sums[1].entry(col).or_default() += ds * ty;
-                *sums[2].entry(col).or_default() += ds * (r[0] * ty - r[1] * tx) / arc.radius;
+                add(disc.dofs.dof(node, comp), (sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]));
             }
         }
     }
     Some(sums.map(|s| s.into_iter().collect()))
+}
+
+/// The Lame parameters of the arc's stress from the displacement gradient: the
+/// material's, or with `lambda = 0` in the displacement-pressure form, whose pressure
+/// carries the rest.
+fn arc_lame(case: &Case, disc: &Discretisation) -> Lame {
+    let lame = case.material.lame();
+    match disc.dofs.unknowns() {
+        Unknowns::Displacement => lame,
+        Unknowns::DisplacementPressure => Lame { lambda: 0.0, mu: lame.mu },
+    }
+}
+
+/// The factor of the balance rows, which makes their coefficients O(1): one over the
+/// stress of a unit gradient (`lame` as in [`arc_lame`]) times the arc's radius (the
+/// moment row is divided by the radius once more).
+fn row_scale(lame: Lame, radius: f64) -> f64 {
+    1.0 / ((lame.lambda + 2.0 * lame.mu) * radius)
 }
 
 /// The injected rows: the Navier rows of the interior nodes within
