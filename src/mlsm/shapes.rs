@@ -150,7 +150,10 @@ pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approxi
         blocks.into_par_iter().enumerate().try_for_each_init(
             || (Vec::new(), Vec::new()),
             |(pts, buf): &mut (Vec<Point>, Vec<f64>), (i, record)| {
-                let ops: Vec<Op> = needs[i].iter().collect();
+                // The node's operators, without an allocation per node.
+                let mut list = [Op::Value; Op::ALL.len()];
+                let count = needs[i].iter().zip(list.iter_mut()).map(|(op, slot)| *slot = op).count();
+                let ops = &list[..count];
                 if ops.is_empty() {
                     return Ok(());
                 }
@@ -160,7 +163,7 @@ pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approxi
                 pts.extend(support.iter().map(|&j| positions[j as usize]));
                 buf.clear();
                 buf.resize(ops.len() * n, 0.0);
-                shape_functions(&approx.basis, &approx.weight, positions[i], pts, &ops, buf).map_err(|e| ShapeError {
+                shape_functions(&approx.basis, &approx.weight, positions[i], pts, ops, buf).map_err(|e| ShapeError {
                     node: i,
                     x: positions[i][0],
                     y: positions[i][1],

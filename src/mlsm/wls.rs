@@ -75,16 +75,52 @@ pub fn shape_functions(
     if let Basis::RbfFd { radial, degree } = basis {
         return super::rbffd::shape_functions(radial, *degree, centre, points, ops, out);
     }
-    let n = points.len();
-    let LocalFrame { dist, radius: s, nearest: h_p, z } = LocalFrame::new(centre, points);
-    let local = LocalBasis::new(basis);
+    SCRATCH.with(|scratch| {
+        let mut scratch = scratch.borrow_mut();
+        let Scratch { frame, local, work } = &mut *scratch;
+        if local.as_ref().is_none_or(|(b, _)| b != basis) {
+            *local = Some((*basis, LocalBasis::new(basis)));
+        }
+        let local = &local.as_ref().expect("set above").1;
+        frame.fill(centre, points);
+        fit(local, weight, frame, ops, work, out)
+    })
+}
+
+/// The buffers of one thread's fits, kept between nodes: each fit allocated five of
+/// them (the frame's three, the basis's exponents, the work buffer), which with the
+/// node's operator list cost about a seventh of the shapes stage (BENCHMARKS.md).
+#[derive(Default)]
+struct Scratch {
+    frame: LocalFrame,
+    local: Option<(Basis, LocalBasis)>,
+    work: Vec<f64>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
+
+/// [`shape_functions`] of a monomial basis on the stencil `frame`, `work` its buffer.
+fn fit(
+    local: &LocalBasis,
+    weight: &Weight,
+    frame: &LocalFrame,
+    ops: &[Op],
+    work: &mut Vec<f64>,
+    out: &mut [f64],
+) -> Result<(), RankDeficient> {
+    let LocalFrame { dist, radius: s, nearest: h_p, z, .. } = frame;
+    let (s, h_p) = (*s, *h_p);
+    let n = z.len();
     let m = local.len();
     if n < m {
         return Err(RankDeficient { ratio: 0.0, basis_size: m });
     }
     // One buffer: W B (n x m, column-major, then the Householder vectors and R), R's
     // diagonal, the reflections' factors, a row of the basis, W's diagonal, a column.
-    let mut work = vec![0.0; n * m + 3 * m + 2 * n];
+    work.clear();
+    work.resize(n * m + 3 * m + 2 * n, 0.0);
     let (wb, rest) = work.split_at_mut(n * m);
     let (diag, rest) = rest.split_at_mut(m);
     let (beta, rest) = rest.split_at_mut(m);
@@ -179,6 +215,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// largest distance from the centre, `nearest` the smallest non-zero one (the local
 /// spacing that scales weights and shape parameters). Shared by least squares and
 /// RBF-FD, so both are invariant to translation and to the unit of length.
+#[derive(Default)]
 pub(super) struct LocalFrame {
     /// `|x_j - centre|`.
     pub dist: Vec<f64>,
@@ -193,12 +230,21 @@ pub(super) struct LocalFrame {
 impl LocalFrame {
     /// The frame of `points` around `centre`.
     pub fn new(centre: [f64; 2], points: &[[f64; 2]]) -> LocalFrame {
-        let rel: Vec<[f64; 2]> = points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]).collect();
-        let dist: Vec<f64> = rel.iter().map(|d| d[0].hypot(d[1])).collect();
-        let radius = dist.iter().cloned().fold(0.0, f64::max);
-        let nearest = dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
-        let z = rel.iter().map(|d| [d[0] / radius, d[1] / radius]).collect();
-        LocalFrame { dist, radius, nearest, z }
+        let mut frame = LocalFrame::default();
+        frame.fill(centre, points);
+        frame
+    }
+
+    /// This frame made the frame of `points` around `centre`, in its own buffers.
+    pub fn fill(&mut self, centre: [f64; 2], points: &[[f64; 2]]) {
+        self.z.clear();
+        self.z.extend(points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]));
+        self.dist.clear();
+        self.dist.extend(self.z.iter().map(|d| d[0].hypot(d[1])));
+        self.radius = self.dist.iter().cloned().fold(0.0, f64::max);
+        self.nearest = self.dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
+        let radius = self.radius;
+        self.z.iter_mut().for_each(|d| *d = [d[0] / radius, d[1] / radius]);
     }
 }
 
