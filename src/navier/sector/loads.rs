@@ -14,7 +14,7 @@
 //! the solid's boundary; the region in polar coordinates about the centre, each ray
 //! cut where it leaves the solid (found by bisection).
 
-use super::Arc;
+use super::arc::Arc;
 use crate::case::Case;
 use crate::domain::shape::Curve;
 use crate::domain::Point;
@@ -196,7 +196,7 @@ mod tests {
         let part = |name: &str| case.domain.parts.iter().position(|p| p == name).expect("a part");
         let contours = [([0.06, 0.14], 0.03, vec![part("inner_v"), part("inner_h")]), ([0.03, 0.05], 0.025, vec![part("hole")])];
         for (centre, radius, parts) in contours {
-            let angles = super::super::inside_interval(&case, centre, radius).unwrap_or((0.0, std::f64::consts::TAU));
+            let angles = super::super::arc::inside_interval(&case, centre, radius).unwrap_or((0.0, std::f64::consts::TAU));
             let arc = Arc { radius, angles };
             let loads = enclosed(&case, Some(exact.as_ref()), centre, &arc, &parts);
             let mut on_arc = [0.0; 3];
