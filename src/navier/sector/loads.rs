@@ -15,6 +15,7 @@
 //! cut where it leaves the solid (found by bisection).
 
 use super::arc::Arc;
+use super::dist;
 use crate::case::Case;
 use crate::domain::shape::Curve;
 use crate::domain::Point;
@@ -87,8 +88,9 @@ fn boundary(case: &Case, exact: Option<&dyn ExactSolution>, centre: Point, radiu
     total
 }
 
-/// The arc-length interval of `curve` inside the disc of `radius` around `centre`: a
-/// line's exactly, a circle's whole (its points outside are skipped one by one).
+/// The arc-length interval of `curve` inside the disc of `radius` around `centre`,
+/// exactly (a circle's may start below 0: `Curve::at` takes any arc length, and the
+/// sum over it then needs no wrap at angle 0).
 fn within(curve: &Curve, centre: Point, radius: f64) -> Option<(f64, f64)> {
     match *curve {
         Curve::Line { a, b, .. } => {
@@ -104,7 +106,20 @@ fn within(curve: &Curve, centre: Point, radius: f64) -> Option<(f64, f64)> {
             let (s0, s1) = ((-half - disc.sqrt()).max(0.0), (-half + disc.sqrt()).min(length));
             (s1 > s0).then_some((s0, s1))
         }
-        Curve::Circle { .. } => Some((0.0, curve.length())),
+        Curve::Circle { center, radius: rc, .. } => {
+            // |center + rc e(t) - c|^2 <= radius^2 <=> cos(t - phi) >= (rc^2 + d^2 - radius^2) / (2 rc d),
+            // phi the direction of c seen from the circle's centre, d their distance.
+            let d = dist(center, centre);
+            if d <= 1e-12 * rc {
+                return (rc <= radius).then_some((0.0, curve.length()));
+            }
+            let cosine = (rc * rc + d * d - radius * radius) / (2.0 * rc * d);
+            if cosine >= 1.0 {
+                return None;
+            }
+            let (phi, half) = ((centre[1] - center[1]).atan2(centre[0] - center[0]), cosine.max(-1.0).acos());
+            Some((rc * (phi - half), rc * (phi + half)))
+        }
     }
 }
 
@@ -163,10 +178,6 @@ fn inside_stretches(inside: impl Fn(f64) -> bool, radius: f64) -> Vec<(f64, f64)
     stretches
 }
 
-fn dist(a: Point, b: Point) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -221,6 +232,23 @@ mod tests {
         assert_eq!(stretches.len(), 1);
         assert!((stretches[0].0 - 0.3).abs() < 1e-12 && (stretches[0].1 - 0.71).abs() < 1e-12, "{stretches:?}");
         assert_eq!(inside_stretches(|r| r < 5.0, 2.0), vec![(0.0, 2.0)]);
+    }
+
+    /// A circle's stretch inside a disc is found exactly: the circle of radius 10 about
+    /// the origin inside the unit disc about (10, 0) spans the angles +-acos(199/200),
+    /// across angle 0; a concentric circle is inside whole or not at all.
+    #[test]
+    fn a_circle_is_clipped_to_the_disc() {
+        let circle = Curve::Circle { center: [0.0, 0.0], radius: 10.0, outward: 1.0 };
+        let (s0, s1) = within(&circle, [10.0, 0.0], 1.0).expect("they cross");
+        let half = (199.0f64 / 200.0).acos();
+        assert!((s0 + 10.0 * half).abs() < 1e-12 && (s1 - 10.0 * half).abs() < 1e-12, "{s0} {s1}");
+        for s in [s0, s1] {
+            assert!((dist(circle.at(s).0, [10.0, 0.0]) - 1.0).abs() < 1e-12, "the ends lie on the disc's edge");
+        }
+        assert_eq!(within(&circle, [13.0, 0.0], 1.0), None);
+        assert_eq!(within(&circle, [0.0, 0.0], 11.0), Some((0.0, circle.length())));
+        assert_eq!(within(&circle, [0.0, 0.0], 9.0), None);
     }
 
     /// The Gauss sum integrates `x^7` over `[0, 2]` exactly.
