@@ -780,11 +780,13 @@ fn a_run_of_more_than_1e8_steps_asks_for_allow_long() {
     assert!(text.contains("end_time = 1e-3"));
     write(tmp.path(), "long.toml", &text.replace("end_time = 1e-3", "end_time = 1e3"));
     let res = tmp.path().join("res");
-    let t0 = std::time::Instant::now();
-    let o = mlsm(tmp.path(), &["--quiet", "run", "long.toml", "--out", res.to_str().unwrap()]);
+    let o = mlsm(tmp.path(), &["run", "long.toml", "--out", res.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
     assert!(stderr(&o).contains("--allow-long") && stderr(&o).contains("steps"), "{}", describe(&o));
-    assert!(t0.elapsed().as_secs_f64() < 10.0, "refused only after {:?}", t0.elapsed());
+    // Refused before the time loop: no `integrate` stage line was printed (a check on
+    // the stages run, not on the clock).
+    let printed = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+    assert!(!printed.lines().any(|l| l.trim_start().starts_with("integrate")), "{}", describe(&o));
     assert!(!res.exists(), "a refused run wrote output");
 }
 

@@ -2,7 +2,7 @@
 //! operator, on scattered supports, at any length scale (property test).
 
 use mlsm::mlsm::basis::{monomial_exponents, Basis, Weight};
-use mlsm::mlsm::wls::shape_functions;
+use mlsm::mlsm::fit::shape_functions;
 use mlsm::mlsm::Op;
 use mlsm::mlsm::Radial;
 use proptest::prelude::*;

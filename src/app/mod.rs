@@ -10,6 +10,7 @@ mod export;
 mod fields;
 mod preset_trial;
 mod ranks;
+mod request;
 mod run;
 mod series;
 mod summary;
@@ -123,7 +124,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 ModelArg::Navier => Model::Navier,
                 ModelArg::Peridynamics => Model::Peridynamics,
             });
-            let req = run::RunRequest {
+            let req = request::RunRequest {
                 scene: scene.clone(),
                 out: out.clone(),
                 spacing: *spacing,

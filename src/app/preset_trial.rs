@@ -10,7 +10,7 @@
 //! grows with the node count); on scenes with non-polynomial solutions the trial adds
 //! the `fast` run and its estimate to the preset's time.
 
-use super::run::RunRequest;
+use super::request::RunRequest;
 use super::AppError;
 use crate::choice::Choice;
 use crate::navier::{self, EstimateMethod};

@@ -2,7 +2,7 @@
 //! or when `mpirun` launched several ranks; the solver each rank then uses, what over
 //! several ranks is refused, and the silence of the ranks above 0.
 
-use super::run::RunRequest;
+use super::request::RunRequest;
 use super::AppError;
 use crate::choice::Choice;
 use crate::linalg::{Preconditioner, SolverKind, SolverParams, GMRES_RESTART};

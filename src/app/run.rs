@@ -3,6 +3,7 @@
 
 use super::fields::{navier_fields, pd_fields, write_points_vtu};
 use super::preset_trial::{self, TrialReport};
+use super::request::RunRequest;
 use super::series::Series;
 use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::target::{self, TargetReport};
@@ -19,29 +20,11 @@ use crate::pipeline::{RunError, OUTPUT};
 use crate::post::probe::ProbeValue;
 use crate::problem::preset::Preset;
 use crate::problem::{Model, Problem};
-use crate::tradeoff::target::Target;
 use crate::warnings::{self, Checks};
 use serde::Serialize;
 use std::ffi::OsStr;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// What `run` was asked for, after the command line was read.
-pub(super) struct RunRequest {
-    pub scene: PathBuf,
-    pub out: Option<PathBuf>,
-    pub spacing: Option<f64>,
-    pub model: Option<Model>,
-    pub horizon: Option<f64>,
-    pub strict: bool,
-    pub preset: Option<String>,
-    pub allow_long: bool,
-    pub export_system: Option<PathBuf>,
-    /// `--target-error` and its options.
-    pub target: Option<Target>,
-    /// PETSc's options (after `--`).
-    pub petsc_options: Vec<String>,
-}
 
 /// The scene with the command line's overrides applied and checked.
 fn prepare(req: &RunRequest) -> Result<Problem, AppError> {

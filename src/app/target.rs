@@ -7,7 +7,7 @@ use crate::cli::{RefinementArg, TargetNormArg};
 use crate::output;
 use crate::pipeline::Silent;
 use crate::problem::Problem;
-use crate::tradeoff::target::{self, Outcome, Refinement, Step, Stop, Target, TargetNorm};
+use crate::tradeoff::target::{self, Outcome, Refinement, Step, Stop, Target, TargetNorm, MAX_STEPS};
 use crate::warnings::Warning;
 use serde::Serialize;
 use std::path::Path;
@@ -25,7 +25,7 @@ pub(super) fn request(tolerance: f64, norm: TargetNormArg, refinement: Refinemen
         RefinementArg::Local => Refinement::Local,
         RefinementArg::Uniform => Refinement::Uniform,
     };
-    Target { tolerance, norm, refinement, budget }
+    Target { tolerance, norm, refinement, budget, max_steps: MAX_STEPS }
 }
 
 /// `summary.json`'s `target`: what was asked, how it ended, and every step.

@@ -22,7 +22,7 @@ use crate::elasticity::stress::StressField;
 use crate::mlsm::interpolate::mls_values_of_degree;
 use crate::model::{self, Outcome};
 use crate::navier::{self, ErrorEstimate, Estimate, EstimateMethod, Sampling};
-use crate::pipeline::Silent;
+use crate::pipeline::{Silent, StageTimer};
 use crate::post::ExactFields;
 use crate::problem::Problem;
 use crate::warnings::LOCAL_REFERENCE_MARGIN;
@@ -87,7 +87,7 @@ fn over_history(
     let t0 = Instant::now();
     crate::resources::check(navier).map_err(|e| format!("the Navier model's run does not fit: {}", e.reason))?;
     let times: Vec<f64> = history.iter().map(|h| h.0).collect();
-    let sim = navier::simulate_sampled(&navier.case, &navier.navier, dynamics, &Silent, Sampling::Times(&times), |_| Ok(()))
+    let sim = navier::simulate_sampled(&navier.case, &navier.navier, dynamics, &mut StageTimer::new(&Silent), Sampling::Times(&times), |_| Ok(()))
         .map_err(|e| format!("the Navier model's run failed: {e}"))?;
     let description = format!(
         "MLSM elastodynamics ({} nodes, spacing {:.3e}, {} steps of {:.3e} s); compared at {}",

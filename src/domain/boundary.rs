@@ -14,7 +14,7 @@
 //! normals (the bisector at a rectangle corner); how the boundary conditions of the
 //! parts are combined there is decided in `navier::equations`.
 
-use super::density::SpacingField;
+use super::density::{Refinement, SpacingField};
 use super::shape::{BoundaryCurve, Domain, Point};
 
 /// A boundary node before it joins the node set.
@@ -115,6 +115,19 @@ fn exact_corner(s_on: f64, s_off: f64, s_sample_off: f64, d: &dyn Fn(f64) -> f64
     }
     let s = s_off - d0 * step / (d1 - d0);
     (s.is_finite() && (s - s_on).abs() <= 1e-3 * h).then_some(s)
+}
+
+/// Samples, every `h_min / 4` of `refinement`, of the boundary parts it refines
+/// towards (none when it names no part).
+pub fn refined_parts(domain: &Domain, refinement: &Refinement) -> Vec<Point> {
+    if refinement.parts.is_empty() {
+        return Vec::new();
+    }
+    discretise_boundary(domain, refinement.spacing / 4.0)
+        .into_iter()
+        .filter(|s| s.touches.iter().any(|(part, _)| refinement.parts.contains(part)))
+        .map(|s| s.position)
+        .collect()
 }
 
 /// Sample the boundary of `domain` at spacing about `h` (see module docs).

@@ -12,7 +12,6 @@
 //! of neighbouring nodes differs by less than a factor `1 + g`, so the density has no
 //! jumps (Slak and Kosec 2019 use the same kind of function).
 
-use super::boundary::discretise_boundary;
 use super::shape::{Domain, Point};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use serde::Serialize;
@@ -82,17 +81,12 @@ impl SpacingField {
         SpacingField { far: h, refinement: None, samples: None }
     }
 
-    /// Spacing `far` away from the targets of `refinement` on `domain`. The distance to
-    /// a boundary part is measured to samples of it every `h_min / 4`.
-    pub fn graded(domain: &Domain, far: f64, refinement: &Refinement) -> Self {
+    /// Spacing `far` away from the targets of `refinement`: its points and
+    /// `part_samples`, samples of the boundary parts it names
+    /// ([`super::boundary::refined_parts`]), the distance to a part being measured to them.
+    pub fn graded(far: f64, refinement: &Refinement, part_samples: Vec<Point>) -> Self {
         let mut targets: Vec<Point> = refinement.points.clone();
-        if !refinement.parts.is_empty() {
-            for s in discretise_boundary(domain, refinement.spacing / 4.0) {
-                if s.touches.iter().any(|(part, _)| refinement.parts.contains(part)) {
-                    targets.push(s.position);
-                }
-            }
-        }
+        targets.extend(part_samples);
         let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&targets).expect("finite refinement targets");
         SpacingField { far, refinement: Some((refinement.clone(), Arc::new(tree))), samples: None }
     }
@@ -204,7 +198,7 @@ mod tests {
         assert!((SpacingField::uniform(0.05).node_estimate(&domain, f64::INFINITY) - 1600.0).abs() < 1e-6 * 1600.0);
         let (h_min, g, h_max) = (0.002, 0.2, 0.05);
         let r = Refinement { spacing: h_min, growth: g, parts: Vec::new(), points: vec![[0.0, 0.0]] };
-        let field = SpacingField::graded(&domain, h_max, &r);
+        let field = SpacingField::graded(h_max, &r, Vec::new());
         assert_eq!(field.at([0.0, 0.0]), h_min);
         assert!((field.at([0.1, 0.0]) - (h_min + g * 0.1)).abs() < 1e-15);
         assert_eq!(field.at([0.9, 0.9]), h_max);

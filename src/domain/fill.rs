@@ -304,7 +304,7 @@ mod tests {
         use crate::domain::density::Refinement;
         let d = Domain::rectangle([-1.0, -1.0], [1.0, 1.0]);
         let r = Refinement { spacing: 0.01, growth: 0.2, parts: Vec::new(), points: vec![[0.0, 0.0]] };
-        let field = SpacingField::graded(&d, 0.1, &r);
+        let field = SpacingField::graded(0.1, &r, Vec::new());
         let boundary: Vec<Point> = super::super::boundary::discretise_boundary_graded(&d, &field).into_iter().map(|s| s.position).collect();
         let interior = scattered_fill(&d, &boundary, &field, 3);
         assert_eq!(interior, scattered_fill(&d, &boundary, &field, 3), "deterministic");

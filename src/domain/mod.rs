@@ -56,7 +56,7 @@ impl FillParams {
     pub fn field(&self, domain: &Domain) -> SpacingField {
         let field = match &self.refine {
             None => SpacingField::uniform(self.spacing),
-            Some(r) => SpacingField::graded(domain, self.spacing, r),
+            Some(r) => SpacingField::graded(self.spacing, r, boundary::refined_parts(domain, r)),
         };
         match &self.adapted {
             None => field,

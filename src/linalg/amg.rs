@@ -25,39 +25,16 @@
 
 use super::aggregation::{aggregate, strength_graph, tentative, Blocks};
 use super::blocks::Transfer;
-pub use super::csr::product;
-use super::csr::{to_csr, Csr};
+use super::csr::{product, to_csr, Csr};
+pub use super::layout::NodeLayout;
+pub use super::level_operator::Finest;
 use super::level_operator::LevelOperator;
 use super::near_null::{left_near_null, rigid_body_modes, LEFT_NULL_ITERATIONS};
 use super::smoother::{inverse_diagonal_blocks, Sweep};
 use super::SparseMatrix;
-use super::{gmres, spgemm, vector_state};
+use super::orthogonal::orthogonalise;
+use super::{spgemm, vector_state};
 use nalgebra::DMatrix;
-
-/// Where the unknowns of a system live, for the near-null space: `per_node`
-/// interleaved unknowns per node (`u, v[, p]`), node `i` at `positions[i]`.
-#[derive(Clone, Copy, Debug)]
-pub struct NodeLayout<'a> {
-    /// Unknowns per node; the first two are the displacement.
-    pub per_node: usize,
-    /// Position of each node (ghosts included).
-    pub positions: &'a [[f64; 2]],
-    /// Unknowns after the nodes' that belong to no node: the multipliers of a
-    /// bordered system ([`super::border`]), 0 for none.
-    pub multipliers: usize,
-}
-
-impl NodeLayout<'_> {
-    /// The layout of the nodes' unknowns alone (a bordered system's leading block).
-    pub fn nodes_only(self) -> Self {
-        NodeLayout { multipliers: 0, ..self }
-    }
-
-    /// Whether each node's third unknown is a pressure (the displacement-pressure form).
-    pub fn has_pressure(&self) -> bool {
-        self.per_node == 3
-    }
-}
 
 /// Settings of the hierarchy.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -80,17 +57,6 @@ impl Default for AmgParams {
     fn default() -> Self {
         AmgParams { strength: 0.0, coarse_strength: 0.05, max_coarse: 400, max_levels: 12 }
     }
-}
-
-/// What a hierarchy keeps of its finest operator once it is built.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Finest {
-    /// The system the Krylov method solves: its rows stay in double precision for the
-    /// method's products ([`Amg::fine_operator`]).
-    System,
-    /// An operator that only preconditions (a low-order operator, a saddle point's
-    /// displacement block, rows the Krylov method holds elsewhere): single precision.
-    PreconditionerOnly,
 }
 
 /// Cycles of [`Amg::cycle_growth`]'s power iteration (the L bracket's growth of 1e6
@@ -169,7 +135,7 @@ fn spectral_radius(a: &Csr, inv_diag: &Csr) -> f64 {
         product(a, &v[j], &mut tmp);
         let mut w = vec![0.0; n];
         product(inv_diag, &tmp, &mut w);
-        let (projections, norm) = gmres::orthogonalise(&v, &mut w);
+        let (projections, norm) = orthogonalise(&v, &mut w);
         for (i, d) in projections.into_iter().enumerate() {
             h[(i, j)] = d;
         }

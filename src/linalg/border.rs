@@ -25,7 +25,7 @@
 //! on which ILU met a zero pivot.
 
 use super::csr::Csr;
-use super::precond::BuiltPreconditioner;
+use super::inverse::Inverse;
 use super::SolveError;
 use nalgebra::DMatrix;
 use std::collections::BTreeMap;
@@ -136,7 +136,7 @@ pub fn leading_block(system: &Csr, multipliers: usize) -> Csr {
 #[derive(Debug)]
 pub struct Bordered {
     /// `M ≈ A`.
-    inner: BuiltPreconditioner,
+    inner: Box<dyn Inverse>,
     /// `G` by columns, in the solved system's scale.
     columns: Vec<Vec<(usize, f64)>>,
     /// `T⁻¹`, `T = −C M⁻¹ G`.
@@ -150,7 +150,7 @@ impl Bordered {
     /// The preconditioner of `system` (`[A G; C 0]` with `multipliers` trailing
     /// unknowns) around `inner ≈ A`. Errors: [`SolveError::Singular`] when `T` is
     /// singular (constraints that `M` cannot tell apart, or that repeat one another).
-    pub fn build(system: &Csr, multipliers: usize, inner: BuiltPreconditioner) -> Result<Self, SolveError> {
+    pub fn build(system: &Csr, multipliers: usize, inner: Box<dyn Inverse>) -> Result<Self, SolveError> {
         let (n, k) = (system.nrows() - multipliers, multipliers);
         let mut columns = vec![Vec::new(); k];
         for i in 0..n {
@@ -208,8 +208,8 @@ impl Bordered {
     }
 
     /// `M`.
-    pub fn inner(&self) -> &BuiltPreconditioner {
-        &self.inner
+    pub fn inner(&self) -> &dyn Inverse {
+        &*self.inner
     }
 
     /// Unknowns, multipliers included.
@@ -225,6 +225,7 @@ impl Bordered {
 
 #[cfg(test)]
 mod tests {
+    use super::super::precond::BuiltPreconditioner;
     use super::super::{csr, gmres, Preconditioner};
     use super::*;
     use nalgebra::DVector;
@@ -293,7 +294,7 @@ mod tests {
         let lead = csr::columns_of(leading_block(&k, 3));
         for (kind, most) in [(Preconditioner::Ilu0, 60), (Preconditioner::Ilut { drop: 0.0, fill: 60 }, 2)] {
             let inner = BuiltPreconditioner::build(&lead, kind, None).expect("a regular leading block");
-            let pc = Bordered::build(&k, 3, inner).expect("independent constraints");
+            let pc = Bordered::build(&k, 3, Box::new(inner)).expect("independent constraints");
             let out = gmres::solve_gmres(&k, &rhs, |v, z| pc.solve_into(v, z), 1e-12, 200, 30);
             assert_eq!(out.status, gmres::Status::Converged, "{kind:?}");
             assert!(out.iterations <= most, "{kind:?}: {} iterations", out.iterations);
@@ -309,6 +310,6 @@ mod tests {
         border.rows[2] = border.rows[1].clone();
         let (k, _) = border.bordered(a, &b);
         let inner = BuiltPreconditioner::build(&csr::columns_of(leading_block(&k, 3)), Preconditioner::Ilu0, None).unwrap();
-        assert!(matches!(Bordered::build(&k, 3, inner), Err(SolveError::Singular { .. })));
+        assert!(matches!(Bordered::build(&k, 3, Box::new(inner)), Err(SolveError::Singular { .. })));
     }
 }

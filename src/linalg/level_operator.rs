@@ -14,11 +14,21 @@
 //! the sweep reads `x` in pairs (BENCHMARKS.md, "Node blocks in the cycle").
 
 use super::aggregation::Blocks;
-use super::amg::Finest;
 use super::blocks::BlockRows;
 use super::csr::{product, Csr, RowsRef};
 use super::smoother::{gauss_seidel, Sweep};
 use rayon::prelude::*;
+
+/// What a hierarchy keeps of its finest operator once it is built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Finest {
+    /// The system the Krylov method solves: its rows stay in double precision for the
+    /// method's products ([`super::amg::Amg::fine_operator`]).
+    System,
+    /// An operator that only preconditions (a low-order operator, a saddle point's
+    /// displacement block, rows the Krylov method holds elsewhere): single precision.
+    PreconditionerOnly,
+}
 
 /// How a level's operator is held.
 #[derive(Debug)]

@@ -8,6 +8,7 @@ use std::borrow::Cow;
 use std::time::Instant;
 
 use super::csr::Csr;
+use super::inverse::Inverse;
 use super::{
     amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error, subtract_column_product,
 };
@@ -276,7 +277,7 @@ pub(super) fn solve_gmres_multigrid(
     let amg = Box::new(amg::Amg::build_from_rows(finest, layout.map(NodeLayout::nodes_only), amg::AmgParams::default(), keep));
     let pc = match system.as_ref().filter(|_| multipliers > 0) {
         None => precond::BuiltPreconditioner::Amg(amg),
-        Some(rows) => match border::Bordered::build(rows, multipliers, precond::BuiltPreconditioner::Amg(amg)) {
+        Some(rows) => match border::Bordered::build(rows, multipliers, Box::new(precond::BuiltPreconditioner::Amg(amg))) {
             Ok(b) => precond::BuiltPreconditioner::Bordered(Box::new(b)),
             Err(e) => return Err(Box::new((e, Leftover::Rows(system.expect("a bordered system is kept"))))),
         },
@@ -317,7 +318,7 @@ pub(super) fn solve_gmres_saddle_point(
     drop((auxiliary, lead));
     let mut pc = precond::BuiltPreconditioner::SaddlePoint(Box::new(built));
     if layout.multipliers > 0 {
-        pc = precond::BuiltPreconditioner::Bordered(Box::new(border::Bordered::build(&rows, layout.multipliers, pc)?));
+        pc = precond::BuiltPreconditioner::Bordered(Box::new(border::Bordered::build(&rows, layout.multipliers, Box::new(pc))?));
     }
     run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))
 }
@@ -346,7 +347,7 @@ pub(super) fn run_gmres(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
-    let apply = |x: &[f64], y: &mut [f64]| amg::product(rows, x, y);
+    let apply = |x: &[f64], y: &mut [f64]| csr::product(rows, x, y);
     let out = gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart, stall);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
@@ -356,7 +357,7 @@ pub(super) fn run_gmres(
         gmres::Status::Converged => {
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(pc, (setup_seconds, solve_seconds), counts);
-            let report = with_own_error(report, |x, y| amg::product(rows, x, y), &r, pc, &out.x, layout);
+            let report = with_own_error(report, |x, y| csr::product(rows, x, y), &r, pc, &out.x, layout);
             Ok((out.x, report))
         }
         gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {

@@ -32,10 +32,13 @@ pub mod csr;
 pub mod distributed;
 pub mod gmres;
 pub mod ilut;
+pub mod inverse;
+pub mod layout;
 mod level_operator;
 pub mod lu;
 mod methods;
 pub mod near_null;
+pub mod orthogonal;
 pub mod params;
 pub mod partition;
 pub mod precond;
@@ -61,7 +64,7 @@ use methods::{
     GmresSettings, Leftover, Rhs, Start,
 };
 
-pub use amg::NodeLayout;
+pub use layout::NodeLayout;
 pub use csr::Csr;
 pub use params::{
     lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
@@ -105,7 +108,7 @@ fn residual(a: &SparseMatrix, x: &[f64], b: &[f64]) -> Vec<f64> {
 /// The residual `b − A x`, `A` in rows (in parallel).
 fn row_residual(a: &Csr, x: &[f64], b: &[f64]) -> Vec<f64> {
     let mut r = vec![0.0; b.len()];
-    amg::product(a, x, &mut r);
+    csr::product(a, x, &mut r);
     r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r);
     r
 }

@@ -5,7 +5,7 @@
 //! not symmetric and its left near-null vectors are not the rigid-body modes.
 
 use super::aggregation::Blocks;
-use super::amg::NodeLayout;
+use super::layout::NodeLayout;
 use super::csr::Csr;
 use super::smoother::MAX_BLOCK;
 
@@ -143,7 +143,7 @@ mod tests {
         let mut copies = Vec::new();
         let product_norm = |v: &[f64]| {
             let mut out = vec![0.0; 2 * nodes];
-            crate::linalg::amg::product(&at, v, &mut out);
+            crate::linalg::csr::product(&at, v, &mut out);
             out.iter().map(|x| x * x).sum::<f64>().sqrt()
         };
         for c in 0..k {

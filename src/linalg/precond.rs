@@ -5,8 +5,10 @@
 //! All are exposed to `faer::matrix_free` through [`BuiltPreconditioner`],
 //! whose `LinOp::apply` / `Precond::apply_in_place` compute `M⁻¹ v`.
 
-use super::amg::{Amg, AmgParams, NodeLayout};
+use super::amg::{Amg, AmgParams};
+use super::layout::NodeLayout;
 pub use super::ilut::{Ilut, ILUT_PIVOT_RTOL};
+use super::inverse::Inverse;
 use super::{Preconditioner, SolveError, SparseMatrix};
 use faer::dyn_stack::{MemStack, StackReq};
 use faer::matrix_free::{LinOp, Precond};
@@ -104,7 +106,7 @@ impl BuiltPreconditioner {
             let lead = super::csr::columns_of(super::border::leading_block(&rows, l.multipliers));
             let inner = Self::build(&lead, kind, Some(l.nodes_only()))?;
             drop(lead);
-            return Ok(BuiltPreconditioner::Bordered(Box::new(super::border::Bordered::build(&rows, l.multipliers, inner)?)));
+            return Ok(BuiltPreconditioner::Bordered(Box::new(super::border::Bordered::build(&rows, l.multipliers, Box::new(inner))?)));
         }
         Ok(match kind {
             Preconditioner::Jacobi => BuiltPreconditioner::Jacobi(Jacobi::try_new(a)?),
@@ -134,69 +136,12 @@ impl BuiltPreconditioner {
         })
     }
 
-    /// Stored entries of the preconditioner (for reports).
-    pub fn nonzeros(&self) -> usize {
-        match self {
-            BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
-            // faer-precond's L includes its unit diagonal; count it once (as U's).
-            BuiltPreconditioner::Ilu0(p) => p.symbolic().l_nnz() + p.symbolic().u_nnz() - p.dim(),
-            BuiltPreconditioner::Ilut(p) => p.nonzeros(),
-            BuiltPreconditioner::Amg(p) => p.nonzeros(),
-            BuiltPreconditioner::SaddlePoint(p) => p.nonzeros(),
-            BuiltPreconditioner::Bordered(p) => p.nonzeros(),
-        }
-    }
-
-    /// The multigrid, alone or inside the border of a bordered system.
-    pub(super) fn multigrid(&self) -> Option<&Amg> {
-        match self {
-            BuiltPreconditioner::Amg(p) => Some(p),
-            BuiltPreconditioner::Bordered(p) => p.inner().multigrid(),
-            _ => None,
-        }
-    }
-
     /// The operator in compressed rows, when the preconditioner keeps one (AMG's
     /// finest level).
     pub fn fine_operator(&self) -> Option<&super::csr::Csr> {
         match self {
             BuiltPreconditioner::Amg(p) => p.fine_operator(),
             _ => None,
-        }
-    }
-
-    /// What the report adds to the method's name: AMG's levels and operator complexity.
-    pub fn describe(&self) -> String {
-        match self {
-            BuiltPreconditioner::Amg(p) => levels(p),
-            BuiltPreconditioner::SaddlePoint(p) => {
-                format!(" on the displacement block{}, the Schur complement by its SIMPLE diagonal", levels(p.multigrid()))
-            }
-            BuiltPreconditioner::Bordered(p) => format!("{}, bordered by the constraints' Schur complement", p.inner().describe()),
-            _ => String::new(),
-        }
-    }
-
-    pub(super) fn dim(&self) -> usize {
-        match self {
-            BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
-            BuiltPreconditioner::Ilu0(p) => p.dim(),
-            BuiltPreconditioner::Ilut(p) => p.dim(),
-            BuiltPreconditioner::Amg(p) => p.dim(),
-            BuiltPreconditioner::SaddlePoint(p) => p.dim(),
-            BuiltPreconditioner::Bordered(p) => p.dim(),
-        }
-    }
-
-    /// `z = M⁻¹ v` for one vector.
-    pub fn solve_into(&self, v: &[f64], z: &mut [f64]) {
-        match self {
-            BuiltPreconditioner::Amg(p) => p.solve_into(v, z),
-            BuiltPreconditioner::Bordered(p) => p.solve_into(v, z),
-            _ => {
-                z.copy_from_slice(v);
-                self.solve_in_place(z);
-            }
         }
     }
 
@@ -216,6 +161,63 @@ impl BuiltPreconditioner {
                 let m = faer::MatMut::from_column_major_slice_mut(x, n, 1);
                 Precond::apply_in_place(&**p, m, Par::Seq, MemStack::new(&mut []));
             }
+        }
+    }
+}
+
+impl Inverse for BuiltPreconditioner {
+    fn dim(&self) -> usize {
+        match self {
+            BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
+            BuiltPreconditioner::Ilu0(p) => p.dim(),
+            BuiltPreconditioner::Ilut(p) => p.dim(),
+            BuiltPreconditioner::Amg(p) => p.dim(),
+            BuiltPreconditioner::SaddlePoint(p) => p.dim(),
+            BuiltPreconditioner::Bordered(p) => p.dim(),
+        }
+    }
+
+    fn nonzeros(&self) -> usize {
+        match self {
+            BuiltPreconditioner::Jacobi(j) => j.inv_diag.len(),
+            // faer-precond's L includes its unit diagonal; count it once (as U's).
+            BuiltPreconditioner::Ilu0(p) => p.symbolic().l_nnz() + p.symbolic().u_nnz() - p.dim(),
+            BuiltPreconditioner::Ilut(p) => p.nonzeros(),
+            BuiltPreconditioner::Amg(p) => p.nonzeros(),
+            BuiltPreconditioner::SaddlePoint(p) => p.nonzeros(),
+            BuiltPreconditioner::Bordered(p) => p.nonzeros(),
+        }
+    }
+
+    fn solve_into(&self, v: &[f64], z: &mut [f64]) {
+        match self {
+            BuiltPreconditioner::Amg(p) => p.solve_into(v, z),
+            BuiltPreconditioner::Bordered(p) => p.solve_into(v, z),
+            _ => {
+                z.copy_from_slice(v);
+                self.solve_in_place(z);
+            }
+        }
+    }
+
+    fn multigrid(&self) -> Option<&Amg> {
+        match self {
+            BuiltPreconditioner::Amg(p) => Some(p),
+            BuiltPreconditioner::SaddlePoint(_) => None,
+            BuiltPreconditioner::Bordered(p) => p.inner().multigrid(),
+            BuiltPreconditioner::Jacobi(_) | BuiltPreconditioner::Ilu0(_) | BuiltPreconditioner::Ilut(_) => None,
+        }
+    }
+
+    /// AMG's levels and operator complexity.
+    fn describe(&self) -> String {
+        match self {
+            BuiltPreconditioner::Amg(p) => levels(p),
+            BuiltPreconditioner::SaddlePoint(p) => {
+                format!(" on the displacement block{}, the Schur complement by its SIMPLE diagonal", levels(p.multigrid()))
+            }
+            BuiltPreconditioner::Bordered(p) => format!("{}, bordered by the constraints' Schur complement", p.inner().describe()),
+            BuiltPreconditioner::Jacobi(_) | BuiltPreconditioner::Ilu0(_) | BuiltPreconditioner::Ilut(_) => String::new(),
         }
     }
 }

@@ -24,7 +24,8 @@
 //! complement has eigenvalues 0.015 to 4 against its diagonal there, two with a
 //! negative real part: the equal-order pressure's weak modes).
 
-use super::amg::{Amg, AmgParams, Finest, NodeLayout};
+use super::amg::{Amg, AmgParams, Finest};
+use super::layout::NodeLayout;
 use super::csr::Csr;
 use std::sync::Mutex;
 

@@ -17,7 +17,7 @@
 //! shipped scenes.
 
 use super::ops::Op;
-use super::rbffd::{polynomial_size, Radial};
+use super::radial::Radial;
 use crate::choice::choice;
 use serde::Serialize;
 
@@ -122,6 +122,11 @@ impl Basis {
             }
         }
     }
+}
+
+/// Number of monomials of total degree `<= degree` in 2D: `(p + 1)(p + 2) / 2`.
+pub fn polynomial_size(degree: u32) -> usize {
+    ((degree + 1) * (degree + 2) / 2) as usize
 }
 
 /// The monomials of a least-squares basis at one centre, in local coordinates.

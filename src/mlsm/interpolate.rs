@@ -5,7 +5,7 @@
 //! which degenerates when a target sits on a node). Reproduces polynomials of degree
 //! `p` exactly; error `O(h^(p+1))` for smooth fields.
 
-use super::{wls::shape_functions, Basis, Op, ShapeError, Weight};
+use super::{fit::shape_functions, Basis, Op, ShapeError, Weight};
 use crate::domain::Point;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;

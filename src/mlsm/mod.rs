@@ -1,14 +1,19 @@
 //! Meshless shape functions: weighted least squares over each node's support (MLSM)
 //! or RBF-FD on it.
 //!
-//! [`basis`] defines the local bases and weights, [`wls`] one least-squares solve,
-//! [`rbffd`] one RBF-FD solve, [`shapes`] the parallel computation for all nodes of
-//! exactly the operators each node needs, [`interpolate`] nodal fields at other
-//! points.
+//! From the bottom up: [`ops`] the operators, [`radial`] the radial functions,
+//! [`basis`] the local bases and weights, [`frame`] a stencil in local coordinates,
+//! [`wls`] one least-squares solve, [`rbffd`] one RBF-FD solve, [`fit`] the one
+//! dispatch from a basis to its solve, [`stencil`] default support sizes, [`shapes`]
+//! the parallel computation for all nodes of exactly the operators each node needs,
+//! [`interpolate`] nodal fields at other points.
 
 pub mod basis;
+pub mod fit;
+pub mod frame;
 pub mod interpolate;
 pub mod ops;
+pub mod radial;
 pub mod rbffd;
 pub mod shapes;
 pub mod stencil;
@@ -16,7 +21,7 @@ pub mod wls;
 
 pub use basis::{Basis, BasisKind, Weight, WeightKind};
 pub use ops::{Op, OpSet};
-pub use rbffd::Radial;
+pub use radial::Radial;
 pub use shapes::{compute_shapes, degenerate_supports, ShapeError, Shapes};
 pub use stencil::{default_rbf_fd_support, default_support};
 

@@ -22,104 +22,15 @@
 //!   `1/sqrt(r^2 + c^2)`, with `c` in local units (the scene gives it in units of the
 //!   local spacing).
 
-use super::basis::LocalBasis;
+use super::basis::{Basis, LocalBasis};
+use super::frame::{monomial_matrix, LocalFrame, RankDeficient};
 use super::ops::Op;
-use super::wls::{monomial_matrix, LocalFrame, RankDeficient};
-use super::Basis;
-use serde::Serialize;
+use super::radial::Radial;
 
 /// Largest `|w| |M| / |rhs|` accepted (in max norms): a lower bound of the condition
 /// number of the local system that is actually reached. Above it the weights carry
 /// fewer than four significant digits.
 pub const AMPLIFICATION_LIMIT: f64 = 1e12;
-
-/// The radial function of an RBF-FD stencil.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "lowercase")]
-pub enum Radial {
-    /// Polyharmonic spline `r^order`, `order` odd and at least 3.
-    Phs {
-        /// The exponent (3, 5, 7, ...).
-        order: u32,
-    },
-    /// `exp(-(r/c)^2)`, `c = shape` x local spacing.
-    Gaussian {
-        /// Shape parameter in units of the local spacing.
-        shape: f64,
-    },
-    /// `sqrt(r^2 + c^2)`.
-    Mq {
-        /// Shape parameter in units of the local spacing.
-        shape: f64,
-    },
-    /// `1 / sqrt(r^2 + c^2)`.
-    Imq {
-        /// Shape parameter in units of the local spacing.
-        shape: f64,
-    },
-}
-
-impl Radial {
-    /// Shape parameter in units of the local spacing (`None` for PHS).
-    pub fn shape(&self) -> Option<f64> {
-        match *self {
-            Radial::Phs { .. } => None,
-            Radial::Gaussian { shape } | Radial::Mq { shape } | Radial::Imq { shape } => Some(shape),
-        }
-    }
-
-    /// `(phi, dphi/dr / r, (d2phi/dr2 - dphi/dr / r) / r^2)` at distance `r`, with `c` the
-    /// shape parameter in local units: then `d phi / dz_a = f1 d_a` and
-    /// `d2 phi / dz_a dz_b = f2 d_a d_b + f1 delta_ab` for `d = z - z_j`.
-    fn profile(&self, r: f64, c: f64) -> (f64, f64, f64) {
-        match *self {
-            Radial::Phs { order } => {
-                let b = order as f64;
-                if r == 0.0 {
-                    // Every derivative up to second order vanishes at the centre for b >= 3.
-                    return (0.0, 0.0, 0.0);
-                }
-                // Integer powers by multiplication (`powf` was most of the cost of a
-                // stencil: 1.95 s -> see BENCHMARKS.md, "Shapes per node").
-                let k = order as i32;
-                let rk2 = r.powi(k - 2);
-                (rk2 * r * r, b * rk2, b * (b - 2.0) * rk2 / (r * r))
-            }
-            Radial::Gaussian { .. } => {
-                let f = (-(r * r) / (c * c)).exp();
-                (f, -2.0 * f / (c * c), 4.0 * f / (c * c * c * c))
-            }
-            Radial::Mq { .. } => {
-                let t = (r * r + c * c).sqrt();
-                (t, 1.0 / t, -1.0 / (t * t * t))
-            }
-            Radial::Imq { .. } => {
-                let t = (r * r + c * c).sqrt();
-                (1.0 / t, -1.0 / (t * t * t), 3.0 / (t * t * t * t * t))
-            }
-        }
-    }
-
-    /// `(L phi(|z - zj|))` at `z = 0`.
-    fn operator_at_centre(&self, op: Op, zj: [f64; 2], c: f64) -> f64 {
-        let d = [-zj[0], -zj[1]];
-        // Local coordinates (within the unit disc): no overflow for `sqrt` to guard against.
-        let (f, f1, f2) = self.profile((d[0] * d[0] + d[1] * d[1]).sqrt(), c);
-        match op {
-            Op::Value => f,
-            Op::Dx => f1 * d[0],
-            Op::Dy => f1 * d[1],
-            Op::Dxx => f2 * d[0] * d[0] + f1,
-            Op::Dxy => f2 * d[0] * d[1],
-            Op::Dyy => f2 * d[1] * d[1] + f1,
-        }
-    }
-}
-
-/// Number of monomials of total degree `<= degree` in 2D: `(p + 1)(p + 2) / 2`.
-pub fn polynomial_size(degree: u32) -> usize {
-    ((degree + 1) * (degree + 2) / 2) as usize
-}
 
 /// RBF-FD weights of `ops` at `centre` for the stencil `points` (the centre first),
 /// written to `out[k * n .. (k + 1) * n]` for the k-th operator.

@@ -3,7 +3,9 @@
 
 use super::basis::{Basis, LocalBasis};
 use super::ops::{Op, OpSet};
-use super::wls::{monomial_matrix, rank_ratio, shape_functions, LocalFrame, RANK_TOLERANCE};
+use super::fit::shape_functions;
+use super::frame::{monomial_matrix, LocalFrame};
+use super::wls::{rank_ratio, RANK_TOLERANCE};
 use super::Approximation;
 use crate::domain::neighbors::Supports;
 use crate::domain::Point;

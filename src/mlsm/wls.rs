@@ -11,16 +11,8 @@
 //! duplicated nodes) is reported, not turned into NaNs.
 
 use super::basis::{Basis, LocalBasis, Weight};
+use super::frame::{LocalFrame, RankDeficient};
 use super::ops::Op;
-
-/// Why a local fit failed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RankDeficient {
-    /// Smallest `|R_kk| / max |R_kk|` found.
-    pub ratio: f64,
-    /// Basis size `m`.
-    pub basis_size: usize,
-}
 
 /// Relative size of the smallest QR pivot below which `W B` counts as rank deficient.
 pub const RANK_TOLERANCE: f64 = 1e-10;
@@ -47,23 +39,10 @@ pub fn rank_ratio(b: &mut [f64], n: usize, m: usize) -> f64 {
     pivot_ratio(diag.iter().copied())
 }
 
-/// The monomials of `local` at the local coordinates `z`: the column-major
-/// `z.len() x m` matrix `P_jk = b_k(z_j)`.
-pub fn monomial_matrix(local: &LocalBasis, z: &[[f64; 2]]) -> Vec<f64> {
-    let (n, m) = (z.len(), local.len());
-    let (mut p, mut row) = (vec![0.0; n * m], vec![0.0; m]);
-    for (j, &zj) in z.iter().enumerate() {
-        local.values(zj, &mut row);
-        for k in 0..m {
-            p[k * n + j] = row[k];
-        }
-    }
-    p
-}
-
-/// Shape functions of `ops` at `centre` for the support `points` (the centre first),
-/// written to `out[k * n .. (k + 1) * n]` for the k-th operator: weighted least
-/// squares for the monomial bases, [`super::rbffd`] for RBF-FD.
+/// Weighted least-squares shape functions of `ops` at `centre` for the support
+/// `points` (the centre first), written to `out[k * n .. (k + 1) * n]` for the k-th
+/// operator; `basis` is a monomial or tensor basis (every basis goes through
+/// [`super::fit::shape_functions`], which sends RBF-FD to [`super::rbffd`]).
 pub fn shape_functions(
     basis: &Basis,
     weight: &Weight,
@@ -72,9 +51,6 @@ pub fn shape_functions(
     ops: &[Op],
     out: &mut [f64],
 ) -> Result<(), RankDeficient> {
-    if let Basis::RbfFd { radial, degree } = basis {
-        return super::rbffd::shape_functions(radial, *degree, centre, points, ops, out);
-    }
     SCRATCH.with(|scratch| {
         let mut scratch = scratch.borrow_mut();
         let Scratch { frame, local, work } = &mut *scratch;
@@ -209,43 +185,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
         }
     }
     (sums[0] + sums[1]) + (sums[2] + sums[3]) + tail
-}
-
-/// A stencil in local coordinates: `z_j = (x_j - centre) / radius`, `radius` the
-/// largest distance from the centre, `nearest` the smallest non-zero one (the local
-/// spacing that scales weights and shape parameters). Shared by least squares and
-/// RBF-FD, so both are invariant to translation and to the unit of length.
-#[derive(Default)]
-pub(super) struct LocalFrame {
-    /// `|x_j - centre|`.
-    pub dist: Vec<f64>,
-    /// `max_j |x_j - centre|`.
-    pub radius: f64,
-    /// `min_j |x_j - centre|` over the points other than the centre.
-    pub nearest: f64,
-    /// Scaled local coordinates.
-    pub z: Vec<[f64; 2]>,
-}
-
-impl LocalFrame {
-    /// The frame of `points` around `centre`.
-    pub fn new(centre: [f64; 2], points: &[[f64; 2]]) -> LocalFrame {
-        let mut frame = LocalFrame::default();
-        frame.fill(centre, points);
-        frame
-    }
-
-    /// This frame made the frame of `points` around `centre`, in its own buffers.
-    pub fn fill(&mut self, centre: [f64; 2], points: &[[f64; 2]]) {
-        self.z.clear();
-        self.z.extend(points.iter().map(|x| [x[0] - centre[0], x[1] - centre[1]]));
-        self.dist.clear();
-        self.dist.extend(self.z.iter().map(|d| d[0].hypot(d[1])));
-        self.radius = self.dist.iter().cloned().fold(0.0, f64::max);
-        self.nearest = self.dist.iter().cloned().filter(|&d| d > 0.0).fold(f64::INFINITY, f64::min);
-        let radius = self.radius;
-        self.z.iter_mut().for_each(|d| *d = [d[0] / radius, d[1] / radius]);
-    }
 }
 
 #[cfg(test)]

@@ -22,7 +22,7 @@
 //! eigenvalue with a positive real part makes every explicit run grow).
 
 use super::discrete::Discretisation;
-use super::estimate::{self, Estimate};
+use super::estimate::Estimate;
 use super::system::System;
 use super::NavierParams;
 use crate::case::{Case, Loads};
@@ -36,7 +36,7 @@ use crate::elasticity::material::Lame;
 use crate::elasticity::stress::strain;
 use crate::exact::{self, ExactSolution};
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
-use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
+use crate::pipeline::{stage, RunError, StageTimer, StageTimings};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 
@@ -327,26 +327,14 @@ pub enum Sampling<'a> {
     Times(&'a [f64]),
 }
 
-/// Run `case` (with `dynamics`) by explicit MLSM elastodynamics, calling `snapshot`
-/// at the snapshot steps, and estimate its error over the history. Energies:
-/// `E_kin = sum rho A_i |v_i|^2 / 2`, `E_el = sum A_i sigma : eps / 2`,
-/// `E_ext = -sum A_i f(x_i) . u_i`, `A_i` lumped Delaunay areas.
-pub fn simulate(
-    case: &Case,
-    params: &NavierParams,
-    dynamics: &DynamicsParams,
-    progress: &dyn Progress,
-    snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
-) -> Result<Simulation, RunError> {
-    simulate_sampled(case, params, dynamics, progress, Sampling::Estimate, snapshot)
-}
-
-/// [`simulate`], keeping the states `sampling` picks.
+/// The stages of [`super::run::simulate`] timed by `timer`, keeping the states
+/// `sampling` picks: the [`Simulation`]'s `estimate` is [`Estimate::Off`] and its
+/// `timings` empty until the caller makes the estimate and closes the timer.
 pub fn simulate_sampled(
     case: &Case,
     params: &NavierParams,
     dynamics: &DynamicsParams,
-    progress: &dyn Progress,
+    timer: &mut StageTimer,
     sampling: Sampling,
     mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
@@ -354,9 +342,8 @@ pub fn simulate_sampled(
     let mut case = case.clone();
     case.outputs.stress = true;
     let case = &case;
-    let mut timer = StageTimer::new(progress);
     let exact = case.exact_solution();
-    let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
+    let disc = Discretisation::new(case, params, exact.as_deref(), timer)?;
     let system = timer.run(stage::ASSEMBLY, || {
         let system = condensed(case, &disc, exact.as_deref(), dynamics.density)?;
         let note = format!("{} dynamic, {} algebraic unknowns", system.dynamic.len(), system.algebraic.len());
@@ -388,7 +375,7 @@ pub fn simulate_sampled(
         Sampling::Times(times) => TimeSamples::at_times(times, grid.dt, grid.steps, 1e-9 * dynamics.end_time),
     };
     let mut kept = BTreeMap::new();
-    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
+    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, timer, |step, s| {
         let (keep, write) = (samples.keeps(step), is_snapshot(step, grid.steps, dynamics));
         let u = nodal(&system.expand(s.t, &s.u, false));
         let v = if keep || write { nodal(&system.expand(s.t, &s.v, true)) } else { Vec::new() };
@@ -403,9 +390,6 @@ pub fn simulate_sampled(
     let history = samples.states(&kept);
     drop(kept);
     let u = nodal(&system.expand(state.t, &state.u, false));
-    let estimate = estimate::stage(method, method.dynamic_navier_estimates(), &mut timer, || {
-        estimate::refined_dynamic(case, params, dynamics, report.time_step, points, &history)
-    })?;
     Ok(Simulation {
         positions: points.clone(),
         u,
@@ -414,9 +398,9 @@ pub fn simulate_sampled(
         energies,
         ghost_nodes: disc.ghost_count(),
         unknowns: (system.dynamic.len(), system.algebraic.len()),
-        estimate,
+        estimate: Estimate::Off,
         history,
-        timings: timer.finish(),
+        timings: StageTimings::default(),
         unbalanced: disc.survey.none_balanced(UNBALANCED_IN_TIME),
     })
 }

@@ -24,20 +24,11 @@
 //! the stress): written to `solution.vtu` as `estimated_error` (and
 //! `estimated_error_stress`).
 
-use super::discrete::Discretisation;
-use super::dynamics::Sampling;
-use super::solve::assemble_and_solve;
-use super::NavierParams;
-use crate::case::Case;
 use crate::choice::{choice, Choice};
-use crate::domain::{FillKind, NodeSet, Point};
-use crate::dynamics::DynamicsParams;
+use crate::domain::{FillKind, Point};
 use crate::elasticity::stress::StressField;
-use crate::exact::ExactSolution;
-use crate::linalg::SolverParams;
-use crate::mlsm::interpolate::mls_values;
 use crate::mlsm::{default_rbf_fd_support, Approximation, Basis, Radial, Weight};
-use crate::pipeline::{RunError, Silent, Stage, StageTimer};
+use crate::pipeline::{RunError, Stage, StageTimer};
 use crate::post::{ErrorNorms, ExactFields};
 use serde::Serialize;
 use std::time::Instant;
@@ -235,134 +226,6 @@ pub fn reference_approximation(run: &Approximation, fill: FillKind, nodes: usize
             p + 1,
             3 * Basis::RbfFd { radial: Radial::Phs { order: 3 }, degree: p + 1 }.size() / 2
         ))
-    }
-}
-
-/// The higher-degree estimate of the run `(displacement, stress)` on `nodes`.
-pub fn higher_degree(
-    case: &Case,
-    params: &NavierParams,
-    nodes: &NodeSet,
-    displacement: &[[f64; 2]],
-    stress: Option<&StressField>,
-    exact: Option<&dyn ExactSolution>,
-) -> Estimate {
-    let t0 = Instant::now();
-    let approximation = match reference_approximation(&params.approximation, params.fill.kind, nodes.len()) {
-        Ok(a) => a,
-        Err(reason) => return Estimate::Unavailable(EstimateMethod::HigherDegree.name(), reason),
-    };
-    let solver = SolverParams { kind: params.solver.kind.for_reference(), ..params.solver };
-    let reference_params = NavierParams { approximation, keep_system: false, solver, ..params.clone() };
-    let mut timer = StageTimer::new(&Silent);
-    let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
-        .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params, &mut timer).map(|s| (disc, s)));
-    let solved = solved.and_then(|(mut disc, solved)| {
-        if stress.is_some() {
-            disc.restore_gradient_shapes(&approximation)?;
-        }
-        Ok((disc, solved))
-    });
-    let (disc, solved) = match solved {
-        Ok(s) => s,
-        Err(e) => {
-            return Estimate::Unavailable(
-                EstimateMethod::HigherDegree.name(),
-                format!("the reference ({}) failed: {e}", approximation.basis.describe()),
-            )
-        }
-    };
-    let n = nodes.len();
-    let u_ref = disc.dofs.displacements(&solved.x, n);
-    let sigma_ref = stress.map(|_| disc.stress(&case.material, &disc.gradients(&solved.x), &solved.x));
-    let reference = ExactFields { displacement: u_ref, stress: sigma_ref.map(|s| s.sigma) };
-    Estimate::Done(Box::new(ErrorEstimate {
-        reference_degree: approximation.basis.polynomial_degree(),
-        reference_unknowns: disc.dofs.len(),
-        reference_nonzeros: solved.nonzeros,
-        ..ErrorEstimate::between(
-            EstimateMethod::HigherDegree,
-            format!("{}, {} nodes per stencil", approximation.basis.describe(), approximation.support),
-            &nodes.positions,
-            displacement,
-            stress,
-            &reference,
-            t0,
-        )
-    }))
-}
-
-/// The `refined` estimate of a dynamic run over its history: the scene integrated
-/// again with the run's approximation on nodes at half the spacing
-/// ([`crate::domain::FillParams::scaled`]) and the run's `time_step` divided by
-/// `2^ceil(2 / order)` (halved for Verlet and RK4, quartered for the first-order emu;
-/// the reference's own stable step when the finer nodes need a smaller one), so that
-/// both the reference's spatial error (order >= 2 in h) and its time error are at most
-/// a quarter of the run's. At each of the run's `history` states
-/// ([`crate::dynamics::driver::history_steps`]) the reference's state at the same time
-/// (its own step's, or interpolated between its two steps around it,
-/// [`crate::dynamics::history`]: only when it had to take its own stable step) is
-/// interpolated to the run's `positions` by moving least squares; the estimate is the
-/// space-time difference over those states ([`ErrorEstimate::over_history`]),
-///
-/// ```text
-/// est e_inf(u)  = max_{t,i,c} |u - u_ref| / max_{t,i,c} |u_ref|
-/// est rel_l2(u) = sqrt(sum_{t,i} |u - u_ref|^2 / sum_{t,i} |u_ref|^2)
-/// ```
-///
-/// which is 0.75 to 1 times the run's error (space and time together). The per-node
-/// indicator is the largest over the states.
-///
-/// Why not a higher degree on the same nodes as for static runs: the PHS stencils
-/// of the reference have growing modes in explicit elastodynamics (both shipped
-/// dynamic scenes diverged within 1500 steps), while the run's own basis on finer
-/// nodes keeps the stability the run had.
-pub fn refined_dynamic(
-    case: &Case,
-    params: &NavierParams,
-    dynamics: &DynamicsParams,
-    time_step: f64,
-    positions: &[Point],
-    history: &[(f64, Vec<[f64; 2]>)],
-) -> Estimate {
-    let t0 = Instant::now();
-    let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::Refined.name(), why);
-    if history.is_empty() {
-        return unavailable("the run kept no state to compare".into());
-    }
-    let estimate = EstimateParams { method: EstimateMethod::None, ..params.estimate };
-    let reference_params = NavierParams { fill: params.fill.scaled(0.5), keep_system: false, estimate, ..params.clone() };
-    let divisor = f64::from(1u32 << 2u32.div_ceil(dynamics.integrator.order()));
-    let fine = DynamicsParams { time_step: Some(time_step / divisor), ..dynamics.clone() };
-    let times: Vec<f64> = history.iter().map(|h| h.0).collect();
-    let run =
-        |d: &DynamicsParams| super::dynamics::simulate_sampled(case, &reference_params, d, &Silent, Sampling::Times(&times), |_| Ok(()));
-    let simulated = match run(&fine) {
-        Err(RunError::UnstableTimeStep { .. }) => run(&DynamicsParams { time_step: None, ..fine.clone() }),
-        other => other,
-    };
-    let sim = match simulated {
-        Ok(s) => s,
-        Err(e) => return unavailable(format!("the reference at half the spacing failed: {e}")),
-    };
-    let r = &sim.report;
-    let description = format!(
-        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({}); compared at {}",
-        sim.positions.len(),
-        reference_params.fill.spacing,
-        r.steps,
-        r.time_step,
-        dynamics.integrator.name(),
-        compared_states(history)
-    );
-    let interpolate = |u: &[[f64; 2]]| mls_values(&sim.positions, u, positions);
-    match ErrorEstimate::over_history(EstimateMethod::Refined, description, positions, history, &sim.history, interpolate, t0) {
-        Ok(e) => Estimate::Done(Box::new(ErrorEstimate {
-            reference_degree: params.approximation.basis.polynomial_degree(),
-            reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
-            ..e
-        })),
-        Err(e) => unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
     }
 }
 

@@ -19,7 +19,9 @@
 //! 3. [`solve`]: the static run (solve, strain, stress, errors, the global force
 //!    balance of [`equilibrium`]);
 //! 4. [`dynamics`]: explicit elastodynamics `rho u_tt = Navier(u) + f` with the
-//!    boundary rows as constraints.
+//!    boundary rows as constraints;
+//! 5. [`estimate`]: what an error estimate is and holds; [`run`]: a run with its
+//!    estimate (the reference run it compares with).
 
 pub mod discrete;
 pub mod dynamics;
@@ -29,6 +31,7 @@ pub mod estimate;
 pub mod formulation;
 pub mod low_order;
 pub mod rows;
+pub mod run;
 pub mod sector;
 pub mod solve;
 pub mod system;
@@ -38,10 +41,11 @@ use crate::linalg::SolverParams;
 use crate::mlsm::Approximation;
 
 pub use discrete::Discretisation;
-pub use dynamics::{simulate, simulate_sampled, Sampling, Simulation};
+pub use dynamics::{simulate_sampled, Sampling, Simulation};
 pub use estimate::{ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
 pub use formulation::Formulation;
-pub use solve::{solve, Solution};
+pub use run::{simulate, solve};
+pub use solve::Solution;
 
 /// How the Navier model discretises a case: node generation, local approximation,
 /// linear solver.

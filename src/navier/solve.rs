@@ -7,7 +7,7 @@ use std::borrow::Cow;
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
-use super::estimate::{self, Estimate};
+use super::estimate::Estimate;
 use super::low_order;
 use super::sector;
 use super::system::System;
@@ -19,7 +19,7 @@ use crate::elasticity::stress::{Gradient, StressField};
 use crate::exact::ExactSolution;
 use crate::linalg::distributed::{self, agree, Distribution};
 use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
-use crate::pipeline::{stage, Progress, RunError, StageTimer, StageTimings};
+use crate::pipeline::{stage, RunError, StageTimer, StageTimings};
 use crate::post::probe::{probe_values, NodalFields, ProbeValue};
 use crate::post::{ErrorNorms, ExactFields};
 
@@ -92,14 +92,13 @@ pub struct LinearSystem {
     pub nodes: usize,
 }
 
-/// Run every stage of `case` with `params`.
-pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Result<Solution, RunError> {
-    let mut timer = StageTimer::new(progress);
-    let exact = case.exact_solution();
-    let exact = exact.as_deref();
-    let mut disc = Discretisation::new(case, params, exact, &mut timer)?;
+/// The stages of the static run of `case` with `params`, each timed by `timer`, up to
+/// the post-processing: the [`Solution`]'s `estimate` is [`Estimate::Off`] and its
+/// `timings` empty until [`super::run::solve`] makes the estimate and closes the timer.
+pub(super) fn stages(case: &Case, params: &NavierParams, exact: Option<&dyn ExactSolution>, timer: &mut StageTimer) -> Result<Solution, RunError> {
+    let mut disc = Discretisation::new(case, params, exact, timer)?;
     let Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced } =
-        assemble_and_solve(case, &mut disc, exact, params, &mut timer)?;
+        assemble_and_solve(case, &mut disc, exact, params, timer)?;
 
     let n = disc.nodes.len();
     let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
@@ -122,11 +121,6 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         Ok(((displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes), note))
     })?;
 
-    let method = params.estimate.method;
-    let estimate = estimate::stage(method, method.static_navier_estimates(), &mut timer, || {
-        estimate::higher_degree(case, params, &disc.nodes, &displacement, stress.as_ref(), exact)
-    })?;
-
     let system = system.map(|(matrix, rhs)| LinearSystem {
         matrix,
         rhs,
@@ -141,11 +135,6 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let unknowns = disc.dofs.len();
     let formulation = disc.dofs.unknowns();
     let Discretisation { nodes, boundary_equations, operators_computed, .. } = disc;
-    let timings = timer.finish();
-    let mut report = report;
-    if let Some(ranks) = report.ranks.as_mut() {
-        ranks.stage_seconds = distributed::stage_seconds_per_rank(&timings.named())?;
-    }
     Ok(Solution {
         nodes,
         boundary_equations,
@@ -157,7 +146,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         errors,
         equilibrium,
         probes,
-        estimate,
+        estimate: Estimate::Off,
         ghost_nodes,
         widened_supports,
         sector_balances: sectors,
@@ -168,7 +157,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
         operators_computed,
         solver: report,
         system,
-        timings,
+        timings: StageTimings::default(),
     })
 }
 
@@ -212,7 +201,7 @@ pub(super) fn assemble_and_solve(
     }
     let (matrix, rhs, sectors, unbalanced, multipliers) = timer.run(stage::ASSEMBLY, || {
         let (m, rhs) = System { case, disc, exact }.assemble()?;
-        let (balances, unbalanced) = sector::balances(case, disc, &m, exact);
+        let (balances, unbalanced) = sector::balances(case, &disc.survey, (&disc.nodes, &disc.dofs), &m, exact);
         let border = sector::border(&balances);
         let (m, rhs) = if border.is_empty() { (m, rhs) } else { border.bordered(m, &rhs) };
         let note = match border.len() {

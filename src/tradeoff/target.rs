@@ -114,6 +114,9 @@ pub struct Target {
     pub refinement: Refinement,
     /// Wall-clock limit of the whole loop.
     pub budget: Option<Duration>,
+    /// Solves at most ([`MAX_STEPS`] from the command line; a test sets fewer to bound
+    /// its cost by steps, not by the clock).
+    pub max_steps: usize,
 }
 
 /// One solve of the loop.
@@ -158,8 +161,11 @@ pub enum Stop {
     /// The estimate stopped falling (round-off, or a singularity the estimate cannot
     /// resolve).
     Stalled,
-    /// [`MAX_STEPS`] solves were made.
-    Steps,
+    /// The target's `max_steps` solves were made.
+    Steps {
+        /// Solves made.
+        made: usize,
+    },
     /// The next solve failed; the last good step is kept.
     Failed {
         /// The failure.
@@ -177,7 +183,7 @@ impl Stop {
             }
             Stop::Memory { reason } => format!("the next step does not fit: {reason}"),
             Stop::Stalled => format!("the estimate stalled (fell less than {:.0} % in two steps running)", 100.0 * STALL_FALL),
-            Stop::Steps => format!("{MAX_STEPS} steps made"),
+            Stop::Steps { made } => format!("{made} steps made"),
             Stop::Failed { reason } => format!("the next step failed: {reason}"),
         }
     }
@@ -283,8 +289,8 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         let k = history.len() - 1;
         let next = if value <= target.tolerance {
             Err(Stop::Reached)
-        } else if history.len() >= MAX_STEPS {
-            Err(Stop::Steps)
+        } else if history.len() >= target.max_steps {
+            Err(Stop::Steps { made: history.len() })
         } else if stalled(&history) {
             Err(Stop::Stalled)
         } else {

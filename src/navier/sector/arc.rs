@@ -6,10 +6,9 @@
 use super::{dist, MIN_SECTOR_SPACINGS, SECTOR_SPACINGS};
 use crate::case::Case;
 use crate::domain::{NodeSet, Point};
-use crate::elasticity::dofs::{Unknowns, PRESSURE};
+use crate::elasticity::dofs::{DofMap, Unknowns, PRESSURE};
 use crate::elasticity::material::Lame;
 use crate::mlsm::{wls, Basis, Op, Weight};
-use crate::navier::discrete::Discretisation;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::collections::BTreeMap;
 use std::num::NonZeroUsize;
@@ -79,19 +78,19 @@ pub(super) fn inside_interval(case: &Case, c: Point, radius: f64) -> Option<(f64
 /// per local spacing, at least 48).
 pub(super) fn arc_rows(
     case: &Case,
-    disc: &Discretisation,
+    (nodes, dofs): (&NodeSet, &DofMap),
     tree: &ImmutableKdTree<f64, 2>,
     c: Point,
     arc: &Arc,
     h: f64,
 ) -> Option<[Vec<(usize, f64)>; 3]> {
-    let lame = arc_lame(case, disc);
-    let pressure = disc.dofs.unknowns() == Unknowns::DisplacementPressure;
+    let lame = arc_lame(case, dofs);
+    let pressure = dofs.unknowns() == Unknowns::DisplacementPressure;
     let ops: &[Op] = if pressure { &[Op::Dx, Op::Dy, Op::Value] } else { &[Op::Dx, Op::Dy] };
     let (t0, t1) = arc.angles;
     let count = ((arc.radius * (t1 - t0) / (0.5 * h)).ceil() as usize).max(48);
     let dt = (t1 - t0) / count as f64;
-    let fit = NonZeroUsize::new(FIT_NODES.min(disc.nodes.len()))?;
+    let fit = NonZeroUsize::new(FIT_NODES.min(nodes.len()))?;
     let mut sums: [BTreeMap<usize, f64>; 3] = Default::default();
     let (mut points, mut weights) = (Vec::with_capacity(FIT_NODES), vec![0.0; ops.len() * FIT_NODES]);
     let scale = row_scale(lame, arc.radius);
@@ -103,7 +102,7 @@ pub(super) fn arc_rows(
         let ds = arc.radius * dt * scale;
         let found = tree.query(&q).nearest_n::<SquaredEuclidean<f64>>(fit).execute();
         points.clear();
-        points.extend(found.iter().map(|f| disc.nodes.positions[f.item as usize]));
+        points.extend(found.iter().map(|f| nodes.positions[f.item as usize]));
         let m = points.len();
         wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, q, &points, ops, &mut weights[..ops.len() * m]).ok()?;
         let mut add = |col: usize, (tx, ty): (f64, f64)| {
@@ -116,7 +115,7 @@ pub(super) fn arc_rows(
             if pressure {
                 // -p n, the unknown being p / mu.
                 let v = -lame.mu * weights[2 * m + j];
-                add(disc.dofs.dof(node, PRESSURE), (v * n[0], v * n[1]));
+                add(dofs.dof(node, PRESSURE), (v * n[0], v * n[1]));
             }
             for comp in 0..2 {
                 // Traction t = sigma n of the gradient that component `comp` of node j
@@ -124,7 +123,7 @@ pub(super) fn arc_rows(
                 let mut g = [[0.0; 2]; 2];
                 g[comp] = [weights[j], weights[m + j]];
                 let [sxx, syy, sxy] = lame.stress(g);
-                add(disc.dofs.dof(node, comp), (sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]));
+                add(dofs.dof(node, comp), (sxx * n[0] + sxy * n[1], sxy * n[0] + syy * n[1]));
             }
         }
     }
@@ -134,9 +133,9 @@ pub(super) fn arc_rows(
 /// The Lame parameters of the arc's stress from the displacement gradient: the
 /// material's, or with `lambda = 0` in the displacement-pressure form, whose pressure
 /// carries the rest.
-pub(super) fn arc_lame(case: &Case, disc: &Discretisation) -> Lame {
+pub(super) fn arc_lame(case: &Case, dofs: &DofMap) -> Lame {
     let lame = case.material.lame();
-    match disc.dofs.unknowns() {
+    match dofs.unknowns() {
         Unknowns::Displacement => lame,
         Unknowns::DisplacementPressure => Lame { lambda: 0.0, mu: lame.mu },
     }

@@ -66,9 +66,9 @@
 //! arc or ring fits, or its fit or injection fails) is listed as [`Unbalanced`] with
 //! the reason, which the checks turn into a note.
 
-use super::discrete::Discretisation;
 use crate::case::Case;
 use crate::domain::{NodeSet, Point};
+use crate::elasticity::dofs::DofMap;
 use crate::elasticity::conditions::ComponentCondition;
 use crate::exact::ExactSolution;
 use crate::linalg::Csr;
@@ -249,23 +249,24 @@ fn spacing_at_arc(nodes: &NodeSet, corner: Point, mut h: f64) -> f64 {
 /// from its exact solution.
 pub fn balances(
     case: &Case,
-    disc: &Discretisation,
+    survey: &Survey,
+    (nodes, dofs): (&NodeSet, &DofMap),
     matrix: &Csr,
     exact: Option<&dyn ExactSolution>,
 ) -> (Vec<SectorBalance>, Vec<Unbalanced>) {
-    let Survey { contours, mut unbalanced } = disc.survey.clone();
+    let Survey { contours, mut unbalanced } = survey.clone();
     if contours.is_empty() {
         return (Vec::new(), unbalanced);
     }
-    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&disc.nodes.positions).expect("finite node positions");
+    let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&nodes.positions).expect("finite node positions");
     let mut balances = Vec::with_capacity(contours.len());
     for c in contours {
-        let rows = arc_rows(case, disc, &tree, c.centre, &c.arc, c.h);
-        let injected = injection(disc, matrix, c.centre, &c.seeds, c.h);
+        let rows = arc_rows(case, (nodes, dofs), &tree, c.centre, &c.arc, c.h);
+        let injected = injection((nodes, dofs), matrix, c.centre, &c.seeds, c.h);
         match (rows, injected) {
             (Some(rows), Some(injected)) if has_rank_three(&injected) => {
                 let [fx, fy, m] = loads::enclosed(case, exact, c.centre, &c.arc, &c.parts);
-                let scale = row_scale(arc_lame(case, disc), c.arc.radius);
+                let scale = row_scale(arc_lame(case, dofs), c.arc.radius);
                 let loads = [-scale * fx, -scale * fy, -scale * m / c.arc.radius];
                 balances.push(SectorBalance { around: c.around, centre: c.centre, radius: c.arc.radius, rows, loads, injected })
             }
@@ -323,26 +324,26 @@ fn ring(case: &Case, nodes: &NodeSet, hole: &[usize]) -> Option<Contour> {
 /// radius grows by half until there are two nodes, up to twice), each scaled by the
 /// row's norm; the couple's share is the direction perpendicular to the node's offset
 /// from the centre.
-fn injection(disc: &Discretisation, matrix: &Csr, c: Point, seeds: &[Point], h: f64) -> Option<Vec<(usize, [f64; 3])>> {
-    let interior = disc.nodes.boundary.len()..disc.nodes.len();
+fn injection((nodes, dofs): (&NodeSet, &DofMap), matrix: &Csr, c: Point, seeds: &[Point], h: f64) -> Option<Vec<(usize, [f64; 3])>> {
+    let interior = nodes.boundary.len()..nodes.len();
     let reach = seeds.iter().map(|&s| dist(s, c)).fold(0.0, f64::max);
     let mut radius = INJECTION_SPACINGS * h;
     for _ in 0..3 {
         let near: Vec<usize> = interior
             .clone()
             .filter(|&i| {
-                let p = disc.nodes.positions[i];
+                let p = nodes.positions[i];
                 dist(p, c) < reach + radius && seeds.iter().any(|&s| dist(p, s) < radius)
             })
             .collect();
         if near.len() >= 2 {
             let mut out = Vec::with_capacity(2 * near.len());
             for i in near {
-                let p = disc.nodes.positions[i];
+                let p = nodes.positions[i];
                 let d = dist(p, c);
                 let perp = [-(p[1] - c[1]) / d, (p[0] - c[0]) / d];
                 for comp in 0..2 {
-                    let row = disc.dofs.dof(i, comp);
+                    let row = dofs.dof(i, comp);
                     let norm = matrix.row(row).values().iter().map(|v| v * v).sum::<f64>().sqrt();
                     let mut g = [0.0; 3];
                     g[comp] = norm;

@@ -1,0 +1,92 @@
+//! The radial functions of RBF-FD stencils, `r = |z - z_j|` in local coordinates:
+//! * polyharmonic spline `r^beta`, `beta` odd `>= 3` (no shape parameter; all its
+//!   derivatives up to second order vanish at `r = 0`);
+//! * Gaussian `exp(-(r/c)^2)`, multiquadric `sqrt(r^2 + c^2)`, inverse multiquadric
+//!   `1/sqrt(r^2 + c^2)`, with `c` in local units (the scene gives it in units of the
+//!   local spacing).
+
+use super::ops::Op;
+use serde::Serialize;
+
+/// The radial function of an RBF-FD stencil.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum Radial {
+    /// Polyharmonic spline `r^order`, `order` odd and at least 3.
+    Phs {
+        /// The exponent (3, 5, 7, ...).
+        order: u32,
+    },
+    /// `exp(-(r/c)^2)`, `c = shape` x local spacing.
+    Gaussian {
+        /// Shape parameter in units of the local spacing.
+        shape: f64,
+    },
+    /// `sqrt(r^2 + c^2)`.
+    Mq {
+        /// Shape parameter in units of the local spacing.
+        shape: f64,
+    },
+    /// `1 / sqrt(r^2 + c^2)`.
+    Imq {
+        /// Shape parameter in units of the local spacing.
+        shape: f64,
+    },
+}
+
+impl Radial {
+    /// Shape parameter in units of the local spacing (`None` for PHS).
+    pub fn shape(&self) -> Option<f64> {
+        match *self {
+            Radial::Phs { .. } => None,
+            Radial::Gaussian { shape } | Radial::Mq { shape } | Radial::Imq { shape } => Some(shape),
+        }
+    }
+
+    /// `(phi, dphi/dr / r, (d2phi/dr2 - dphi/dr / r) / r^2)` at distance `r`, with `c` the
+    /// shape parameter in local units: then `d phi / dz_a = f1 d_a` and
+    /// `d2 phi / dz_a dz_b = f2 d_a d_b + f1 delta_ab` for `d = z - z_j`.
+    pub(super) fn profile(&self, r: f64, c: f64) -> (f64, f64, f64) {
+        match *self {
+            Radial::Phs { order } => {
+                let b = order as f64;
+                if r == 0.0 {
+                    // Every derivative up to second order vanishes at the centre for b >= 3.
+                    return (0.0, 0.0, 0.0);
+                }
+                // Integer powers by multiplication (`powf` was most of the cost of a
+                // stencil: 1.95 s -> see BENCHMARKS.md, "Shapes per node").
+                let k = order as i32;
+                let rk2 = r.powi(k - 2);
+                (rk2 * r * r, b * rk2, b * (b - 2.0) * rk2 / (r * r))
+            }
+            Radial::Gaussian { .. } => {
+                let f = (-(r * r) / (c * c)).exp();
+                (f, -2.0 * f / (c * c), 4.0 * f / (c * c * c * c))
+            }
+            Radial::Mq { .. } => {
+                let t = (r * r + c * c).sqrt();
+                (t, 1.0 / t, -1.0 / (t * t * t))
+            }
+            Radial::Imq { .. } => {
+                let t = (r * r + c * c).sqrt();
+                (1.0 / t, -1.0 / (t * t * t), 3.0 / (t * t * t * t * t))
+            }
+        }
+    }
+
+    /// `(L phi(|z - zj|))` at `z = 0`.
+    pub(super) fn operator_at_centre(&self, op: Op, zj: [f64; 2], c: f64) -> f64 {
+        let d = [-zj[0], -zj[1]];
+        // Local coordinates (within the unit disc): no overflow for `sqrt` to guard against.
+        let (f, f1, f2) = self.profile((d[0] * d[0] + d[1] * d[1]).sqrt(), c);
+        match op {
+            Op::Value => f,
+            Op::Dx => f1 * d[0],
+            Op::Dy => f1 * d[1],
+            Op::Dxx => f2 * d[0] * d[0] + f1,
+            Op::Dxy => f2 * d[0] * d[1],
+            Op::Dyy => f2 * d[1] * d[1] + f1,
+        }
+    }
+}
