@@ -151,6 +151,7 @@ pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
                 file: p.source.clone(),
                 field: "MLSM_MEMORY_LIMIT".into(),
                 reason: format!("the environment variable is {v:?}, not a positive number of bytes (e.g. 4e9)"),
+                kind: crate::problem::ProblemErrorKind::Invalid,
             });
         }
     }
@@ -170,6 +171,7 @@ pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
                     _ => "use a larger spacing, solver.kind = \"auto\" or \"bicgstab\" (no factors), or [estimate] method = \"none\" (its reference solve has the larger stencils)",
                 }
             ),
+            kind: crate::problem::ProblemErrorKind::Invalid,
         }),
         _ => Ok(e),
     }

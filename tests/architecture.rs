@@ -1,7 +1,9 @@
-//! The module floors of the crate (README, Architecture): the top-level modules of
-//! `src/` import each other without a circle, and every module imports only modules
-//! on the floors below its own (`// Floor k` groups in `src/lib.rs`). Imports are read
-//! as text (`crate::<module>`), test modules (after `#[cfg(test)]`) excluded.
+//! The module floors of the crate (docs/maintainers/architecture.md): the top-level
+//! modules of `src/` import each other without a circle, every module imports only
+//! modules on the floors below its own (`// Floor k` groups in `src/lib.rs`), no two
+//! files import each other in a loop, and the architecture page matches `lib.rs`.
+//! Imports are read as text (`crate::`, `super::`, `self::` paths), test modules
+//! (after `#[cfg(test)]`) excluded.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -95,5 +97,158 @@ fn modules_import_only_modules_below_them() {
     }
     for m in graph.keys() {
         visit(m, &graph, &mut Vec::new());
+    }
+}
+
+/// The page a maintainer reads first, `docs/maintainers/architecture.md`.
+fn architecture_page() -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/maintainers/architecture.md");
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The floors table of the architecture page lists exactly the modules of `lib.rs`,
+/// each on the floor `lib.rs` declares it on (rows `| k | `module` | ... |`).
+#[test]
+fn architecture_page_lists_the_modules_of_lib_rs_on_their_floors() {
+    let mut page = BTreeMap::new();
+    for line in architecture_page().lines() {
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        if cells.len() >= 4 && cells[2].starts_with('`') {
+            if let Ok(floor) = cells[1].parse::<usize>() {
+                page.insert(cells[2].trim_matches('`').to_string(), floor);
+            }
+        }
+    }
+    assert_eq!(page, floors(), "docs/maintainers/architecture.md's floors table against src/lib.rs");
+}
+
+/// Every `src/...` path the architecture page names exists.
+#[test]
+fn architecture_page_names_only_files_that_exist() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let page = architecture_page();
+    let mut missing = Vec::new();
+    for (i, _) in page.match_indices("src/") {
+        let path: String = page[i..].chars().take_while(|c| c.is_alphanumeric() || "_/.".contains(*c)).collect();
+        let path = path.trim_end_matches('.');
+        if path.ends_with(".rs") && !root.join(path).exists() {
+            missing.push(path.to_string());
+        }
+    }
+    assert!(missing.is_empty(), "named on docs/maintainers/architecture.md but missing: {missing:?}");
+}
+
+/// The module path of a source file: `["linalg", "amg"]` for `src/linalg/amg.rs`,
+/// `["navier", "sector"]` for `src/navier/sector/mod.rs`.
+fn module_path(file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src()).unwrap().with_extension("");
+    let mut parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+    if parts.last().is_some_and(|p| p == "mod" || p == "lib" || p == "main") {
+        parts.pop();
+    }
+    parts
+}
+
+/// The file of module `path`, if it is one (`src/a/b.rs` or `src/a/b/mod.rs`).
+fn file_of(path: &[String]) -> Option<PathBuf> {
+    if path.is_empty() {
+        return None;
+    }
+    let base = src().join(path.join("/"));
+    [base.with_extension("rs"), base.join("mod.rs")].into_iter().find(|p| p.exists())
+}
+
+/// The files a source file names through `crate::`, `super::` or `self::` paths
+/// (grouped imports `super::{a, b}` included), each resolved to the deepest module
+/// that is a file.
+fn file_imports(file: &Path, code: &str) -> Vec<PathBuf> {
+    let own = module_path(file);
+    let ident = |s: &str| s.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect::<String>();
+    let mut out = Vec::new();
+    let mut resolve = |mut base: Vec<String>, rest: &str| {
+        let mut target = None;
+        for seg in rest.split("::") {
+            let seg = ident(seg.trim());
+            if seg.is_empty() {
+                break;
+            }
+            base.push(seg);
+            match file_of(&base) {
+                Some(f) => target = Some(f),
+                None => break,
+            }
+        }
+        if let Some(t) = target.or_else(|| file_of(&base[..base.len().saturating_sub(1)])) {
+            if t != file {
+                out.push(t);
+            }
+        }
+    };
+    for start in ["crate::", "super::", "self::"] {
+        for (i, _) in code.match_indices(start) {
+            let before = code[..i].chars().last();
+            if before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                continue;
+            }
+            let mut base = if start == "crate::" { Vec::new() } else { own.clone() };
+            let mut rest = &code[i + start.len()..];
+            if start == "super::" {
+                // `super` of `a/b.rs` is `a`; of `a/b/mod.rs` (module `a::b`) also `a`.
+                base.pop();
+                while let Some(r) = rest.strip_prefix("super::") {
+                    base.pop();
+                    rest = r;
+                }
+            }
+            if let Some(group) = rest.strip_prefix('{') {
+                let end = group.find('}').unwrap_or(group.len());
+                for item in group[..end].split(',') {
+                    resolve(base.clone(), item);
+                }
+            } else {
+                resolve(base, rest);
+            }
+        }
+    }
+    out
+}
+
+/// No two files import each other in a loop (the floors rule it out between
+/// top-level modules; this is the same rule between the files inside them).
+#[test]
+fn no_files_import_each_other_in_a_circle() {
+    let mut all = Vec::new();
+    files(&src(), &mut all);
+    let mut graph: BTreeMap<PathBuf, Vec<PathBuf>> = BTreeMap::new();
+    for f in &all {
+        let name = f.file_name().unwrap().to_string_lossy();
+        if name == "tests.rs" || name.ends_with("_tests.rs") {
+            continue;
+        }
+        let text = std::fs::read_to_string(f).unwrap();
+        let code = text.split("#[cfg(test)]").next().unwrap();
+        let code: String = code.lines().filter(|l| !l.trim_start().starts_with("//")).collect::<Vec<_>>().join("\n");
+        let mut deps = file_imports(f, &code);
+        deps.sort();
+        deps.dedup();
+        graph.insert(f.clone(), deps);
+    }
+    let mut done = std::collections::BTreeSet::new();
+    fn visit(f: &PathBuf, graph: &BTreeMap<PathBuf, Vec<PathBuf>>, path: &mut Vec<PathBuf>, done: &mut std::collections::BTreeSet<PathBuf>) {
+        if let Some(k) = path.iter().position(|p| p == f) {
+            let names: Vec<String> = path[k..].iter().map(|p| p.strip_prefix(src()).unwrap().display().to_string()).collect();
+            panic!("files import each other in a circle: {} -> {}", names.join(" -> "), names[0]);
+        }
+        if !done.insert(f.clone()) {
+            return;
+        }
+        path.push(f.clone());
+        for d in graph.get(f).into_iter().flatten() {
+            visit(d, graph, path, done);
+        }
+        path.pop();
+    }
+    for f in graph.keys() {
+        visit(f, &graph, &mut Vec::new(), &mut done);
     }
 }

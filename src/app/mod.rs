@@ -54,11 +54,11 @@ impl AppError {
             RunError::UnstableTimeStep { .. } => "dynamics.time_step".to_string(),
             RunError::BadFormula { field, .. } => field.clone(),
             RunError::Formula { field, reason } => {
-                return AppError::Problem(ProblemError { file: p.source.clone(), field: field.clone(), reason: reason.clone() })
+                return AppError::Problem(ProblemError { file: p.source.clone(), field: field.clone(), reason: reason.clone(), kind: crate::problem::ProblemErrorKind::Invalid })
             }
             _ => return e.into(),
         };
-        AppError::Problem(ProblemError { file: p.source.clone(), field, reason: e.to_string() })
+        AppError::Problem(ProblemError { file: p.source.clone(), field, reason: e.to_string(), kind: crate::problem::ProblemErrorKind::Invalid })
     }
 }
 

@@ -23,6 +23,18 @@ pub struct ProblemError {
     pub field: String,
     /// What is wrong and what to change.
     pub reason: String,
+    /// What kind of refusal it is, for a caller that acts on it.
+    pub kind: ProblemErrorKind,
+}
+
+/// What kind of refusal a [`ProblemError`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ProblemErrorKind {
+    /// Any invalid value, key or file.
+    Invalid,
+    /// A spacing too coarse for the stencils (fewer nodes than two supports' worth,
+    /// [`validate::too_few_nodes`]): a sweep passes over such a level.
+    TooFewNodes,
 }
 
 choice! {
@@ -126,6 +138,7 @@ impl Problem {
             file: path.to_path_buf(),
             field: "(file)".into(),
             reason: format!("cannot read the scene file: {e}"),
+            kind: crate::problem::ProblemErrorKind::Invalid,
         })?;
         Problem::from_str_with_preset(&text, path, preset)
     }
@@ -156,7 +169,7 @@ impl Problem {
             return Err(self.spacing_error(format!("spacing {spacing} gives about {expected:.1e} nodes (over {:e})", validate::MAX_NODES)));
         }
         if let Some(reason) = validate::too_few_nodes(spacing, expected, self.navier.approximation.support) {
-            return Err(self.spacing_error(reason));
+            return Err(ProblemError { kind: ProblemErrorKind::TooFewNodes, ..self.spacing_error(reason) });
         }
         let mut p = self.clone();
         p.navier.fill = fill;
@@ -164,7 +177,7 @@ impl Problem {
     }
 
     fn spacing_error(&self, reason: String) -> ProblemError {
-        ProblemError { file: self.source.clone(), field: "nodes.spacing".into(), reason }
+        ProblemError { file: self.source.clone(), field: "nodes.spacing".into(), reason, kind: ProblemErrorKind::Invalid }
     }
 
     /// The same problem with other peridynamic parameters (used by `compare` and
@@ -174,6 +187,7 @@ impl Problem {
             file: self.source.clone(),
             field: format!("peridynamics.{field}"),
             reason,
+            kind: crate::problem::ProblemErrorKind::Invalid,
         })?;
         let mut p = self.clone();
         p.peridynamics = Some(params);

@@ -10,7 +10,7 @@ mod report;
 
 use super::AppError;
 use crate::output::{self, StagedDir};
-use crate::problem::{validate, Model, Problem, ProblemError};
+use crate::problem::{Model, Problem, ProblemError, ProblemErrorKind};
 use crate::resources::{self, MemoryEstimate};
 use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
 use crate::tradeoff::variant::{Edits, Setting};
@@ -187,6 +187,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
         file: req.scene.clone(),
         field: "(file)".into(),
         reason: format!("cannot read the scene file: {e}"),
+        kind: crate::problem::ProblemErrorKind::Invalid,
     })?;
     let p = Problem::from_str(&text, &req.scene)?;
     check_scene(&p)?;
@@ -228,7 +229,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
                 let level = sweep.families[f].next_level;
                 match plan(&p, &text, setting.as_ref(), level) {
                     Ok(pl) => plans[f] = Some(pl),
-                    Err(e) if e.reason.contains(validate::TOO_FEW_NODES) && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
+                    Err(e) if e.kind == ProblemErrorKind::TooFewNodes && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
                     Err(e) => sweep.stop(f, format!("{}: {}", e.field, e.reason)),
                 }
             }

@@ -141,7 +141,8 @@ fn radial(c: &Ctx, s: &ApproximationSpec, kind: BasisKind, degree: u32) -> Resul
     Ok(match kind {
         BasisKind::Gaussian => Radial::Gaussian { shape },
         BasisKind::Mq => Radial::Mq { shape },
-        _ => Radial::Imq { shape },
+        BasisKind::Imq => Radial::Imq { shape },
+        BasisKind::Phs | BasisKind::Monomials | BasisKind::Tensor => unreachable!("PHS returns above; least squares has no radial function"),
     })
 }
 
@@ -235,7 +236,7 @@ pub(super) fn check_node_count(
 ) -> Result<(), ProblemError> {
     let expected_nodes = expected_nodes(domain, fill, area);
     if let Some(reason) = super::too_few_nodes(fill.spacing, expected_nodes, approximation.support) {
-        return c.err("nodes.spacing", reason);
+        return Err(ProblemError { kind: crate::problem::ProblemErrorKind::TooFewNodes, ..c.error("nodes.spacing", reason) });
     }
     if expected_nodes > MAX_NODES {
         return c.err(

@@ -37,9 +37,9 @@ pub const MAX_NODES: f64 = 5e7;
 // for a node count above its estimate.
 const _: () = assert!(MAX_NODES * 3.0 * 10.0 <= u32::MAX as f64);
 
-/// What a spacing too coarse for the stencils is refused with (in `nodes.spacing`),
-/// shared by the validation, [`crate::problem::Problem::with_fill`] and the tradeoff
-/// sweep, which passes over such levels.
+/// What a spacing too coarse for the stencils is refused with (in `nodes.spacing`, of
+/// kind [`crate::problem::ProblemErrorKind::TooFewNodes`]), by the validation and
+/// [`crate::problem::Problem::with_fill`].
 pub const TOO_FEW_NODES: &str = "too few for supports";
 
 /// The refusal of a spacing that gives about `expected` nodes for supports of
@@ -60,7 +60,7 @@ pub(crate) fn packing(kind: FillKind) -> f64 {
 
 /// TOML syntax, types and unknown keys; the message carries line, column and key path.
 pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, ProblemError> {
-    let err = |field: String, reason: String| ProblemError { file: path.to_path_buf(), field, reason };
+    let err = |field: String, reason: String| ProblemError { file: path.to_path_buf(), field, reason, kind: crate::problem::ProblemErrorKind::Invalid };
     let de = toml::Deserializer::parse(text).map_err(|e| err("(syntax)".into(), located(text, &e)))?;
     serde_path_to_error::deserialize(de).map_err(|e| {
         let field = e.path().to_string();
@@ -92,7 +92,7 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     fn error(&self, field: impl Into<String>, reason: impl Into<String>) -> ProblemError {
-        ProblemError { file: self.path.to_path_buf(), field: field.into(), reason: reason.into() }
+        ProblemError { file: self.path.to_path_buf(), field: field.into(), reason: reason.into(), kind: crate::problem::ProblemErrorKind::Invalid }
     }
 
     fn err<T>(&self, field: impl Into<String>, reason: impl Into<String>) -> Result<T, ProblemError> {

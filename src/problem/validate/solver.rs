@@ -44,7 +44,8 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
             match kind {
                 PreconditionerKind::Ilu0 => Preconditioner::Ilu0,
                 PreconditionerKind::Amg => Preconditioner::Amg,
-                _ => Preconditioner::Jacobi,
+                PreconditionerKind::Jacobi => Preconditioner::Jacobi,
+                PreconditionerKind::Ilut => unreachable!("ilut is the arm above"),
             }
         }
     };
