@@ -58,7 +58,7 @@ pub struct MemoryEstimate {
 fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: bool) -> f64 {
     match kind.resolve_system(unknowns, nonzeros, saddle_point, available_memory_bytes()).0 {
         // The assembled matrix is freed once equilibrated (`linalg::solve_nodal`).
-        SolverKind::Bicgstab { .. } => 72.0 * nonzeros,
+        SolverKind::Bicgstab(..) => 72.0 * nonzeros,
         // The rows as assembled (12 B per entry), equilibrated in place and kept as the
         // multigrid's finest level, the coarse levels and single-precision transfers
         // (about 9 B per fine entry), slack, and the Krylov basis. Measured at 1e6 nodes:

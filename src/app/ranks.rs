@@ -5,7 +5,7 @@
 use super::request::RunRequest;
 use super::AppError;
 use crate::choice::Choice;
-use crate::linalg::{Preconditioner, SolverKind, SolverParams, GMRES_RESTART};
+use crate::linalg::{Krylov, Preconditioner, SolverKind, SolverParams, GMRES_RESTART};
 use crate::petsc;
 use crate::problem::{Model, Problem};
 
@@ -48,31 +48,25 @@ pub(super) fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<(), AppEr
         let (kind, note) = match active_solver(p).kind {
             SolverKind::Lu => {
                 let (tolerance, max_iterations) = (1e-10, 500);
-                let kind = SolverKind::Petsc {
-                    preconditioner: Preconditioner::Amg,
-                    tolerance,
-                    max_iterations,
-                    restart: GMRES_RESTART,
-                    direct: true,
-                };
+                let kind = SolverKind::Petsc { krylov: Krylov { preconditioner: Preconditioner::Amg, tolerance, max_iterations }, restart: GMRES_RESTART, direct: true };
                 (kind, "solver.kind = \"lu\": MUMPS's distributed sparse LU in PETSc".to_string())
             }
-            SolverKind::Auto { preconditioner, tolerance, max_iterations } if preconditioner.petsc_name().is_some() => {
+            SolverKind::Auto(Krylov { preconditioner, tolerance, max_iterations }) if preconditioner.petsc_name().is_some() => {
                 // LU while its factors fit (memory only: no fallback follows a failed
                 // PETSc iteration, so the in-process choice by time does not apply).
                 let estimate = crate::resources::of(p);
                 let available = crate::output::available_memory_bytes();
                 let direct = matches!(active_solver(p).kind.resolve(estimate.unknowns, estimate.nonzeros, available).0, SolverKind::Lu);
-                let kind = SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART, direct };
+                let kind = SolverKind::Petsc { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart: GMRES_RESTART, direct };
                 let what = if direct { "the LU factors fit: MUMPS's distributed sparse LU" } else { "the LU factors do not fit: GMRES" };
                 (kind, format!("auto: {what} ({})", kind.label()))
             }
             kind @ SolverKind::Petsc { .. } => (kind, String::new()),
-            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }
-            | SolverKind::Gmres { preconditioner, tolerance, max_iterations, .. }
+            SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations })
+            | SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, .. }
                 if preconditioner.petsc_name().is_some() =>
             {
-                let kind = SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART, direct: false };
+                let kind = SolverKind::Petsc { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart: GMRES_RESTART, direct: false };
                 (kind, format!("PETSc's KSP ({}) in place of the in-process Krylov solver", kind.label()))
             }
             other => {

@@ -20,7 +20,7 @@
 
 use super::scaling::row_scale;
 use super::triplets::{compress, Entry};
-use super::{Csr, SolveError, SolveReport, SolverKind, SolverParams};
+use super::{Csr, Krylov, SolveError, SolveReport, SolverKind, SolverParams};
 use crate::petsc::{self, KspDefaults, LocalRows, World};
 
 /// Owner rank and PETSc index of every point.
@@ -199,7 +199,7 @@ pub fn solve(
     points: &[[f64; 2]],
     params: &SolverParams,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart, direct } = params.kind else {
+    let SolverKind::Petsc { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart, direct } = params.kind else {
         return Err(SolveError::Dimension { detail: format!("{} is not a PETSc solver", params.kind.label()) });
     };
     let k = dist.per_point;

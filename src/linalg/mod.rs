@@ -67,7 +67,7 @@ use methods::{
 pub use layout::NodeLayout;
 pub use csr::Csr;
 pub use params::{
-    lu_factor_bytes, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
+    lu_factor_bytes, Krylov, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
     AUTO_LU_SHARE, GMRES_RESTART, SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
 };
 pub use report::{SolveError, SolveReport};
@@ -247,7 +247,7 @@ pub(crate) fn solve_with_memory(
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
-    if let SolverKind::Bicgstab { tolerance, .. } | SolverKind::Gmres { tolerance, .. } = kind {
+    if let SolverKind::Bicgstab(Krylov { tolerance, .. }) | SolverKind::Gmres { krylov: Krylov { tolerance, .. }, .. } = kind {
         if !(tolerance > 0.0 && tolerance.is_finite()) {
             return Err(SolveError::Dimension { detail: format!("the Krylov tolerance must be positive and finite, got {tolerance}") });
         }
@@ -274,12 +274,12 @@ pub(crate) fn solve_with_memory(
         scales,
     };
     match kind {
-        SolverKind::Auto { .. } | SolverKind::Petsc { .. } => unreachable!("resolved and returned above"),
+        SolverKind::Auto(..) | SolverKind::Petsc { .. } => unreachable!("resolved and returned above"),
         SolverKind::Lu => solve_lu(&working(a, &rhs), &rhs, &start),
-        SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
+        SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations }) => {
             solve_krylov_bicgstab(&working(a, &rhs), &rhs, &start, (preconditioner, tolerance, max_iterations), layout)
         }
-        SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart } => {
+        SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart } => {
             // GMRES chosen for time gives way to LU as soon as a cycle shows it is slow.
             let stall = if fallback == Some(SolverKind::Lu) { AUTO_KRYLOV_PACE } else { gmres::STAGNATION };
             let settings = GmresSettings { preconditioner, tolerance, max_iterations, restart, stall };
@@ -319,7 +319,7 @@ pub(crate) fn solve_with_memory(
                     Some(retry_kind),
                 ) => {
                     let retry_method = match retry_kind {
-                        SolverKind::Bicgstab { preconditioner, .. } => format!("BiCGSTAB+{}", preconditioner.display_name()),
+                        SolverKind::Bicgstab(Krylov { preconditioner, .. }) => format!("BiCGSTAB+{}", preconditioner.display_name()),
                         other => other.label(),
                     };
                     let e = e.without_hint();
@@ -329,7 +329,7 @@ pub(crate) fn solve_with_memory(
                     // A failed fallback reports both failures: the first is the one
                     // that says what is wrong with the system.
                     let retried = match retry_kind {
-                        SolverKind::Bicgstab { preconditioner, tolerance, max_iterations } => {
+                        SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations }) => {
                             solve_krylov_bicgstab(&columns, &rhs, &retry, (preconditioner, tolerance, max_iterations), layout)
                         }
                         _ => solve_lu(&columns, &rhs, &retry),

@@ -57,26 +57,16 @@ pub enum SolverKind {
     /// simplicial LU, COLAMD column ordering).
     Lu,
     /// Right-preconditioned BiCGSTAB (van der Vorst 1992). Converged means the
-    /// true relative residual of the original system is `≤ tolerance`.
-    Bicgstab {
-        /// Right preconditioner.
-        preconditioner: Preconditioner,
-        /// Target true relative residual `‖b − A x‖₂/‖b‖₂` of the solved
-        /// (row-equilibrated, when equilibration is on) system (`> 0`).
-        tolerance: f64,
-        /// Iteration budget, summed over verification restarts (one iteration
-        /// = 2 preconditioner applications + 2 products with `A`).
-        max_iterations: usize,
-    },
+    /// true relative residual of the original system is `≤ tolerance`; an iteration
+    /// is 2 preconditioner applications and 2 products with `A`.
+    Bicgstab(Krylov),
     /// Restarted right-preconditioned GMRES(`restart`) (Saad & Schultz 1986;
     /// [`super::gmres`]). Converged means the same true residual as BiCGSTAB's.
     Gmres {
-        /// Right preconditioner.
-        preconditioner: Preconditioner,
-        /// Target true relative residual of the solved system (`> 0`).
-        tolerance: f64,
-        /// Iteration budget (products with `A`), over all restarts.
-        max_iterations: usize,
+        /// Preconditioner, tolerance and iteration budget (products with `A`, over all
+        /// restarts).
+        #[serde(flatten)]
+        krylov: Krylov,
         /// Krylov vectors kept before a restart.
         restart: usize,
     },
@@ -85,12 +75,9 @@ pub enum SolverKind {
     /// counterpart ([`Preconditioner::petsc_name`]) to the same true relative residual;
     /// PETSc's options database overrides each default.
     Petsc {
-        /// Right preconditioner (mapped to PETSc's).
-        preconditioner: Preconditioner,
-        /// Target true relative residual of the solved system (`> 0`).
-        tolerance: f64,
-        /// Iteration budget.
-        max_iterations: usize,
+        /// Preconditioner (mapped to PETSc's), tolerance and iteration budget.
+        #[serde(flatten)]
+        krylov: Krylov,
         /// Krylov vectors kept before a restart.
         restart: usize,
         /// Preconditioner replaced by a distributed sparse LU (MUMPS): `lu` and `auto`'s
@@ -99,14 +86,35 @@ pub enum SolverKind {
     },
     /// GMRES with these settings when the LU factors would not fit comfortably or
     /// would be slow to make, else LU ([`SolverKind::resolve_system`]).
-    Auto {
-        /// Right preconditioner of the iterative choice.
-        preconditioner: Preconditioner,
-        /// Its target true relative residual.
-        tolerance: f64,
-        /// Its iteration budget.
-        max_iterations: usize,
-    },
+    Auto(Krylov),
+}
+
+/// What every Krylov method is given: its right preconditioner, the true relative
+/// residual `‖b − A x‖₂ / ‖b‖₂` of the solved (row-equilibrated, when equilibration is
+/// on) system to reach (`> 0`), and its iteration budget. The default is GMRES's and
+/// `auto`'s: multigrid, 1e-10, 500 iterations.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Krylov {
+    /// Right preconditioner.
+    pub preconditioner: Preconditioner,
+    /// Target true relative residual of the solved system (`> 0`).
+    pub tolerance: f64,
+    /// Iteration budget.
+    pub max_iterations: usize,
+}
+
+impl Default for Krylov {
+    fn default() -> Self {
+        Krylov { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 }
+    }
+}
+
+impl Krylov {
+    /// BiCGSTAB's default: ILUT(drop = 1e-5, fill = 20), tolerance 1e-10, at most 2000
+    /// iterations.
+    pub fn bicgstab() -> Self {
+        Krylov { preconditioner: Preconditioner::Ilut { drop: 1e-5, fill: 20 }, tolerance: 1e-10, max_iterations: 2000 }
+    }
 }
 
 /// Estimated bytes of faer's sparse-LU factors of a matrix with `nonzeros` entries and
@@ -152,10 +160,10 @@ impl SolverKind {
     pub fn method(&self) -> SolverMethod {
         match self {
             SolverKind::Lu => SolverMethod::Lu,
-            SolverKind::Bicgstab { .. } => SolverMethod::Bicgstab,
+            SolverKind::Bicgstab(..) => SolverMethod::Bicgstab,
             SolverKind::Gmres { .. } => SolverMethod::Gmres,
             SolverKind::Petsc { .. } => SolverMethod::Petsc,
-            SolverKind::Auto { .. } => SolverMethod::Auto,
+            SolverKind::Auto(..) => SolverMethod::Auto,
         }
     }
 
@@ -167,8 +175,8 @@ impl SolverKind {
     /// plate whose degree-4 run it solved in 67 iterations); LU, PETSc and `auto` stay.
     pub fn for_reference(&self) -> SolverKind {
         match *self {
-            SolverKind::Gmres { tolerance, max_iterations, .. } | SolverKind::Bicgstab { tolerance, max_iterations, .. } => {
-                SolverKind::Auto { preconditioner: Preconditioner::Amg, tolerance, max_iterations }
+            SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. } | SolverKind::Bicgstab(Krylov { tolerance, max_iterations, .. }) => {
+                SolverKind::Auto(Krylov { preconditioner: Preconditioner::Amg, tolerance, max_iterations })
             }
             other => other,
         }
@@ -181,11 +189,11 @@ impl SolverKind {
     /// ranks, where no fallback follows a failed iteration; an explicit kind is
     /// returned unchanged.
     pub fn resolve(&self, unknowns: f64, nonzeros: f64, available: Option<f64>) -> (SolverKind, Option<String>) {
-        let SolverKind::Auto { preconditioner, tolerance, max_iterations } = *self else { return (*self, None) };
+        let SolverKind::Auto(Krylov { preconditioner, tolerance, max_iterations }) = *self else { return (*self, None) };
         let factors = lu_factor_bytes(nonzeros, unknowns);
         match available {
             Some(a) if factors > AUTO_LU_SHARE * a => (
-                SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART },
+                SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart: GMRES_RESTART },
                 Some(format!(
                     "auto: LU factors estimated at {:.2} GB, more than {AUTO_LU_SHARE} of the {:.2} GB available: GMRES+{}",
                     factors / 1e9,
@@ -215,7 +223,7 @@ impl SolverKind {
     /// [`SolverKind::for_saddle_point`]'s longer GMRES and says so in the reason.
     pub fn resolve_system(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> (SolverKind, Option<String>) {
         let (kind, mut choice) = self.resolve(unknowns, nonzeros, available);
-        let SolverKind::Auto { preconditioner, tolerance, max_iterations } = *self else { return (kind, choice) };
+        let SolverKind::Auto(Krylov { preconditioner, tolerance, max_iterations }) = *self else { return (kind, choice) };
         let factors = lu_factor_bytes(nonzeros, unknowns);
         if kind == SolverKind::Lu && !saddle_point && factors > AUTO_KRYLOV_BYTES {
             let why = format!(
@@ -225,13 +233,13 @@ impl SolverKind {
                 preconditioner.display_name(),
                 preconditioner.display_name()
             );
-            return (SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart: GMRES_RESTART }, Some(why));
+            return (SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart: GMRES_RESTART }, Some(why));
         }
         if !saddle_point {
             return (kind, choice);
         }
         let longer = kind.for_saddle_point();
-        if let (Some(c), SolverKind::Gmres { restart, max_iterations, .. }) = (&mut choice, longer) {
+        if let (Some(c), SolverKind::Gmres { krylov: Krylov { max_iterations, .. }, restart, .. }) = (&mut choice, longer) {
             c.push_str(&format!(
                 " (the displacement-pressure form: GMRES({restart}), up to {max_iterations} iterations, block-triangular preconditioner)"
             ));
@@ -245,13 +253,13 @@ impl SolverKind {
     /// cantilever grid ILUT diverges where ILU(0) converges; BENCHMARKS.md). `None`
     /// for an explicit kind and for a saddle point.
     pub fn auto_fallback(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> Option<SolverKind> {
-        let SolverKind::Auto { tolerance, max_iterations, .. } = *self else { return None };
+        let SolverKind::Auto(Krylov { tolerance, max_iterations, .. }) = *self else { return None };
         if saddle_point {
             return None;
         }
         Some(match self.resolve(unknowns, nonzeros, available).0 {
             SolverKind::Lu => SolverKind::Lu,
-            _ => SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance, max_iterations },
+            _ => SolverKind::Bicgstab(Krylov { preconditioner: Preconditioner::Ilu0, tolerance, max_iterations }),
         })
     }
 
@@ -261,39 +269,40 @@ impl SolverKind {
     /// anything else unchanged.
     pub fn for_saddle_point(self) -> SolverKind {
         match self {
-            SolverKind::Gmres { preconditioner, tolerance, max_iterations, .. } => SolverKind::Gmres {
-                preconditioner,
-                tolerance,
-                max_iterations: max_iterations.max(SADDLE_POINT_ITERATIONS),
-                restart: SADDLE_POINT_RESTART,
-            },
+            SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, .. } => SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations: max_iterations.max(SADDLE_POINT_ITERATIONS) }, restart: SADDLE_POINT_RESTART },
             other => other,
         }
     }
 
-    /// A sensible iterative default: BiCGSTAB + ILUT(drop = 1e-5, fill = 20),
-    /// tolerance 1e-10, at most 2000 iterations.
+    /// BiCGSTAB with [`Krylov::bicgstab`]'s settings.
     pub fn default_bicgstab() -> Self {
-        SolverKind::Bicgstab { preconditioner: Preconditioner::Ilut { drop: 1e-5, fill: 20 }, tolerance: 1e-10, max_iterations: 2000 }
+        SolverKind::Bicgstab(Krylov::bicgstab())
     }
 
-    /// The iterative default: GMRES(30) + smoothed-aggregation AMG, tolerance 1e-10, at
-    /// most 500 iterations.
+    /// The iterative default: GMRES(30) with [`Krylov::default`]'s settings.
     pub fn default_gmres() -> Self {
-        SolverKind::Gmres { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500, restart: GMRES_RESTART }
+        SolverKind::Gmres { krylov: Krylov::default(), restart: GMRES_RESTART }
+    }
+
+    /// The Krylov settings of an iterative kind (`None` for LU).
+    pub fn krylov(&self) -> Option<Krylov> {
+        match *self {
+            SolverKind::Lu => None,
+            SolverKind::Bicgstab(k) | SolverKind::Auto(k) | SolverKind::Gmres { krylov: k, .. } | SolverKind::Petsc { krylov: k, .. } => Some(k),
+        }
     }
 
     /// Short label for reports, e.g. `lu` or `bicgstab+ilu0`.
     pub fn label(&self) -> String {
         match self {
             SolverKind::Lu => "lu".to_string(),
-            SolverKind::Auto { preconditioner, .. } => format!("auto(lu|gmres+{})", preconditioner.label()),
-            SolverKind::Gmres { preconditioner, restart, .. } => format!("gmres({restart})+{}", preconditioner.label()),
+            SolverKind::Auto(Krylov { preconditioner, .. }) => format!("auto(lu|gmres+{})", preconditioner.label()),
+            SolverKind::Gmres { krylov: Krylov { preconditioner, .. }, restart, .. } => format!("gmres({restart})+{}", preconditioner.label()),
             SolverKind::Petsc { direct: true, .. } => "petsc:gmres+mumps-lu".to_string(),
-            SolverKind::Petsc { preconditioner, restart, .. } => {
+            SolverKind::Petsc { krylov: Krylov { preconditioner, .. }, restart, .. } => {
                 format!("petsc:gmres({restart})+{}", preconditioner.petsc_name().unwrap_or("?"))
             }
-            SolverKind::Bicgstab { preconditioner, .. } => {
+            SolverKind::Bicgstab(Krylov { preconditioner, .. }) => {
                 format!("bicgstab+{}", preconditioner.label())
             }
         }
@@ -355,8 +364,16 @@ pub struct SolverParams {
 }
 
 impl Default for SolverParams {
-    /// Direct LU on the row-equilibrated system.
+    /// What a scene gets without `[solver]`: `auto` with [`Krylov::default`], on the
+    /// row-equilibrated system.
     fn default() -> Self {
+        SolverParams { kind: SolverKind::Auto(Krylov::default()), equilibrate: true }
+    }
+}
+
+impl SolverParams {
+    /// Direct LU on the row-equilibrated system.
+    pub fn lu() -> Self {
         SolverParams { kind: SolverKind::Lu, equilibrate: true }
     }
 }

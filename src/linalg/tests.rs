@@ -106,7 +106,7 @@ fn residual_floor(t: &Triplets, x: &[f64], b: &[f64]) -> f64 {
 }
 
 fn bicgstab_params(preconditioner: Preconditioner, equilibrate: bool) -> SolverParams {
-    SolverParams { kind: SolverKind::Bicgstab { preconditioner, tolerance: 1e-10, max_iterations: 2000 }, equilibrate }
+    SolverParams { kind: SolverKind::Bicgstab(Krylov { preconditioner, tolerance: 1e-10, max_iterations: 2000 }), equilibrate }
 }
 
 #[test]
@@ -116,7 +116,7 @@ fn lu_and_bicgstab_agree_on_collocation_like_system() {
     assert_eq!(a.nrows(), 20_000);
 
     let t0 = Instant::now();
-    let (x_lu, rep) = solve(&a, &b, &SolverParams::default()).unwrap();
+    let (x_lu, rep) = solve(&a, &b, &SolverParams::lu()).unwrap();
     let floor = residual_floor(&t, &x_lu, &b);
     println!(
         "n = {}, nnz = {}, LU: residual {:.2e} (floor {floor:.1e}), setup {:.3}s, solve {:.3}s, \
@@ -203,7 +203,7 @@ fn equilibration_handles_rows_scaled_from_1e_minus_12_to_1e12() {
     for kind in [
         SolverKind::Lu,
         SolverKind::default_bicgstab(),
-        SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 2000 },
+        SolverKind::Bicgstab(Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 2000 }),
     ] {
         let params = SolverParams { kind, equilibrate: true };
         let (x, rep) = solve(&a, &b, &params).unwrap();
@@ -327,7 +327,7 @@ fn non_finite_matrix_entry_is_named() {
     use faer::sparse::Triplet;
     let entries = [Triplet::new(0, 0, 1.0), Triplet::new(1, 1, 1.0), Triplet::new(1, 0, f64::INFINITY)];
     let a = SparseMatrix::try_new_from_triplets(2, 2, &entries).unwrap();
-    for params in [SolverParams::default(), bicgstab_params(Preconditioner::Jacobi, false)] {
+    for params in [SolverParams::lu(), bicgstab_params(Preconditioner::Jacobi, false)] {
         match solve(&a, &[1.0, 1.0], &params) {
             Err(e @ SolveError::NotFinite { row: 1, col: 0, .. }) => {
                 assert!(e.to_string().contains("(1, 0)"))
@@ -357,7 +357,7 @@ fn no_convergence_reports_the_true_residual() {
     let a = assemble(&t).unwrap();
     let (pc, tol, max_it) = (Preconditioner::Jacobi, 1e-10, 2);
     let params =
-        SolverParams { kind: SolverKind::Bicgstab { preconditioner: pc, tolerance: tol, max_iterations: max_it }, equilibrate: true };
+        SolverParams { kind: SolverKind::Bicgstab(Krylov { preconditioner: pc, tolerance: tol, max_iterations: max_it }), equilibrate: true };
     let err = solve(&a, &b, &params).unwrap_err();
     let msg = err.to_string();
     let SolveError::NoConvergence { iterations, relative_residual, ref method, .. } = err else {
@@ -388,7 +388,7 @@ fn no_convergence_reports_the_true_residual() {
 /// LU; an explicit kind is never changed.
 #[test]
 fn auto_resolves_by_the_memory_of_the_factors() {
-    let auto = SolverKind::Auto { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 };
+    let auto = SolverKind::Auto(Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 });
     let (n, nnz) = (1e5, 2.5e6);
     let factors = lu_factor_bytes(nnz, n);
     assert!(factors > 1e9 && factors < 1e10, "{factors}");
@@ -398,7 +398,7 @@ fn auto_resolves_by_the_memory_of_the_factors() {
     let (kind, why) = auto.resolve(n, nnz, Some(1.5 * factors));
     assert_eq!(
         kind,
-        SolverKind::Gmres { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300, restart: GMRES_RESTART }
+        SolverKind::Gmres { krylov: Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 }, restart: GMRES_RESTART }
     );
     assert!(why.unwrap().contains("GMRES+ILU(0)"));
     assert_eq!(auto.resolve(n, nnz, None).0, SolverKind::Lu);
@@ -412,8 +412,8 @@ fn auto_resolves_by_the_memory_of_the_factors() {
 #[test]
 fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
     use super::params::AUTO_KRYLOV_BYTES;
-    let auto = SolverKind::Auto { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 };
-    let gmres = SolverKind::Gmres { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500, restart: GMRES_RESTART };
+    let auto = SolverKind::Auto(Krylov { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 });
+    let gmres = SolverKind::Gmres { krylov: Krylov { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 }, restart: GMRES_RESTART };
     let n = 1e4;
     let nnz = |bytes: f64| bytes / lu_factor_bytes(1.0, n);
     let roomy = Some(1e12);
@@ -430,7 +430,7 @@ fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
     assert_eq!(auto.resolve_system(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, tight).0, gmres);
     assert_eq!(
         auto.auto_fallback(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, tight),
-        Some(SolverKind::Bicgstab { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 500 })
+        Some(SolverKind::Bicgstab(Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 500 }))
     );
     assert_eq!(SolverKind::Lu.auto_fallback(n, 1.0, false, roomy), None);
 }
@@ -443,17 +443,17 @@ fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
 fn auto_retries_with_ilu0_when_the_iteration_stops() {
     let (t, _, b) = navier_like(100, 20.0);
     let a = assemble(&t).unwrap();
-    let kind = |preconditioner| SolverKind::Bicgstab { preconditioner, tolerance: 1e-10, max_iterations: 300 };
+    let kind = |preconditioner| SolverKind::Bicgstab(Krylov { preconditioner, tolerance: 1e-10, max_iterations: 300 });
     assert!(solve(&a, &b, &SolverParams { kind: kind(Preconditioner::Jacobi), equilibrate: true }).is_err(), "Jacobi alone must stop");
     let auto = SolverParams {
-        kind: SolverKind::Auto { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 },
+        kind: SolverKind::Auto(Krylov { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 }),
         equilibrate: true,
     };
     let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, Some(1.0)).unwrap();
     assert_eq!(rep.method, "bicgstab+ilu0");
     let why = rep.choice.unwrap();
     assert!(why.contains("did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
-    let (x_lu, _) = solve(&a, &b, &SolverParams::default()).unwrap();
+    let (x_lu, _) = solve(&a, &b, &SolverParams::lu()).unwrap();
     assert!(max_rel_diff(&x, &x_lu) < 1e-7);
     let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, Some(1e12)).unwrap();
     assert_eq!(rep.method, "lu");

@@ -113,7 +113,7 @@ pub(crate) mod test_case {
             },
             formulation: super::Formulation::Displacement,
             pressure_stabilisation: super::formulation::PRESSURE_STABILISATION,
-            solver: SolverParams::default(),
+            solver: SolverParams::lu(),
             multigrid: super::low_order::MultigridOperator::Auto,
             estimate: Default::default(),
             keep_system: false,

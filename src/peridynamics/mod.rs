@@ -63,7 +63,7 @@ pub(crate) mod test_case {
             kernel: Kernel::Plain,
             quadrature,
             correction: SurfaceCorrection::None,
-            solver: SolverParams::default(),
+            solver: SolverParams::lu(),
             force: BondForce::Linear,
         }
     }

@@ -3,7 +3,7 @@
 
 use super::Ctx;
 use crate::choice::Choice;
-use crate::linalg::{Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, GMRES_RESTART};
+use crate::linalg::{Krylov, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, GMRES_RESTART};
 use crate::navier::low_order::MultigridOperator;
 use crate::problem::spec::SolverSpec;
 use crate::problem::ProblemError;
@@ -11,21 +11,18 @@ use crate::problem::ProblemError;
 /// Largest GMRES restart length accepted: the basis then takes 8 kB per unknown.
 const MAX_RESTART: usize = 1000;
 
-/// The Krylov settings of `s`: BiCGSTAB with defaults from
-/// [`SolverKind::default_bicgstab`], GMRES (and `auto`'s iterative choice) from
-/// [`SolverKind::default_gmres`] (preconditioner `amg` unless another is named).
-fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, ProblemError> {
-    let (default_p, default_t, default_m) = match (method, SolverKind::default_bicgstab(), SolverKind::default_gmres()) {
-        (SolverMethod::Bicgstab, SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }, _)
-        | (_, _, SolverKind::Gmres { preconditioner, tolerance, max_iterations, .. }) => (preconditioner, tolerance, max_iterations),
-        _ => unreachable!("the defaults are a BiCGSTAB and a GMRES configuration"),
-    };
+/// `solver.preconditioner` with its `drop` and `fill` (ILUT only), `default` when the
+/// scene names none.
+fn preconditioner(c: &Ctx, s: &SolverSpec, default: Preconditioner) -> Result<Preconditioner, ProblemError> {
     let (default_drop, default_fill) = (1e-5, 20);
     let kind: PreconditionerKind = match s.preconditioner.as_deref() {
-        None => default_p.kind(),
+        None => default.kind(),
         named => c.choose("solver.preconditioner", named)?,
     };
-    let preconditioner = match kind {
+    if kind != PreconditionerKind::Ilut && (s.drop.is_some() || s.fill.is_some()) {
+        return c.err("solver.drop", format!("drop and fill belong to preconditioner = \"ilut\", not \"{}\"", kind.name()));
+    }
+    Ok(match kind {
         PreconditionerKind::Ilut => {
             let drop = s.drop.unwrap_or(default_drop);
             if !(drop.is_finite() && drop >= 0.0) {
@@ -37,18 +34,22 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
             }
             Preconditioner::Ilut { drop, fill }
         }
-        PreconditionerKind::Ilu0 | PreconditionerKind::Jacobi | PreconditionerKind::Amg => {
-            if s.drop.is_some() || s.fill.is_some() {
-                return c.err("solver.drop", format!("drop and fill belong to preconditioner = \"ilut\", not \"{}\"", kind.name()));
-            }
-            match kind {
-                PreconditionerKind::Ilu0 => Preconditioner::Ilu0,
-                PreconditionerKind::Amg => Preconditioner::Amg,
-                PreconditionerKind::Jacobi => Preconditioner::Jacobi,
-                PreconditionerKind::Ilut => unreachable!("ilut is the arm above"),
-            }
-        }
+        PreconditionerKind::Ilu0 => Preconditioner::Ilu0,
+        PreconditionerKind::Amg => Preconditioner::Amg,
+        PreconditionerKind::Jacobi => Preconditioner::Jacobi,
+    })
+}
+
+/// The Krylov settings of `s`: BiCGSTAB with defaults from [`Krylov::bicgstab`],
+/// GMRES, PETSc and `auto`'s iterative choice from [`Krylov::default`]
+/// (preconditioner `amg` unless another is named).
+fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, ProblemError> {
+    let defaults = match method {
+        SolverMethod::Bicgstab => Krylov::bicgstab(),
+        SolverMethod::Gmres | SolverMethod::Petsc | SolverMethod::Auto | SolverMethod::Lu => Krylov::default(),
     };
+    let (default_p, default_t, default_m) = (defaults.preconditioner, defaults.tolerance, defaults.max_iterations);
+    let preconditioner = preconditioner(c, s, default_p)?;
     let tolerance = s.tolerance.unwrap_or(default_t);
     if !(tolerance > 0.0 && tolerance < 1.0) {
         return c.err("solver.tolerance", format!("must lie in (0, 1), got {tolerance}"));
@@ -66,7 +67,7 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
             if s.restart.is_some() {
                 return c.err("solver.restart", "only used by kind = \"gmres\" (BiCGSTAB keeps no Krylov basis)");
             }
-            SolverKind::Bicgstab { preconditioner, tolerance, max_iterations }
+            SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations })
         }
         SolverMethod::Auto => {
             if s.restart.is_some() {
@@ -75,7 +76,7 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
                     format!("auto's GMRES restarts every {GMRES_RESTART} iterations; set kind = \"gmres\" to change it"),
                 );
             }
-            SolverKind::Auto { preconditioner, tolerance, max_iterations }
+            SolverKind::Auto(Krylov { preconditioner, tolerance, max_iterations })
         }
         SolverMethod::Petsc => {
             if !crate::petsc::AVAILABLE {
@@ -92,9 +93,10 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
                      (e.g. -pc_type hypre -pc_hypre_type euclid after `--`)",
                 );
             }
-            SolverKind::Petsc { preconditioner, tolerance, max_iterations, restart, direct: false }
+            SolverKind::Petsc { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart, direct: false }
         }
-        _ => SolverKind::Gmres { preconditioner, tolerance, max_iterations, restart },
+        SolverMethod::Gmres => SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart },
+        SolverMethod::Lu => unreachable!("LU has no Krylov settings: `solver` handles it"),
     })
 }
 
@@ -103,7 +105,7 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
 pub(super) fn multigrid(c: &Ctx, s: &SolverSpec, params: &SolverParams) -> Result<MultigridOperator, ProblemError> {
     let chosen = c.choose("solver.multigrid", s.multigrid.as_deref())?;
     let in_process_amg = match params.kind {
-        SolverKind::Gmres { preconditioner, .. } | SolverKind::Auto { preconditioner, .. } => preconditioner == Preconditioner::Amg,
+        SolverKind::Gmres { krylov: Krylov { preconditioner, .. }, .. } | SolverKind::Auto(Krylov { preconditioner, .. }) => preconditioner == Preconditioner::Amg,
         _ => false,
     };
     if s.multigrid.is_some() && !in_process_amg {
