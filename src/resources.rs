@@ -56,7 +56,7 @@ pub struct MemoryEstimate {
 /// factors or preconditioner (`auto` resolved as the solve will resolve it, with its
 /// longer GMRES on the saddle point of the displacement-pressure form).
 fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: bool) -> f64 {
-    match kind.resolve_system(unknowns, nonzeros, saddle_point, available_memory_bytes()).0 {
+    match kind.choose(unknowns, nonzeros, saddle_point, available_memory_bytes()).primary {
         // The assembled matrix is freed once equilibrated (`linalg::solve_nodal`).
         SolverKind::Bicgstab(..) => 72.0 * nonzeros,
         // The rows as assembled (12 B per entry), equilibrated in place and kept as the

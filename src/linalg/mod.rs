@@ -67,7 +67,7 @@ use methods::{
 pub use layout::NodeLayout;
 pub use csr::Csr;
 pub use params::{
-    lu_factor_bytes, Krylov, Preconditioner, PreconditionerKind, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
+    lu_factor_bytes, Krylov, Preconditioner, PreconditionerKind, SolverChoice, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
     AUTO_LU_SHARE, GMRES_RESTART, SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
 };
 pub use report::{SolveError, SolveReport};
@@ -225,11 +225,7 @@ pub(crate) fn solve_with_memory(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let saddle_point = layout.filter(|l| l.has_pressure());
     let (unknowns, nonzeros) = (a.nrows() as f64, a.nnz() as f64);
-    let (kind, choice) = params.kind.resolve_system(unknowns, nonzeros, saddle_point.is_some(), available);
-    let fallback = match kind {
-        SolverKind::Gmres { .. } => params.kind.auto_fallback(unknowns, nonzeros, saddle_point.is_some(), available),
-        _ => None,
-    };
+    let SolverChoice { primary: kind, fallback, reason: choice } = params.kind.choose(unknowns, nonzeros, saddle_point.is_some(), available);
     if let SolverKind::Petsc { .. } = kind {
         let (per_point, owner, points) = match layout {
             Some(l) => (l.per_node, partition::morton_owners(l.positions, crate::petsc::world().size), l.positions.to_vec()),

@@ -155,6 +155,18 @@ pub const AUTO_KRYLOV_BYTES: f64 = 4e7;
 /// 0.40 of it after the first cycle, which cost as much as its LU.
 pub const AUTO_KRYLOV_PACE: f64 = 0.1;
 
+/// What a solve runs, decided once: the solver, the one it falls back to when that
+/// fails, and why (`auto`'s reason, for `summary.json`'s `solver.choice`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverChoice {
+    /// The solver run first.
+    pub primary: SolverKind,
+    /// The solver run when the primary GMRES fails (`auto` only).
+    pub fallback: Option<SolverKind>,
+    /// Why `auto` chose so (`None` for an explicit kind).
+    pub reason: Option<String>,
+}
+
 impl SolverKind {
     /// Its name in a scene.
     pub fn method(&self) -> SolverMethod {
@@ -245,6 +257,18 @@ impl SolverKind {
             ));
         }
         (longer, choice)
+    }
+
+    /// The whole choice for a system of `unknowns` rows and `nonzeros` entries in this
+    /// process: [`SolverKind::resolve_system`]'s solver and reason, and when that is a
+    /// GMRES, [`SolverKind::auto_fallback`]'s fallback.
+    pub fn choose(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> SolverChoice {
+        let (primary, reason) = self.resolve_system(unknowns, nonzeros, saddle_point, available);
+        let fallback = match primary {
+            SolverKind::Gmres { .. } => self.auto_fallback(unknowns, nonzeros, saddle_point, available),
+            SolverKind::Lu | SolverKind::Bicgstab(_) | SolverKind::Petsc { .. } | SolverKind::Auto(_) => None,
+        };
+        SolverChoice { primary, fallback, reason }
     }
 
     /// What `auto` tries when the GMRES it chose for this system fails: LU when the

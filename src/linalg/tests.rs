@@ -433,6 +433,13 @@ fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
         Some(SolverKind::Bicgstab(Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-10, max_iterations: 500 }))
     );
     assert_eq!(SolverKind::Lu.auto_fallback(n, 1.0, false, roomy), None);
+    // The whole choice as one value: GMRES for time with LU behind it; LU alone below.
+    let c = auto.choose(n, nnz(1.1 * AUTO_KRYLOV_BYTES), false, roomy);
+    assert_eq!((c.primary, c.fallback), (gmres, Some(SolverKind::Lu)));
+    assert!(c.reason.is_some_and(|r| r.contains("LU if it fails")));
+    let c = auto.choose(n, nnz(0.9 * AUTO_KRYLOV_BYTES), false, roomy);
+    assert_eq!((c.primary, c.fallback), (SolverKind::Lu, None));
+    assert_eq!(SolverKind::Lu.choose(n, 1.0, false, roomy), SolverChoice { primary: SolverKind::Lu, fallback: None, reason: None });
 }
 
 /// `auto` gone iterative retries with BiCGSTAB+ILU(0) when its GMRES stops: with a
