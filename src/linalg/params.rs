@@ -187,7 +187,8 @@ impl SolverKind {
     /// plate whose degree-4 run it solved in 67 iterations); LU, PETSc and `auto` stay.
     pub fn for_reference(&self) -> SolverKind {
         match *self {
-            SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. } | SolverKind::Bicgstab(Krylov { tolerance, max_iterations, .. }) => {
+            SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. }
+            | SolverKind::Bicgstab(Krylov { tolerance, max_iterations, .. }) => {
                 SolverKind::Auto(Krylov { preconditioner: Preconditioner::Amg, tolerance, max_iterations })
             }
             other => other,
@@ -293,7 +294,10 @@ impl SolverKind {
     /// anything else unchanged.
     pub fn for_saddle_point(self) -> SolverKind {
         match self {
-            SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, .. } => SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations: max_iterations.max(SADDLE_POINT_ITERATIONS) }, restart: SADDLE_POINT_RESTART },
+            SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, .. } => SolverKind::Gmres {
+                krylov: Krylov { preconditioner, tolerance, max_iterations: max_iterations.max(SADDLE_POINT_ITERATIONS) },
+                restart: SADDLE_POINT_RESTART,
+            },
             other => other,
         }
     }
@@ -312,7 +316,9 @@ impl SolverKind {
     pub fn krylov(&self) -> Option<Krylov> {
         match *self {
             SolverKind::Lu => None,
-            SolverKind::Bicgstab(k) | SolverKind::Auto(k) | SolverKind::Gmres { krylov: k, .. } | SolverKind::Petsc { krylov: k, .. } => Some(k),
+            SolverKind::Bicgstab(k) | SolverKind::Auto(k) | SolverKind::Gmres { krylov: k, .. } | SolverKind::Petsc { krylov: k, .. } => {
+                Some(k)
+            }
         }
     }
 
@@ -321,7 +327,9 @@ impl SolverKind {
         match self {
             SolverKind::Lu => "lu".to_string(),
             SolverKind::Auto(Krylov { preconditioner, .. }) => format!("auto(lu|gmres+{})", preconditioner.label()),
-            SolverKind::Gmres { krylov: Krylov { preconditioner, .. }, restart, .. } => format!("gmres({restart})+{}", preconditioner.label()),
+            SolverKind::Gmres { krylov: Krylov { preconditioner, .. }, restart, .. } => {
+                format!("gmres({restart})+{}", preconditioner.label())
+            }
             SolverKind::Petsc { direct: true, .. } => "petsc:gmres+mumps-lu".to_string(),
             SolverKind::Petsc { krylov: Krylov { preconditioner, .. }, restart, .. } => {
                 format!("petsc:gmres({restart})+{}", preconditioner.petsc_name().unwrap_or("?"))

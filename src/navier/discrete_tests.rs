@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::domain::FillKind;
+use crate::mlsm::Basis;
 use crate::navier::test_case::quadratic_plate;
 use crate::pipeline::{Silent, StageTimer};
 

@@ -23,6 +23,7 @@
 //! 5. [`estimate`]: what an error estimate is and holds; [`run`]: a run with its
 //!    estimate (the reference run it compares with).
 
+pub mod cloud;
 pub mod discrete;
 pub mod dynamics;
 pub mod equations;

@@ -159,8 +159,9 @@ pub fn refined_dynamic(
     let divisor = f64::from(1u32 << 2u32.div_ceil(dynamics.integrator.order()));
     let fine = DynamicsParams { time_step: Some(time_step / divisor), ..dynamics.clone() };
     let times: Vec<f64> = history.iter().map(|h| h.0).collect();
-    let run =
-        |d: &DynamicsParams| simulate_sampled(case, &reference_params, d, &mut StageTimer::new(&Silent), Sampling::Times(&times), |_| Ok(()));
+    let run = |d: &DynamicsParams| {
+        simulate_sampled(case, &reference_params, d, &mut StageTimer::new(&Silent), Sampling::Times(&times), |_| Ok(()))
+    };
     let simulated = match run(&fine) {
         Err(RunError::UnstableTimeStep { .. }) => run(&DynamicsParams { time_step: None, ..fine.clone() }),
         other => other,

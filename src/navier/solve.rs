@@ -95,13 +95,18 @@ pub struct LinearSystem {
 /// The stages of the static run of `case` with `params`, each timed by `timer`, up to
 /// the post-processing: the [`Solution`]'s `estimate` is [`Estimate::Off`] and its
 /// `timings` empty until [`super::run::solve`] makes the estimate and closes the timer.
-pub(super) fn stages(case: &Case, params: &NavierParams, exact: Option<&dyn ExactSolution>, timer: &mut StageTimer) -> Result<Solution, RunError> {
+pub(super) fn stages(
+    case: &Case,
+    params: &NavierParams,
+    exact: Option<&dyn ExactSolution>,
+    timer: &mut StageTimer,
+) -> Result<Solution, RunError> {
     let mut disc = Discretisation::new(case, params, exact, timer)?;
     let Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced } =
         assemble_and_solve(case, &mut disc, exact, params, timer)?;
 
     let n = disc.nodes.len();
-    let (displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes) = timer.run(stage::POST, || {
+    let Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes } = timer.run(stage::POST, || {
         let displacement = disc.dofs.displacements(&x, n);
         let pressure = disc.pressure(&case.material, &x);
         if case.outputs.needs_gradient() {
@@ -118,7 +123,7 @@ pub(super) fn stages(case: &Case, params: &NavierParams, exact: Option<&dyn Exac
             Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
             None => String::new(),
         };
-        Ok(((displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes), note))
+        Ok((Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes }, note))
     })?;
 
     let system = system.map(|(matrix, rhs)| LinearSystem {
@@ -159,6 +164,19 @@ pub(super) fn stages(case: &Case, params: &NavierParams, exact: Option<&dyn Exac
         system,
         timings: StageTimings::default(),
     })
+}
+
+/// What the post-processing stage makes of a solved system (the fields of a
+/// [`Solution`] of the same names).
+struct Post {
+    displacement: Vec<[f64; 2]>,
+    pressure: Option<Vec<f64>>,
+    gradient: Option<Vec<Gradient>>,
+    stress: Option<StressField>,
+    exact_fields: Option<ExactFields>,
+    errors: Option<ErrorNorms>,
+    equilibrium: Option<Equilibrium>,
+    probes: Vec<ProbeValue>,
 }
 
 /// An assembled and solved system.

@@ -225,6 +225,42 @@ pub fn refusal(p: &Problem, target: &Target) -> Option<String> {
     None
 }
 
+/// The target the loop aims at: with singular corners a displacement estimate counts
+/// double (the `estimate` check's rule), so the tolerance is divided by that factor
+/// (and a note says so).
+fn aimed(target: &Target, problem: &Problem, solution: &navier::Solution, notes: &mut Vec<String>) -> Target {
+    let factor = if target.norm.of_stress() {
+        1.0
+    } else {
+        crate::warnings::displacement_estimate_factor(&crate::warnings::singular_corners(&problem.case, &solution.nodes))
+    };
+    if factor != 1.0 {
+        notes.push(format!(
+            "the scene has singular corners, where the estimate's reference is about as wrong as the run: \
+             the displacement estimate counts x{factor}, so the loop stops at an estimate of {:.2e}",
+            target.tolerance / factor
+        ));
+    }
+    Target { tolerance: target.tolerance / factor, ..*target }
+}
+
+impl Step {
+    /// The step of `solution`, whose estimate `estimated` is `value` in `norm`, made in
+    /// `seconds`.
+    fn of(solution: &navier::Solution, estimated: ErrorNorms, value: f64, norm: TargetNorm, seconds: f64) -> Step {
+        Step {
+            nodes: solution.nodes.len(),
+            spacing_min: solution.nodes.local_spacing.iter().copied().fold(f64::INFINITY, f64::min),
+            spacing_max: solution.nodes.local_spacing.iter().copied().fold(0.0, f64::max),
+            seconds,
+            estimate: value,
+            error: solution.errors.as_ref().and_then(|e| norm.of(e)),
+            estimated,
+            errors: solution.errors,
+        }
+    }
+}
+
 /// Pursue `target` from the nodes of `p`, reporting each step to `on_step`.
 pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step: impl FnMut(&Step)) -> Result<Outcome, RunError> {
     let t0 = Instant::now();
@@ -242,21 +278,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
     let order = problem.navier.approximation.formal_order();
     let mut history: Vec<Step> = Vec::new();
     let mut solution = navier::solve(&problem.case, &problem.navier, progress)?;
-    // With singular corners a displacement estimate counts double (the `estimate`
-    // check's rule): the loop aims at the target divided by that factor.
-    let factor = if target.norm.of_stress() {
-        1.0
-    } else {
-        crate::warnings::displacement_estimate_factor(&crate::warnings::singular_corners(&problem.case, &solution.nodes))
-    };
-    if factor != 1.0 {
-        notes.push(format!(
-            "the scene has singular corners, where the estimate's reference is about as wrong as the run: \
-             the displacement estimate counts x{factor}, so the loop stops at an estimate of {:.2e}",
-            target.tolerance / factor
-        ));
-    }
-    let target = &Target { tolerance: target.tolerance / factor, ..*target };
+    let target = &aimed(target, &problem, &solution, &mut notes);
     // The best step so far (smallest estimate): its index, problem and solution.
     let mut best: Option<(usize, Problem, navier::Solution)> = None;
     let stop = loop {
@@ -274,16 +296,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         let Some(value) = target.norm.of(&estimate.norms) else {
             return Err(RunError::Estimate { reason: format!("the estimate has no {}", target.norm.name()) });
         };
-        let step = Step {
-            nodes: solution.nodes.len(),
-            spacing_min: solution.nodes.local_spacing.iter().copied().fold(f64::INFINITY, f64::min),
-            spacing_max: solution.nodes.local_spacing.iter().copied().fold(0.0, f64::max),
-            seconds: step_seconds,
-            estimate: value,
-            error: solution.errors.as_ref().and_then(|e| target.norm.of(e)),
-            estimated: estimate.norms,
-            errors: solution.errors,
-        };
+        let step = Step::of(&solution, estimate.norms, value, target.norm, step_seconds);
         on_step(&step);
         history.push(step);
         let k = history.len() - 1;

@@ -105,7 +105,9 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
 pub(super) fn multigrid(c: &Ctx, s: &SolverSpec, params: &SolverParams) -> Result<MultigridOperator, ProblemError> {
     let chosen = c.choose("solver.multigrid", s.multigrid.as_deref())?;
     let in_process_amg = match params.kind {
-        SolverKind::Gmres { krylov: Krylov { preconditioner, .. }, .. } | SolverKind::Auto(Krylov { preconditioner, .. }) => preconditioner == Preconditioner::Amg,
+        SolverKind::Gmres { krylov: Krylov { preconditioner, .. }, .. } | SolverKind::Auto(Krylov { preconditioner, .. }) => {
+            preconditioner == Preconditioner::Amg
+        }
         _ => false,
     };
     if s.multigrid.is_some() && !in_process_amg {
