@@ -248,17 +248,7 @@ mod tests {
     use super::*;
 
     fn quarter_plate() -> Domain {
-        Domain {
-            regions: vec![
-                Region {
-                    primitive: Primitive::Rectangle { min: [0.0, 0.0], max: [4.0, 4.0] },
-                    op: CsgOp::Union,
-                    edge_parts: vec![0, 1, 2, 3],
-                },
-                Region { primitive: Primitive::Disc { center: [0.0, 0.0], radius: 1.0 }, op: CsgOp::Subtract, edge_parts: vec![4] },
-            ],
-            parts: ["bottom", "right", "top", "left", "hole"].iter().map(|s| s.to_string()).collect(),
-        }
+        super::super::shape::tests::plate_with_hole()
     }
 
     #[test]

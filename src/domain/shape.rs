@@ -310,10 +310,11 @@ impl Domain {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn plate_with_hole() -> Domain {
+    /// The quarter plate [0, 4]^2 minus the unit disc, parts bottom, right, top, left, hole.
+    pub(in crate::domain) fn plate_with_hole() -> Domain {
         Domain {
             regions: vec![
                 Region {

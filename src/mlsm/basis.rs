@@ -40,7 +40,7 @@ choice! {
     pub enum BasisKind("approximation.basis", default Some(BasisKind::Monomials)) {
         Monomials = "monomials" => "weighted least squares on monomials x^a y^b of total degree a + b <= `degree`",
         Tensor = "tensor" => "weighted least squares on tensor-product monomials x^a y^b, a, b <= `degree`",
-        Phs = "phs" => "RBF-FD: polyharmonic spline r^`order` (odd, default 3) plus monomials of total degree `degree`",
+        Phs = "phs" => "RBF-FD: polyharmonic spline r^`exponent` (odd, at least 3, default 3) plus monomials of total degree `degree`",
         Gaussian = "gaussian" => "RBF-FD: Gaussian exp(-(r/c)^2), c = `shape` x local spacing, plus monomials of total degree `degree`",
         Mq = "mq" => "RBF-FD: multiquadric sqrt(r^2 + c^2), c = `shape` x local spacing, plus monomials of total degree `degree`",
         Imq = "imq" => "RBF-FD: inverse multiquadric 1/sqrt(r^2 + c^2), c = `shape` x local spacing, plus monomials of total degree `degree`",

@@ -19,7 +19,7 @@ pub fn shape_functions(
     out: &mut [f64],
 ) -> Result<(), RankDeficient> {
     match basis {
-        Basis::Monomials { .. } | Basis::Tensor { .. } => wls::shape_functions(basis, weight, centre, points, ops, out),
+        Basis::Monomials { .. } | Basis::Tensor { .. } => wls::shape_functions(basis, weight, (centre, points), ops, out),
         Basis::RbfFd { radial, degree } => rbffd::shape_functions(radial, *degree, centre, points, ops, out),
     }
 }

@@ -40,14 +40,14 @@ pub fn rank_ratio(b: &mut [f64], n: usize, m: usize) -> f64 {
 }
 
 /// Weighted least-squares shape functions of `ops` at `centre` for the support
-/// `points` (the centre first), written to `out[k * n .. (k + 1) * n]` for the k-th
-/// operator; `basis` is a monomial or tensor basis (every basis goes through
-/// [`super::fit::shape_functions`], which sends RBF-FD to [`super::rbffd`]).
+/// `points` (the centre first; `stencil = (centre, points)`), written to
+/// `out[k * n .. (k + 1) * n]` for the k-th operator; `basis` is a monomial or tensor
+/// basis (every basis goes through [`super::fit::shape_functions`], which sends
+/// RBF-FD to [`super::rbffd`]).
 pub fn shape_functions(
     basis: &Basis,
     weight: &Weight,
-    centre: [f64; 2],
-    points: &[[f64; 2]],
+    (centre, points): ([f64; 2], &[[f64; 2]]),
     ops: &[Op],
     out: &mut [f64],
 ) -> Result<(), RankDeficient> {
@@ -226,7 +226,7 @@ mod tests {
                     })
                     .collect();
                 let mut out = vec![0.0; ops.len() * n];
-                shape_functions(&basis, &weight, centre, &points, &ops, &mut out).unwrap();
+                shape_functions(&basis, &weight, (centre, &points), &ops, &mut out).unwrap();
 
                 let LocalFrame { dist, radius: s, nearest: h_p, z } = LocalFrame::new(centre, &points);
                 let local = LocalBasis::new(&basis);

@@ -104,7 +104,7 @@ pub(super) fn arc_rows(
         points.clear();
         points.extend(found.iter().map(|f| nodes.positions[f.item as usize]));
         let m = points.len();
-        wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, q, &points, ops, &mut weights[..ops.len() * m]).ok()?;
+        wls::shape_functions(&Basis::Monomials { degree: 2 }, &Weight::None, (q, &points), ops, &mut weights[..ops.len() * m]).ok()?;
         let mut add = |col: usize, (tx, ty): (f64, f64)| {
             *sums[0].entry(col).or_default() += ds * tx;
             *sums[1].entry(col).or_default() += ds * ty;
