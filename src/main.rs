@@ -6,23 +6,16 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    // Blocks from 128 kB up are always mapped, and unmapped when freed. glibc raises
-    // this threshold to the size of the first mapped block that is freed (up to 32 MB),
-    // after which freed vectors of a few MB stay in its heaps: 0.07 GB of the peak at
-    // 1e6 nodes (BENCHMARKS.md); the multigrid keeps its cycle's vectors, so the solve
-    // does not map and fault in fresh pages at every iteration.
-    // A thread's heap gives its top back to the system only when more than 2 MB of it
-    // is free: at glibc's 128 kB the small buffers of every RBF-FD stencil (tens of kB
-    // at degree 8) were returned and faulted in again node after node (page faults,
-    // zeroing and TLB shootdowns were 10-15 % of a Kirsch run); the balanced preset on
-    // Kirsch took 2.42 s instead of 3.75-3.79, the 1e6-node cantilever's peak stayed at
-    // 1.93 GB (1.89-1.93 before; BENCHMARKS.md, "Allocator trimming").
-    // M_MMAP_MAX is glibc's default, set again because a library may have changed it
-    // (and the trim threshold) before `main`: with the `petsc` feature, SuperLU_DIST's load-time constructor
-    // (linked in by PETSc) sets M_MMAP_MAX = 0 and M_TRIM_THRESHOLD = -1, so that freed
-    // memory never went back to the system: the cantilever at 1e6 nodes in one process
-    // peaked at 2.31-2.40 GB with the feature against 1.96 GB without, and rank 0 of a
-    // two-rank run still held 2.36 GB when it started writing its output.
+    // Blocks from 128 kB up are always mapped and unmapped when freed: glibc would
+    // otherwise raise this threshold and keep freed vectors of a few MB in its heaps
+    // at the peak (docs/notebook/round2-target-error.md, "no retained heap").
+    // A thread's heap gives its top back only when more than 2 MB of it is free: at
+    // 128 kB the buffers of every RBF-FD stencil were returned and faulted in again
+    // node after node (docs/notebook/2026-11-27-allocator-trimming.md).
+    // M_MMAP_MAX is glibc's default, set again because a library may change both before
+    // `main`: SuperLU_DIST (linked in by PETSc) sets M_MMAP_MAX = 0 and M_TRIM_THRESHOLD
+    // = -1, and freed memory never went back to the system
+    // (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "Freed memory returned").
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: sets malloc parameters before any thread starts.
     unsafe {

@@ -20,8 +20,8 @@
 //!
 //! and for peridynamics `n = area / h^2`, `pi m^2` bonds per node (32 B each),
 //! `Z = 4 n (pi m^2 + 1)`, the same solver terms with `N = 2 n`. The LU term was fitted
-//! on the Kirsch plate (PHS p = 4) at 3.8e4 and 1.5e5 unknowns (measured peaks 1.27 and
-//! 7.10 GB; the constant came out 33.5 and 34.6); the test `memory_estimate_tracks_the_measured_peak`
+//! on the Kirsch plate (PHS p = 4) at two sizes (docs/notebook/2026-11-27-auto-by-time.md,
+//! "From the code comments"); the test `memory_estimate_tracks_the_measured_peak`
 //! checks the whole model within 2x on three sizes.
 
 use crate::case::Case;
@@ -61,8 +61,8 @@ fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: b
         SolverKind::Bicgstab(..) => 72.0 * nonzeros,
         // The rows as assembled (12 B per entry), equilibrated in place and kept as the
         // multigrid's finest level, the coarse levels and single-precision transfers
-        // (about 9 B per fine entry), slack, and the Krylov basis. Measured at 1e6 nodes:
-        // 1.49 GB at assembly, 2.34 GB in the solve, estimated 2.43 (BENCHMARKS.md).
+        // (about 9 B per fine entry), slack, and the Krylov basis (checked at 1e6 nodes:
+        // docs/notebook/round2-target-error.md, "Rows assembled in node order").
         SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 24.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
         // The rows (12 B per entry) become the equilibrated columns (16 B) and are freed;
         // then the columns and the factors.
@@ -83,12 +83,13 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
     let one = |support: usize, nodes: f64| {
         let s = support as f64;
         // Navier rows couple k unknowns of s nodes (u-p: the continuity row only 2; its
-        // stabilisation's pressure Laplacian, s more, is not counted: Lame at nu = 0.5,
-        // measured peak +6 %, estimate still 1.84x of it).
+        // stabilisation's pressure Laplacian, s more, is not counted: it adds little to
+        // the measured peak, which the estimate still exceeds;
+        // docs/notebook/round2-pressure-stabilisation.md).
         let nonzeros = (k * k - (k - 2.0)) * nodes * s;
         // Dynamic: the triplets, the matrix, its split into dynamic and algebraic
-        // blocks and the boundary block's factors, 100 B per entry (steel_plate_dynamic
-        // at 1.2e4 / 4.9e4 nodes: 86 / 311 MB measured, 40 B gave 0.46 of it).
+        // blocks and the boundary block's factors, 100 B per entry (chosen from the
+        // measured peaks of steel_plate_dynamic: docs/notebook/round1-explicit-dynamics-1e5.md).
         let solve =
             if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros, k > 2.0) };
         // A static run releases its shapes once the rows are assembled (they and the

@@ -130,8 +130,8 @@ fn against_navier(
         Outcome::PdStatic(_) | Outcome::PdDynamic(_) => unreachable!("the reference runs the Navier model"),
     };
     // Interpolated at the reference's degree: a degree-2 interpolation from a coarse
-    // reference was five times the difference it measured (pd_manufactured, delta =
-    // 0.0125: 2.8e-4 against 5.6e-5).
+    // reference was several times the difference it measured
+    // (docs/notebook/round1-peridynamics-static-m3.md, "From the code comments").
     let degree = navier.navier.approximation.basis.polynomial_degree().max(2);
     let interpolated = mls_values_of_degree(nodes, u, positions, degree).and_then(|u| {
         let sigma = match (stress, sigma) {

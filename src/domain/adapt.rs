@@ -47,18 +47,18 @@ pub const GROWTH: f64 = 0.1;
 /// clamped edge meets a free one, where the rest of the solid's error falls like
 /// `h^q`, `q >= 1`: to keep pace, a corner's spacing must shrink by the bulk's factor
 /// to the power `q / lambda`, 1.4 to 1.9 for the loop's `q = 1` of degree 2. The square
-/// is the round value. On the bracket from 2 mm (target 1e-2 in e_inf(u), four node
-/// seeds) the step written had a true error of 1.8e-3 to 2.8e-3 and an estimate 0.87
-/// to 1.00 of it; with the plain factor 2.1e-3 to 1.6e-2 and 0.27 to 0.97, with 1.5 to
-/// 8.6 times fewer nodes (README, "Refining to an error target").
+/// is the round value. On the bracket it kept the estimate close to the true error,
+/// where the plain factor, with fewer nodes, let it fall well below
+/// (docs/notebook/2026-11-27-bracket-to-error-target.md; docs/verification.md,
+/// "Refining to an error target: measured").
 pub const CORNER_POWER: i32 = 2;
 
 /// Finest spacing a node next to a singular corner is refined to, as a fraction of
 /// the largest spacing of the step. Without it the square of [`CORNER_POWER`]
 /// compounds (the nodes graded around a corner ask for refinement too): on the
-/// bracket from 2 mm (node seed 2) it took the corner to 1.3 um, 1/1500 of the bulk,
-/// in three steps, and the fourth solve took 120 s instead of a few. The three other
-/// node seeds reached the target with corners at 1/70 to 1/130 of the bulk.
+/// bracket it took one node seed's corner far below the other seeds' in three steps,
+/// and the fourth solve took minutes instead of seconds
+/// (docs/notebook/2026-11-27-bracket-to-error-target.md).
 pub const CORNER_FLOOR: f64 = MIN_FACTOR * MIN_FACTOR * MIN_FACTOR * MIN_FACTOR;
 
 /// Neighbours of a node in the grading graph.

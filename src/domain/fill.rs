@@ -174,9 +174,10 @@ fn advancing_front(domain: &Domain, boundary: &[Point], field: &SpacingField, se
     while next < front.len() {
         // The front points known now, in order: their random rotations drawn in that
         // order (one each, as one at a time would), their candidates and spacings made
-        // in parallel (a graded spacing is a nearest-target query, 0.2-2 us each, 87 %
-        // of a sequential fill), then accepted one by one in the same order: the same
-        // nodes as a point-by-point front, bit for bit.
+        // in parallel (a graded spacing is a nearest-target query, most of a sequential
+        // fill: docs/notebook/2026-11-26-up-form-iterative-solvers.md, "The graded
+        // fill's spacings in parallel"), then accepted one by one in the same order:
+        // the same nodes as a point-by-point front, bit for bit.
         let batch: Vec<(Point, f64)> = front[next..].iter().map(|&p| (p, rng.random::<f64>() * std::f64::consts::TAU)).collect();
         next = front.len();
         let proposals: Vec<(f64, [Candidate; CANDIDATES])> = batch.par_iter().map(|&(p, theta0)| candidates(field, p, theta0)).collect();

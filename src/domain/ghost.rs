@@ -18,17 +18,12 @@
 //!   `navier::sector` takes: there the ghost-free edges were worse than the ghosts,
 //!   for RBF-FD and for least squares).
 //!
-//! Measured on the L bracket without holes (base clamped, tip shear, grid), tip
-//! deflection against a P2 finite-element reference of -4.894e-4 m
-//! (`benches/fem_reference.py`), at h = 4, 2, 1, 0.5 mm: with ghosts up to the corner
-//! (the first four rules) +1.99e-3, +2.08e-3, +2.17e-3, +2.26e-3 m (wrong sign,
-//! drifting); ghost-free within 10 spacings -4.778e-4, -4.828e-4, -4.916e-4,
-//! -4.879e-4 (not monotone); within 16, -4.908e-4, -4.857e-4, -4.878e-4, -4.893e-4;
-//! within 24, -4.797e-4, -4.854e-4, -4.873e-4, -4.888e-4 (errors 2.0, 0.8, 0.4,
-//! 0.1 %, monotone). The shipped bracket on a grid (holes included; reference
-//! -4.973e-4 m) goes from +2.2e-3 m to -4.963e-4 m at h = 1 mm. (Measured before
-//! the sector balance at the corner, `navier::sector`, which moves the L's to
-//! -4.641e-4, -4.787e-4, -4.839e-4 m at 4, 2, 1 mm and makes scattered nodes converge.)
+//! The radius was chosen on the L bracket without holes (grid, tip deflection against
+//! a P2 finite-element reference, `benches/fem_reference.py`): with ghosts up to the
+//! corner the tip had the wrong sign; ghost-free within 10 or 16 spacings it did not
+//! converge monotonically, within 24 it did (before the sector balance of
+//! `navier::sector`; docs/limits.md, and the figures in
+//! docs/notebook/2026-11-26-reentrant-sector-balance.md, "From the code comments").
 
 use super::{Domain, NodeSet, Point};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};

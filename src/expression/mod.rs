@@ -4,13 +4,14 @@
 //!
 //! Parsing, compilation and symbolic differentiation are done by `exmex`. Measured
 //! against `evalexpr`, `fasteval` and `meval` on a five-variable load expression
-//! (1e6 evaluations, release build, this project's machine): exmex 73 ns per
-//! evaluation, evalexpr 724 ns; fasteval and meval are unmaintained since 2020 and
-//! 2017, and evalexpr accepts `2x` and `x +* y` without an error. exmex is also the
-//! only candidate that differentiates (`Differentiate::partial`), which gives the
-//! body force and the stresses of a manufactured solution without hand algebra
-//! (`exact::ExpressionSolution`). Its error texts are terse, so [`Expression::parse`]
-//! checks names and functions itself and rewords the syntax errors.
+//! (1e6 evaluations, release build, this project's machine): an exmex evaluation took
+//! a tenth of evalexpr's (docs/guide/formulas.md); fasteval and meval are unmaintained
+//! since 2020 and 2017, and evalexpr accepts `2x` and `x +* y` without an error.
+//! exmex is also the only candidate that differentiates (`Differentiate::partial`),
+//! which gives the body force and the stresses of a manufactured solution without
+//! hand algebra (`exact::ExpressionSolution`). Its error texts are terse, so
+//! [`Expression::parse`] checks names and functions itself and rewords the syntax
+//! errors.
 //!
 //! Syntax: numbers (`2`, `1.5e-3`), `+ - * /`, `^` (power), parentheses, the
 //! variables `x`, `y` (and the time `t` in the loads of a scene with `[dynamics]`),

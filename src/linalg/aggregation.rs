@@ -22,8 +22,9 @@ pub struct Blocks {
 
 /// A graph over the nodes of a level in compressed form: the neighbours of node `i`
 /// are `neighbours[offsets[i]..offsets[i + 1]]`, sorted, without `i` itself. (One
-/// flat array: the million small per-node lists it replaces took 2.2 s and stayed
-/// resident in the allocator's arenas after they were freed, 0.5 GB at 1e6 nodes.)
+/// flat array: the million small per-node lists it replaces were slow to build and
+/// stayed resident in the allocator's arenas after they were freed;
+/// docs/notebook/round2-target-error.md, "One copy of the matrix in the solve".)
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NodeGraph {
     offsets: Vec<usize>,

@@ -44,8 +44,9 @@ pub struct AmgParams {
     pub strength: f64,
     /// θ on the coarser levels, whose operators couple each aggregate with many others:
     /// with θ = 0 there the second coarsening took about 25 nodes per aggregate and the
-    /// third level was too coarse. 0.05 took the 1e5-node cantilever from 30 to 21
-    /// iterations, Lame at 5e4 nodes from 99 to 89 (BENCHMARKS.md).
+    /// third level was too coarse; 0.05 lowered the iterations on the cantilever, Lame
+    /// and Kirsch (docs/notebook/2026-11-25-multigrid-symmetry-edges.md, "A strength
+    /// threshold on the coarse levels").
     pub coarse_strength: f64,
     /// Stop coarsening at this many unknowns and solve that level directly.
     pub max_coarse: usize,
@@ -75,8 +76,9 @@ struct Level {
     /// Pseudo-inverse of each diagonal block, row-major, `block²` per node.
     inv_diag: Vec<f64>,
     /// The transfers in single precision: a fixed linear map is all the cycle needs of
-    /// them, and they are the largest part of the hierarchy (at 1e6 nodes 0.17 GB less);
-    /// stored by aggregate ([`Transfer`]).
+    /// them, and they are the largest part of the hierarchy
+    /// (docs/notebook/round2-target-error.md, "Rows assembled in node order,
+    /// single-precision transfers"); stored by aggregate ([`Transfer`]).
     p: Transfer,
     r: Transfer,
 }
@@ -118,9 +120,9 @@ fn block_diagonal(inv_diag: &[f64], blocks: Blocks) -> Csr {
 /// Spectral radius of `M = D⁻¹ A` estimated from the Ritz values of a 15-step Arnoldi
 /// process, as many as pyamg's `approximate_spectral_radius` takes (power iteration
 /// underestimates it on nonsymmetric `M`, and `ω` too large makes the smoothed
-/// prolongator amplify instead of smooth). On the cantilever at 1e5 nodes 15 steps
-/// give ρ within 0.5 % of 20 steps, and the same iterations on the grid scenes
-/// (BENCHMARKS.md); the orthogonalisation grows with the square of the steps.
+/// prolongator amplify instead of smooth). 15 steps gave nearly the ρ of 20 and the
+/// same iterations (docs/notebook/round2-target-error.md, "A cheaper multigrid
+/// setup"); the orthogonalisation grows with the square of the steps.
 fn spectral_radius(a: &Csr, inv_diag: &Csr) -> f64 {
     let n = a.nrows();
     let steps = 15.min(n);

@@ -3,8 +3,9 @@
 //! in whole aggregates. A row of the prolongation `P` holds all `k` near-null
 //! columns of each aggregate it touches (`1 x k` blocks), and the `k` rows of one
 //! aggregate in the restriction `R` share their columns (`k x 1` blocks). With `k = 3`
-//! an entry takes 4 + 4/3 bytes instead of 8: at 1e6 nodes the two transfers take
-//! 0.25 GB instead of 0.38 GB.
+//! an entry takes 4 + 4/3 bytes instead of 8
+//! (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "Single-precision cycle,
+//! block-stored transfers").
 
 use super::csr::Csr;
 use rayon::prelude::*;
@@ -40,7 +41,8 @@ impl BlockRows {
         }
         let block_rows = a.nrows() / br;
         // Ranges of block rows in parallel, each into its own part, the parts then
-        // concatenated (serially the conversion took 0.77 s of the 1e6-node setup).
+        // concatenated (serially the conversion was a noticeable part of the 1e6-node
+        // setup: docs/notebook/2026-11-26-up-form-iterative-solvers.md).
         let per_task = block_rows.div_ceil(4 * rayon::current_num_threads().max(1)).max(1024);
         let parts: Option<Vec<Part>> = (0..block_rows.div_ceil(per_task))
             .into_par_iter()
@@ -96,7 +98,7 @@ impl BlockRows {
         let block_rows = a.nrows() / b;
         // Two passes over the rows, each in parallel: the block columns of each block
         // row, then the blocks written in place (one pass into parts and a
-        // concatenation took 0.46 s at 1e6 nodes).
+        // concatenation was slower: docs/notebook/2026-11-27-node-blocks-in-the-cycle.md).
         let counts: Vec<usize> = (0..block_rows)
             .into_par_iter()
             .with_min_len(4096)

@@ -2,12 +2,12 @@
 //! multigrid work on.
 //!
 //! Why not nalgebra-sparse's `CsrMatrix`: its `usize` column indices make a stored
-//! entry 16 bytes; here it is 12. At 1e6 nodes the equilibrated operator and the
-//! multigrid hold 1.1e8 entries, so this is 0.44 GB less at the solve's peak and a
-//! quarter less memory traffic in every product and smoothing sweep, which bound the
-//! iteration's time (BENCHMARKS.md). faer's `SparseRowMat<u32, _>` would also do, but
-//! its row pointers would be 32-bit too and its API is built around views; the few
-//! operations the multigrid needs are written here.
+//! entry 16 bytes; here it is 12: less memory at the solve's peak and a quarter less
+//! memory traffic in every product and smoothing sweep, which bound the iteration's
+//! time (docs/notebook/round2-target-error.md, "32-bit column indices"). faer's
+//! `SparseRowMat<u32, _>` would also do, but its row pointers would be 32-bit too and
+//! its API is built around views; the few operations the multigrid needs are written
+//! here.
 
 use super::SparseMatrix;
 use rayon::prelude::*;

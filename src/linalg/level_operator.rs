@@ -3,15 +3,13 @@
 //! node blocks.
 //!
 //! Single precision: the cycle need only be a fixed linear map, and the smoother and
-//! residual passes are memory-bound (an entry in 8 bytes instead of 12). Measured with
-//! the block-stored transfers (BENCHMARKS.md, "Single-precision cycle"): the cantilever
-//! at 1e6 nodes iterates in 0.91x the time; a low-order operator that only
-//! preconditions is held once, in single precision (Kirsch at 3e5 nodes: peak 1.21 ->
-//! 1.10 GB).
+//! residual passes are memory-bound (an entry in 8 bytes instead of 12); a low-order
+//! operator that only preconditions is held once, in single precision
+//! (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "Single-precision cycle").
 //!
 //! Node blocks ([`BlockRows::square`]): the two rows of a node reach the same support
 //! nodes, so one column index serves four entries (5 bytes an entry instead of 8) and
-//! the sweep reads `x` in pairs (BENCHMARKS.md, "Node blocks in the cycle").
+//! the sweep reads `x` in pairs (docs/notebook/2026-11-27-node-blocks-in-the-cycle.md).
 
 use super::aggregation::Blocks;
 use super::blocks::BlockRows;
@@ -48,9 +46,8 @@ impl LevelOperator {
     /// operator that only preconditions is held in node blocks when a node has two
     /// unknowns and the blocks hold few stored zeros ([`super::blocks::MAX_FILL`]);
     /// the system's own rows are not: next to their double-precision copy the blocks
-    /// took more memory than the single-precision values (1e6-node cantilever: peak
-    /// +26-60 MB, the conversion 0.33 s against 0.3-0.5 s of iterations saved;
-    /// BENCHMARKS.md, "Node blocks in the cycle").
+    /// took more memory than the single-precision values, for no gain in time
+    /// (docs/notebook/2026-11-27-node-blocks-in-the-cycle.md).
     pub(super) fn new(a: Csr, keep: Finest, blocks: Blocks) -> Self {
         if blocks.block == 2 && keep == Finest::PreconditionerOnly {
             if let Some(b) = BlockRows::square(&a, 2) {

@@ -15,8 +15,8 @@ pub const CONDITION_LIMIT: f64 = 1e14;
 /// Sparse LU factorisation `P A Q = L U` with partial (row) pivoting and a
 /// fill-reducing COLAMD column ordering, from `faer::sparse::linalg::solvers`
 /// (supernodal or simplicial, chosen by faer). Runs sequentially: results then do
-/// not depend on the thread count, and two threads gave no measured gain here
-/// (crates.md: 1e5 unknowns, 1.3-1.5 s either way).
+/// not depend on the thread count, and two threads gave no gain here
+/// (`../shared/docs/crates.md`).
 pub struct SparseLu {
     lu: Lu<usize, f64>,
     n: usize,

@@ -155,7 +155,8 @@ pub type Auxiliary<'a> = Option<Box<dyn FnOnce() -> Result<Csr, String> + 'a>>;
 /// preconditioner takes its near-null space (rigid-body modes) from their positions.
 /// A matrix handed over (`Cow::Owned`) is freed as soon as the solver holds the form it
 /// works on (the equilibrated copy, or GMRES+AMG's equilibrated rows): one copy of the
-/// matrix fewer at the solve's peak (0.84 GB at 1e6 nodes, BENCHMARKS.md).
+/// matrix fewer at the solve's peak (docs/notebook/round2-target-error.md, "One copy
+/// of the matrix in the solve").
 pub fn solve_nodal(
     a: Cow<'_, Csr>,
     b: &[f64],

@@ -36,8 +36,8 @@ pub(super) fn rigid_body_modes(n: usize, layout: Option<NodeLayout>) -> (Vec<f64
 }
 
 /// Symmetric Gauss–Seidel iterations that grow the finest level's left near-null space
-/// (`left_near_null`): pyamg takes 4; on the Lame ring 1 / 2 / 4 gave 71 / 42 / 41
-/// iterations (pyamg on our exported system).
+/// (`left_near_null`): pyamg takes 4; on the Lame ring 2 did as well as 4 (pyamg on
+/// our exported system: docs/notebook/2026-11-25-multigrid-symmetry-edges.md).
 pub(super) const LEFT_NULL_ITERATIONS: usize = 2;
 
 /// Near-null vectors of `aᵀ` grown from those of `a`: `iterations` symmetric block
@@ -45,15 +45,15 @@ pub(super) const LEFT_NULL_ITERATIONS: usize = 2;
 /// `y = null` (unknowns × `k`, row-major), `aᵀ`'s diagonal blocks `D_Iᵀ` inverted as
 /// `(D_I⁺)ᵀ`. A collocation matrix is not symmetric, and its left near-null space is
 /// not the rigid-body modes: the restriction built from these (pyamg's "improve
-/// candidates" applied to `BH`, Olson & Schroder's nonsymmetric SA) took the scattered
-/// Lame ring from 325 to 41 iterations in pyamg, against 143 when only `B` was relaxed
-/// (`benches/pyamg_left_null.py`).
+/// candidates" applied to `BH`, Olson & Schroder's nonsymmetric SA) cut the scattered
+/// Lame ring's iterations in pyamg several-fold, far more than relaxing only `B`
+/// (`benches/pyamg_left_null.py`; docs/notebook/2026-11-25-multigrid-symmetry-edges.md).
 ///
 /// `aᵀ` is never formed: the residual `r = −aᵀ y` is kept up to date by scattering each
 /// node's change through its rows of `a`, `r_j −= a_ij δ_i`, so a sweep is one serial
-/// pass over `a` updating `k` vectors (at 1e6 nodes 0.8-1.0 s for the four sweeps; a
-/// hybrid sweep by thread, as `smoother::gauss_seidel` does, was no faster there and cost the
-/// Lame ring 99 instead of 85 iterations at 5e4 nodes).
+/// pass over `a` updating `k` vectors (a hybrid sweep by thread, as
+/// `smoother::gauss_seidel` does, was no faster and cost the Lame ring iterations:
+/// docs/notebook/2026-11-25-multigrid-symmetry-edges.md).
 pub(super) fn left_near_null(a: &Csr, blocks: Blocks, inv_diag: &[f64], null: &[f64], k: usize, iterations: usize) -> Vec<f64> {
     let (b, n) = (blocks.block, a.nrows());
     let (ptr, idx, val) = (a.row_offsets(), a.col_indices(), a.values());

@@ -118,8 +118,8 @@ impl Krylov {
 }
 
 /// Estimated bytes of faer's sparse-LU factors of a matrix with `nonzeros` entries and
-/// `unknowns` rows: `34 N^0.26` per nonzero, fitted on the Kirsch plate (PHS p = 4,
-/// 3.8e4 and 1.5e5 unknowns, measured peaks 1.27 and 7.10 GB; see `resources`).
+/// `unknowns` rows: `34 N^0.26` per nonzero, fitted on the Kirsch plate (PHS p = 4; see
+/// `resources`).
 pub fn lu_factor_bytes(nonzeros: f64, unknowns: f64) -> f64 {
     nonzeros * 34.0 * unknowns.max(1.0).powf(0.26)
 }
@@ -129,8 +129,9 @@ pub fn lu_factor_bytes(nonzeros: f64, unknowns: f64) -> f64 {
 pub const GMRES_RESTART: usize = 30;
 
 /// Krylov vectors of `auto`'s GMRES on a displacement-pressure system: on the Lame
-/// ring at nu = 0.4999 (5.3e4 nodes) GMRES(100) took 401 iterations and 18.8 s where
-/// GMRES(30) took 780 and 30.2 s, for 13 % more peak memory (BENCHMARKS.md).
+/// ring at nu = 0.4999 the longer restart took about half the iterations and less time
+/// than GMRES(30), for a little more peak memory
+/// (docs/notebook/2026-11-26-up-form-iterative-solvers.md).
 pub const SADDLE_POINT_RESTART: usize = 100;
 
 /// Least iteration budget of `auto`'s GMRES on a displacement-pressure system.
@@ -141,18 +142,16 @@ pub const AUTO_LU_SHARE: f64 = 0.5;
 
 /// Estimated LU factor bytes ([`lu_factor_bytes`]) above which `auto` solves a
 /// displacement system by GMRES + multigrid even though the factors fit, and falls
-/// back to LU if the iteration fails. Measured on the shipped scenes (2-core AMD EPYC,
-/// BENCHMARKS.md "auto by time"): the solve stage was equal at 14-16 MB (manufactured,
-/// 441-1681 nodes), 1.2x faster by GMRES + AMG at 47 MB (Kirsch, 1 283 nodes), 2.1x at
-/// 72 MB, 4.3x at 230 MB (Kirsch as shipped) and 19x at 2.3 GB (Kirsch, PHS degree 6,
-/// 18 942 nodes: 14.4 against 0.77 s).
+/// back to LU if the iteration fails: on the shipped scenes the two solve equally fast
+/// below it, and GMRES + AMG is faster above it, by far on the largest systems
+/// (docs/notebook/2026-11-27-auto-by-time.md).
 pub const AUTO_KRYLOV_BYTES: f64 = 4e7;
 
 /// The largest share of its residual a whole restart cycle of the GMRES that `auto`
-/// chose for time ([`AUTO_KRYLOV_BYTES`]) may leave before LU takes over. A working
-/// multigrid left 8e-10 to 2e-5 per cycle of 30 on the shipped scenes (35-65 iterations
-/// to 1e-10, up to 5e4 nodes); the bracket's (unstable at its re-entrant corner) left
-/// 0.40 of it after the first cycle, which cost as much as its LU.
+/// chose for time ([`AUTO_KRYLOV_BYTES`]) may leave before LU takes over: a working
+/// multigrid leaves far less per cycle on the shipped scenes, the bracket's (unstable
+/// at its re-entrant corner) far more after a first cycle that cost as much as its LU
+/// (docs/notebook/2026-11-27-auto-by-time.md).
 pub const AUTO_KRYLOV_PACE: f64 = 0.1;
 
 /// What a solve runs, decided once: the solver, the one it falls back to when that
@@ -183,8 +182,9 @@ impl SolverKind {
     /// system on the run's nodes): a scene's explicit GMRES or BiCGSTAB becomes `auto`
     /// with the same tolerance and budget, so that a small reference is solved by LU and
     /// a large one falls back to BiCGSTAB+ILU(0) when the multigrid does not converge
-    /// (degree-6 stencils of 56 nodes: GMRES+AMG stalled at 1.6e-2 on a 368-node Kirsch
-    /// plate whose degree-4 run it solved in 67 iterations); LU, PETSc and `auto` stay.
+    /// (on degree-6 stencils of 56 nodes GMRES+AMG stalled on a Kirsch plate whose
+    /// degree-4 run it solved: docs/notebook/2026-11-25-multigrid-symmetry-edges.md);
+    /// LU, PETSc and `auto` stay.
     pub fn for_reference(&self) -> SolverKind {
         match *self {
             SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. }
@@ -275,7 +275,8 @@ impl SolverKind {
     /// What `auto` tries when the GMRES it chose for this system fails: LU when the
     /// factors fit ([`SolverKind::resolve`] chose LU: GMRES was chosen for time),
     /// else BiCGSTAB with ILU(0) and the `Auto` tolerance and iteration budget (on the
-    /// cantilever grid ILUT diverges where ILU(0) converges; BENCHMARKS.md). `None`
+    /// cantilever grid ILUT diverges where ILU(0) converges;
+    /// docs/notebook/round2-direct-against-iterative.md). `None`
     /// for an explicit kind and for a saddle point.
     pub fn auto_fallback(&self, unknowns: f64, nonzeros: f64, saddle_point: bool, available: Option<f64>) -> Option<SolverKind> {
         let SolverKind::Auto(Krylov { tolerance, max_iterations, .. }) = *self else { return None };

@@ -113,8 +113,9 @@ impl BuiltPreconditioner {
             Preconditioner::Ilu0 => {
                 // Ghost-node rows carry no diagonal entry (their unknown is coupled only
                 // through the stencils of other nodes); ILU(0) on the pattern of A + 0 I
-                // updates those pivots during elimination like any other (Kirsch: 133
-                // BiCGSTAB iterations where the bare pattern is refused).
+                // updates those pivots during elimination like any other (on Kirsch
+                // BiCGSTAB then converges where the bare pattern is refused:
+                // docs/notebook/round2-direct-against-iterative.md).
                 let padded = with_stored_diagonal(a)?;
                 let a = padded.as_ref().unwrap_or(a);
                 let p = Ilu0::try_new(a.as_ref()).map_err(|e| match e {

@@ -106,7 +106,7 @@ pub enum SolveError {
         "{failure}; the multigrid is unstable on this system: one V-cycle, as a stationary iteration, \
          amplifies an error {growth:.1e}-fold (it should shrink it; block Gauss-Seidel diverges next to \
          boundary nodes that carry only traction rows, such as the ghost-free boundary around a re-entrant \
-         corner: README, Known limits)"
+         corner: docs/limits.md)"
     )]
     UnstableMultigrid {
         /// The solve's own failure.

@@ -7,7 +7,8 @@
 //! parallel and sorted there) is appended to the growing row arrays and freed. The
 //! peak of the assembly is then the matrix itself (12 bytes per entry) plus the
 //! fragments in flight, where a triplet list compressed by a counting sort held the
-//! triplets (16 bytes per entry) and the compressed copy together (BENCHMARKS.md).
+//! triplets (16 bytes per entry) and the compressed copy together
+//! (docs/notebook/round2-target-error.md, "Rows assembled in node order").
 
 use super::csr::Csr;
 use super::triplets::StoredEntry;

@@ -18,11 +18,11 @@
 //! with `Ã⁻¹` one V-cycle of the multigrid on `A` (two unknowns per node, the
 //! rigid-body modes) and `S̃ = diag(D) − diag(C diag(A)⁻¹ B)`, the diagonal of the
 //! SIMPLE approximation of the Schur complement `D − C A⁻¹ B`. Chosen on exported
-//! systems (`benches/pyamg_saddle_point.py`): on the Lame ring (PHS p = 4) GMRES(30)
-//! needs 64 iterations at nu = 0.3, and 528 / 539 at nu = 0.4999 on 3 388 / 13 317
-//! nodes (nearly flat); the exact Schur complement's own diagonal was no better (the
-//! complement has eigenvalues 0.015 to 4 against its diagonal there, two with a
-//! negative real part: the equal-order pressure's weak modes).
+//! systems (`benches/pyamg_saddle_point.py`): on the Lame ring its iterations are
+//! nearly flat in the node count, and the exact Schur complement's own diagonal was no
+//! better (against its diagonal the complement has two eigenvalues with a negative
+//! real part: the equal-order pressure's weak modes;
+//! docs/notebook/2026-11-26-up-form-iterative-solvers.md).
 
 use super::amg::{Amg, AmgParams, Finest};
 use super::layout::NodeLayout;

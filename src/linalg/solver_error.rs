@@ -13,12 +13,9 @@ use super::{gmres, NodeLayout};
 pub const STEPS: usize = 30;
 
 /// Reduction of the residual equation's residual at which the correction stops: half
-/// a decade. Measured against the true distance to the system's solution: with the
-/// multigrid (manufactured_traction, PHS degree 6, 1.2e4 and 4.6e4 nodes) 5.9e-9 and
-/// 3.3e-9 for about 6.1e-9 and 3.9e-9; with BiCGSTAB + ILU(0) (Kirsch, degree 6)
-/// 5.2e-10 for 5.7e-10. A full decade gave 6.2e-9, 3.8e-9 and 5.5e-10 for one step
-/// more; 0.5 gave 3.8e-10 on the ILU(0) case; five fixed steps 1.0e-10 there. On the
-/// 1e6-node cantilever it takes 3 steps, about 2 s of a 10 s solve.
+/// a decade came close to the true distance to the system's solution on the scenes
+/// tried, one step cheaper than a full decade, and costs a few steps at 1e6 nodes
+/// (docs/notebook/2026-11-27-solver-own-error.md).
 pub const REDUCTION: f64 = 0.3;
 
 /// `δ ≈ A⁻¹ r`: right-preconditioned GMRES on `A δ = r` from zero until its residual

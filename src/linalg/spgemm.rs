@@ -4,7 +4,8 @@
 //!
 //! Why written here: the multigrid setup forms six products per level (`A T`,
 //! `D (A T)`, `Tᵀ A`, `(Tᵀ A) D`, and `R A P` fused); nalgebra-sparse's product is
-//! serial and was most of the 10 s setup at 1e6 nodes. sprs has a parallel product,
+//! serial and was most of the setup at 1e6 nodes (docs/notebook/round2-gmres-amg-against-lu.md,
+//! "Parallel sparse products in the multigrid setup"). sprs has a parallel product,
 //! but every operand would have to be copied into its format and back.
 
 use super::csr::{Csr, Value};
@@ -64,9 +65,10 @@ impl Accumulator {
 /// The `n x m` matrix whose row `i` the accumulators `row(i, scratch)` build, rows in
 /// parallel: every row formed once into its task's part, the parts then concatenated,
 /// so the result is held twice while they are copied. Forming every row twice instead
-/// (its length, then its entries in place) held it once, but the multigrid setup at
-/// 1e6 nodes took 7.2-7.3 s against 6.4-6.5 s now, for the same peak of the run
-/// (1.882-1.887 GB: the transfers are not its peak; BENCHMARKS.md).
+/// (its length, then its entries in place) held it once, but made the multigrid setup
+/// slower for the same peak of the run: the transfers are not its peak
+/// (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "Sparse products formed in
+/// one pass").
 fn rows_of_products<S: Send, V: Value>(
     n: usize,
     m: usize,
@@ -164,8 +166,9 @@ fn plus_triple<V: Value, VB: Value, VA: Value, VC: Value>(
 
 /// `(A B) C` without holding `A B`: each row of `A B` is formed in one accumulator and
 /// at once multiplied into the next. The multigrid's coarse operator `R A P` this way
-/// never holds `R A`, whose rows reach two stencils around an aggregate: 1.5 GB at
-/// 1e6 nodes, the peak of the whole run before (BENCHMARKS.md). `A` and `C` may be
+/// never holds `R A`, whose rows reach two stencils around an aggregate: it was the
+/// peak of the whole run (docs/notebook/round2-target-error.md, "One copy of the
+/// matrix in the solve"). `A` and `C` may be
 /// stored in single precision (the multigrid's transfers); the sums are in double.
 pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -> Csr {
     plus_triple((None::<&Csr>, 1.0), a, b, c)
@@ -176,8 +179,9 @@ pub fn triple_product<VA: Value, VC: Value>(a: &Csr<VA>, b: &Csr, c: &Csr<VC>) -
 /// (formed in one accumulator) multiplied into `C`, summed in double and rounded
 /// once. The multigrid's smoothed transfers are of this form:
 /// `P = T − ω (D⁻¹ A) T` and `R = Tᵀ − ω (Tᵀ A) D⁻¹`; formed by separate products
-/// they held `A T`, `D⁻¹ A T` and `P` in double at once, 0.4-0.5 GB at 1e6 nodes and
-/// the peak of the run (BENCHMARKS.md).
+/// they held `A T`, `D⁻¹ A T` and `P` in double at once, the peak of the run
+/// (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "The smoothed transfers in
+/// one fused product").
 pub fn smoothed<VB: Value>(base: &Csr<VB>, omega: f64, a: &Csr, b: &Csr, c: &Csr) -> Csr<f32> {
     plus_triple((Some(base), -omega), a, b, c)
 }

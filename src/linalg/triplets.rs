@@ -14,8 +14,8 @@ use faer::sparse::SymbolicSparseColMat;
 pub type Entry = (usize, usize, f64);
 
 /// One entry as stored, `(row, column, value)` with 32-bit indices: 16 bytes instead
-/// of 24, 0.42 GB less at the assembly's peak at 1e6 nodes (BENCHMARKS.md). Systems
-/// of more than `u32::MAX` unknowns are refused by [`Triplets::new`].
+/// of 24, a lower assembly peak (docs/notebook/round2-target-error.md, "32-bit column
+/// indices"). Systems of more than `u32::MAX` unknowns are refused by [`Triplets::new`].
 pub type StoredEntry = (u32, u32, f64);
 
 /// `(row, column, value)` in the stored form.

@@ -5,11 +5,11 @@
 //! set. On Intel cores every *non-VEX* SSE instruction executed afterwards on that
 //! thread then carries a false dependency on those bits (Intel optimisation manual,
 //! "Mixing AVX code with SSE code"), and this crate is compiled for baseline x86-64
-//! (SSE2), as are glibc's `exp` and `hypot` wrappers. Measured on this project's
-//! 2-core Xeon at 1e6 nodes: after the multigrid's coarsest dense LU (276 unknowns)
-//! the rayon workers evaluated `exp` 36x slower (0.26 s against 0.0075 s for 2e6
-//! calls), and the gradient shapes made after the solve took 2.0-2.6 s against 1.1 s
-//! before it. `vzeroupper` ends that state; it costs about a cycle.
+//! (SSE2), as are glibc's `exp` and `hypot` wrappers: after the multigrid's coarsest
+//! dense LU the rayon workers evaluated `exp` many times slower, and the gradient
+//! shapes made after the solve slowed down with it
+//! (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "The vector registers'
+//! upper halves"). `vzeroupper` ends that state; it costs about a cycle.
 //!
 //! Call [`clear_upper_halves`] on the thread that ran a faer kernel, and
 //! [`clear_upper_halves_everywhere`] after a call that may have run on the rayon pool.

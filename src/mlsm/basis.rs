@@ -156,8 +156,8 @@ impl LocalBasis {
     }
 
     /// `b_k(z)` for all `k`, from tables of the powers of `z1` and `z2` built by
-    /// repeated multiplication (`powi` is a library call per factor; the shapes stage of
-    /// the 1e6-node cantilever took 1.27 s with it, 1.17 s without, BENCHMARKS.md).
+    /// repeated multiplication (`powi` is a library call per factor, which slowed the
+    /// shapes stage: docs/notebook/round2-target-error.md).
     pub fn values(&self, z: [f64; 2], out: &mut [f64]) {
         const POWERS: usize = 16;
         let top = self.exponents.iter().map(|&(a, b)| a.max(b) as usize).max().unwrap_or(0);

@@ -55,7 +55,7 @@ impl Radial {
                     return (0.0, 0.0, 0.0);
                 }
                 // Integer powers by multiplication (`powf` was most of the cost of a
-                // stencil: 1.95 s -> see BENCHMARKS.md, "Shapes per node").
+                // stencil: docs/notebook/round2-shapes-per-node-by-basis.md).
                 let k = order as i32;
                 let rk2 = r.powi(k - 2);
                 (rk2 * r * r, b * rk2, b * (b - 2.0) * rk2 / (r * r))

@@ -128,8 +128,8 @@ pub fn shape_functions(
 /// `partial_piv_lu` copied the saddle matrix and split its factors into two more, and
 /// at degree 8 (the error estimate's reference of degree-6 runs: 135 unknowns, 146 kB
 /// a matrix) each of those blocks was mapped and unmapped again at every node
-/// (glibc's mmap threshold of 128 kB, set in `main`; BENCHMARKS.md, "Stencil buffers
-/// kept per thread").
+/// (glibc's mmap threshold of 128 kB, set in `main`;
+/// docs/notebook/2026-11-27-stencil-buffers-per-thread.md).
 struct Scratch {
     sys: faer::Mat<f64>,
     rhs: faer::Mat<f64>,

@@ -9,8 +9,8 @@ use crate::domain::FillKind;
 /// over-determined by a factor 2. Grid fills: the smallest complete ring of lattice
 /// neighbours (9, 13, 21, 25, 29, 37, 45, 49, ...) with at least `1.4 m` nodes, because
 /// the `n` nearest of a lattice node are ambiguous when the n-th distance is shared
-/// by several nodes; an arbitrary pick makes stencils asymmetric (measured on
-/// manufactured_traction.toml: order 1.3-1.6 with 12 nodes, 1.9-2.0 with 9).
+/// by several nodes; an arbitrary pick makes stencils asymmetric and costs order
+/// (docs/notebook/round1-one-local-least-squares-solve.md, "From the code comments").
 pub fn default_support(m: usize, fill: FillKind) -> usize {
     match fill {
         FillKind::Scattered => 2 * m,

@@ -32,7 +32,7 @@ fn pivot_ratio(diag: impl Iterator<Item = f64> + Clone) -> f64 {
 /// Smallest relative QR pivot `|R_kk| / max |R_kk|` of the column-major `n x m`
 /// matrix `b` (`n >= m`; overwritten by its factorisation): its numerical rank test.
 /// By [`householder_qr`] (faer's blocked QR was no faster at these sizes, nalgebra's
-/// slower: BENCHMARKS.md, "Shapes: the rank test").
+/// slower: docs/notebook/2026-11-27-shapes-rank-test-sqrt.md).
 pub fn rank_ratio(b: &mut [f64], n: usize, m: usize) -> f64 {
     let (mut diag, mut beta) = (vec![0.0; m], vec![0.0; m]);
     householder_qr(b, n, m, &mut diag, &mut beta);
@@ -65,7 +65,9 @@ pub fn shape_functions(
 
 /// The buffers of one thread's fits, kept between nodes: each fit allocated five of
 /// them (the frame's three, the basis's exponents, the work buffer), which with the
-/// node's operator list cost about a seventh of the shapes stage (BENCHMARKS.md).
+/// node's operator list slowed the shapes stage
+/// (docs/notebook/2026-11-27-issue-12-scaling-remeasured.md, "The least-squares fit
+/// without allocations").
 #[derive(Default)]
 struct Scratch {
     frame: LocalFrame,

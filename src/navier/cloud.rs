@@ -17,10 +17,10 @@ use crate::pipeline::RunError;
 /// them through the solve, instead of making them again after it: yes for RBF-FD,
 /// whose cost is the LU of the `(s + m)`-square local system, shared by every operator
 /// of the node (two more right-hand sides are nearly free, a second round of LUs
-/// doubled the shapes' time: Kirsch, PHS p = 4, 30-node supports, 7.5e4 nodes, 1.1 s
-/// for the rows and 1.05 s for the gradient again); no for least squares, whose
-/// local solves are cheap (1.1 s per 1e6 nodes again) and whose 16 s bytes per node
-/// then stay out of the solve's peak.
+/// doubled the shapes' time); no for least squares, whose local solves are cheap and
+/// whose 16 s bytes per node then stay out of the solve's peak
+/// (docs/notebook/2026-11-26-up-form-iterative-solvers.md, "RBF-FD keeps the
+/// gradient's shapes").
 pub fn keeps_gradient_shapes(basis: &Basis) -> bool {
     matches!(basis, Basis::RbfFd { .. })
 }
@@ -119,14 +119,13 @@ pub(super) fn cloud(
 
 /// Positions of nodes and ghosts, and the ghost of each node.
 ///
-/// Which boundary nodes get a ghost depends on the basis (measured, README):
+/// Which boundary nodes get a ghost depends on the basis (measured: docs/limits.md,
+/// docs/methods/rbf-fd.md):
 /// * weighted least squares: nodes whose two equations are tractions. On mixed
-///   (symmetry) nodes an extra Navier row made scattered-node runs unstable (Kirsch:
-///   e_inf(sigma) 1.4e-2 at h = 0.005 with them, 3.1e-4 without);
+///   (symmetry) nodes an extra Navier row made scattered-node runs unstable;
 /// * RBF-FD: every node with a traction equation, symmetry nodes included. Without
 ///   them the one-sided RBF-FD stencils where a symmetry edge meets a curved free
-///   edge went unstable (Lame, p = 4, 2e4 nodes: e_inf(sigma) 8.1e-4 without, 4.4e-6
-///   with; Kirsch, p = 2: e_inf(u) 0.39 without, 1.0e-3 with).
+///   edge went unstable.
 fn ghosts(
     case: &Case,
     params: &NavierParams,

@@ -157,9 +157,10 @@ impl Discretisation {
     /// Give back the memory of the rows' shapes once the rows are assembled: the solve
     /// is the peak of a large run. The first derivatives that post-processing needs
     /// are kept when they were made with the rows ([`keeps_gradient_shapes`]), else
-    /// made again after the solve ([`Discretisation::restore_gradient_shapes`]; the
-    /// cantilever at 1e6 nodes: 0.21 GB less at the peak for 1.1 s more in
-    /// post-processing).
+    /// made again after the solve ([`Discretisation::restore_gradient_shapes`]: a lower
+    /// peak for some more post-processing;
+    /// docs/notebook/2026-11-26-up-form-iterative-solvers.md, "The smoothed transfers in
+    /// one fused product, the gradient's shapes after the solve").
     pub fn release_row_shapes(&mut self) {
         self.shapes.retain(if self.gradient_kept { OpSet::D1 } else { OpSet::EMPTY });
     }
@@ -211,8 +212,8 @@ impl Discretisation {
     /// a displacement, whose only coefficient is the node's own unknown, stays in the
     /// node's row (diagonal 1) and the Navier equation goes to the ghost's row.
     /// Writing a displacement in the ghost's row left a zero diagonal there, which
-    /// stalled the multigrid on every scene with a symmetry edge (Kirsch, Lame: GMRES
-    /// stuck at a residual of 3e-2; with this rule, 50-60 iterations).
+    /// stalled the multigrid on every scene with a symmetry edge
+    /// (docs/notebook/2026-11-25-multigrid-symmetry-edges.md).
     pub fn row_nodes(&self, i: usize, c: usize) -> (Option<usize>, usize) {
         match (self.ghost.get(i).copied().flatten(), self.nodes.is_boundary(i)) {
             (None, false) => (Some(i), i),

@@ -12,7 +12,8 @@
 //! than the run (`e_ref << e_h`, the normal case in the asymptotic range: two degrees
 //! buy about two orders of `h`), the estimate equals the true error to within
 //! `e_ref / e_h`. Measured effectivities (estimate / true error) on the shipped scenes
-//! and the near-incompressible Lame ring lie in 0.78..1.13 (README, "Error estimate").
+//! and the near-incompressible Lame ring: docs/verification.md, "The error estimate:
+//! measured effectivities".
 //!
 //! Why this estimator: a residual or recovery indicator of a collocation scheme is not
 //! a bound on the error (a residual of 1e-12 proves nothing), and Richardson

@@ -3,7 +3,7 @@
 //! * **Displacement** (`u, v` per node): `(lambda + mu) grad div u + mu lap u + f = 0`.
 //!   As `nu -> 1/2` in plane strain, `lambda / mu -> inf`: the stress `lambda div u`
 //!   multiplies a small, inaccurate divergence and the errors grow like `lambda / mu`
-//!   (README, "Near-incompressible solids").
+//!   (docs/methods/incompressible.md).
 //! * **Displacement-pressure** (`u, v, p` per node) with `p = -lambda div u`:
 //!
 //!   ```text
@@ -19,13 +19,12 @@
 //!   displacement (equal order); the continuity rows at boundary nodes close it
 //!   without a pressure boundary condition. A ghost's third unknown takes the normal
 //!   derivative of the continuity equation at its boundary node: the continuity
-//!   equation written at the ghost itself (an extrapolating stencil) gave 5x larger
-//!   errors at `nu = 1/2` (Lame, PHS p = 4, h = 2.5e-4: e_inf(u) 1.3e-3 against
-//!   2.6e-4; README, "Near-incompressible solids").
+//!   equation written at the ghost itself (an extrapolating stencil) gave larger
+//!   errors at `nu = 1/2` (docs/methods/incompressible.md).
 //!
 //! **Pressure stabilisation.** Equal-order collocation has no inf-sup guarantee: at
-//! `nu = 1/2` the pressure near the Lame ring's bore oscillated (standard deviation
-//! 5x its mean error there) and e_inf(sigma) was 3.5x that of `nu = 0.3`. The
+//! `nu = 1/2` the pressure near the Lame ring's bore oscillated and the stress error
+//! grew (docs/methods/incompressible.md). The
 //! continuity row of every node with second-derivative shapes (interior nodes and
 //! nodes with a ghost) gets a consistent pressure-Laplacian term, the strong-form
 //! analogue of pressure-stabilised Petrov-Galerkin:
@@ -56,19 +55,18 @@ choice! {
 }
 
 /// Poisson's ratio from which `auto` takes the displacement-pressure form in plane
-/// strain (README, "Near-incompressible solids": where the two forms' errors cross).
+/// strain (docs/methods/incompressible.md: where the two forms' errors cross).
 pub const AUTO_FROM_POISSON: f64 = 0.45;
 
 /// Default `tau` of the continuity rows' pressure stabilisation (module docs), in
-/// squared local spacings. Measured (PHS p = 4, BENCHMARKS.md): 0.03 to 1 all bring
-/// Lame at nu = 0.5 to the errors of nu = 0.3; over 5 levels of manufactured_traction
-/// at nu = 0.4999, 0.05, 0.1, 0.2 and 1 converge cleanly and 0.3 has one 6x step up;
-/// 0.1 is also clean over 5 levels of Lame.
+/// squared local spacings: it brings the near-incompressible Lame ring to the errors of
+/// nu = 0.3 and converges cleanly over five levels on Lame and manufactured_traction
+/// (docs/notebook/round2-pressure-stabilisation.md, "Choice of tau").
 pub const PRESSURE_STABILISATION: f64 = 0.1;
 
 /// Largest `tau` accepted: the measured range. Above it the pressure Laplacian drowns
-/// the continuity equation, `div u` is barely enforced (Lame at nu = 0.5, 3388 nodes:
-/// e_inf(u) 8.0e-5 at tau = 1, 9.4e-3 at 10, 2.1e-2 at 1e3; warned by the estimate).
+/// the continuity equation, `div u` is barely enforced and the errors grow (warned by
+/// the estimate; docs/methods/incompressible.md).
 pub const MAX_PRESSURE_STABILISATION: f64 = 1.0;
 
 impl Formulation {

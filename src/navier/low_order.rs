@@ -3,19 +3,16 @@
 //!
 //! Block Gauss–Seidel smoothing and aggregation both lean on small stencils. On the
 //! 56-node stencils of PHS + degree 6 the smoother diverges at the ghost nodes near
-//! the corners (the spectral radius of its iteration matrix is 3.7 on Kirsch at 1.9e4
-//! nodes, against 1.4 at degree 4), and with every coupling strong the aggregates hold
-//! about 50 nodes: GMRES with the multigrid on the system stalls at a residual of
-//! 0.1-0.9. Built instead on a PHS `r^3` + degree-2 discretisation of the same
-//! equations on the same nodes and ghosts (12-node stencils; the same unknowns and row
-//! layout, other coefficients), the multigrid approximates the inverse of the
-//! high-order system well enough for GMRES, which still solves the scene's system:
-//! the solution is the high-order one. Degree 6 on Kirsch then takes 50, 52, 54
-//! iterations at 4.9e3, 1.9e4, 7.5e4 nodes, and degree 4 (30-node stencils) gains too:
-//! Lame at 2.1e5 nodes 73 iterations and 11.2 s against 86 and 17.5 s on the system,
-//! for 18 % more memory. On stencils of 9-13 nodes the system's own multigrid is
-//! better (grid scenes: 10-15 iterations against 45-71), and at 20 nodes (degree 3)
-//! both cost the same (BENCHMARKS.md, "A low-order operator for the multigrid").
+//! the corners, and with every coupling strong the aggregates hold about 50 nodes:
+//! GMRES with the multigrid on the system stalls. Built instead on a PHS `r^3` +
+//! degree-2 discretisation of the same equations on the same nodes and ghosts
+//! (12-node stencils; the same unknowns and row layout, other coefficients), the
+//! multigrid approximates the inverse of the high-order system well enough for GMRES,
+//! which still solves the scene's system: the solution is the high-order one. Degree 6
+//! then converges in iterations nearly flat in the node count, and degree 4 (30-node
+//! stencils) gains too, for some more memory. On stencils of 9-13 nodes the system's
+//! own multigrid is better, and at 20 nodes (degree 3) both cost the same
+//! (docs/notebook/2026-11-26-low-order-multigrid-operator.md).
 //! This is the "smaller stencil" preconditioning of the RBF-FD literature.
 
 use super::discrete::Discretisation;

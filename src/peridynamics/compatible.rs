@@ -20,7 +20,7 @@
 //!   integrated over the truncated disc ([`truncated_moments`]). Then `L_h` reproduces the
 //!   continuum operator, surface effect included, for quadratic fields; without this the
 //!   one-point rule's O(1) moment error near the edge acts like a spurious edge load whose
-//!   effect does not shrink with delta (measured on pd_tension.toml: 6 % stall).
+//!   effect does not shrink with delta (pd_tension.toml stalls: docs/methods/peridynamics.md).
 //!
 //! Solution (Lagrange multipliers): `c = c0 + S A^T y`, `(A S A^T) y = mu - A c0`,
 //! `S = diag(c0)`, `A_kj = p_k(xi_j / delta)`: the same small weighted least-squares

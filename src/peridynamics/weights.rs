@@ -207,13 +207,14 @@ pub fn bond_coefficients(
 
 /// `c_ij <- (V_i c_ij + V_j c_ji) / (2 V_i)` for bonds between free nodes of which at
 /// least one has a truncated family: internal forces then cancel pairwise (momentum is
-/// conserved) near free edges. Without it the per-row weights leave a net force of
-/// 0.7 % of the edge load in the edge strip that does not shrink with delta (measured
-/// on a tension plate: interior error stalled at 3.8e-3; with it, first order). Bonds
-/// between complete families are left alone: on a uniform lattice their weights are
-/// already symmetric (translation invariance), and averaging the round-off of two
-/// moment solves would cost the cubic exactness (1e-15 -> 2e-10). Only the rows
-/// `wanted` picks are symmetrised (a rank's own), the others are left as they are.
+/// conserved) near free edges. Without it the per-row weights leave a net force in the
+/// edge strip that does not shrink with delta, and the tension plate's interior error
+/// stalled; with it, first order (docs/methods/peridynamics.md). Bonds between
+/// complete families are left alone: on a uniform lattice their weights are already
+/// symmetric (translation invariance), and averaging the round-off of two moment
+/// solves would cost the cubic exactness (docs/notebook/round1-peridynamics-static-m3.md,
+/// "From the code comments"). Only the rows `wanted` picks are symmetrised (a rank's
+/// own), the others are left as they are.
 fn symmetrised(nodes: &PdNodes, families: &Families, c: &[f64], complete: &[bool], wanted: impl Fn(usize) -> bool + Sync) -> Vec<f64> {
     (0..nodes.free)
         .into_par_iter()

@@ -323,7 +323,7 @@ mod ffi {
 
     /// The message of every entry point of a build without the backend.
     const ABSENT: &str = "this mlsm was built without PETSc; build it with `cargo build --release --features petsc` \
-                          after `scripts/install-petsc.sh` (README, PETSc and MPI)";
+                          after `scripts/install-petsc.sh` (docs/guide/petsc-mpi.md)";
 
     pub(super) fn initialize(_options: &[String]) -> Result<World, String> {
         Err(ABSENT.into())

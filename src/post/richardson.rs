@@ -20,9 +20,10 @@
 //! three levels is more likely luck than a property of the scheme). With four or
 //! more levels the triple before the last is checked too: if it is not monotone, or
 //! its observed order differs from the last triple's by more than a factor 2, the
-//! convergence is erratic (least squares on scattered nodes, measured: three
-//! monotone levels whose extrapolation missed the exact value by 2.6 error bars),
-//! and the range of the last three levels is the error bar, not extrapolated.
+//! convergence is erratic (least squares on scattered nodes: three monotone levels
+//! whose extrapolation missed the exact value by more than two error bars;
+//! docs/verification.md, "Convergence studies"), and the range of the last three
+//! levels is the error bar, not extrapolated.
 
 use serde::Serialize;
 

@@ -3,9 +3,9 @@
 //! geometry. The spacing is a fraction of the domain's smallest feature `L` (the
 //! shortest rectangle side, disc radius or polygon edge); a graded spacing
 //! (`[nodes.refine]`) is scaled with it. The rules were read off the fronts that
-//! `mlsm tradeoff` measured on the shipped scenes (README, "Trading speed for
-//! accuracy", and BENCHMARKS.md). A `balanced` or `accurate` run first tries `fast`
-//! (`app::preset_trial`).
+//! `mlsm tradeoff` measured on the shipped scenes (docs/guide/tradeoff.md, and
+//! docs/notebook/round2-fronts-and-presets.md). A `balanced` or `accurate` run first
+//! tries `fast` (`app::preset_trial`).
 
 use super::spec::SceneSpec;
 use crate::choice::{choice, Choice};
@@ -48,7 +48,7 @@ impl Preset {
 
 impl Preset {
     /// The band `(floor, ceiling)` of e_inf(sigma) this preset landed in on the shipped
-    /// scenes with non-polynomial exact solutions (README, "Presets").
+    /// scenes with non-polynomial exact solutions (docs/guide/tradeoff.md, "Presets").
     pub fn band(self) -> (f64, f64) {
         match self {
             Preset::Fast => (1e-4, 3e-2),

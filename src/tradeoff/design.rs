@@ -34,10 +34,11 @@ pub fn spacing(h: f64, level: usize) -> f64 {
 }
 
 /// The families of a sweep: the scene's own setting (`None`) and the settings that
-/// were on the measured fronts of the shipped scenes (BENCHMARKS.md): degree-2 least
-/// squares for cheap runs; PHS r^3 with degree 4 (default stencil, a 1.5x stencil,
-/// sparse LU instead of the scene's solver, which `auto` leaves for GMRES + AMG above
-/// a few thousand nodes) and degree 6 for accurate ones.
+/// were on the measured fronts of the shipped scenes: degree-2 least squares for cheap
+/// runs; PHS r^3 with degree 4 (default stencil, a 1.5x stencil, sparse LU instead of
+/// the scene's solver, which `auto` leaves for GMRES + AMG above a few thousand nodes)
+/// and degree 6 for accurate ones (docs/notebook/round2-fronts-and-presets.md;
+/// docs/notebook/2026-11-27-auto-by-time.md).
 /// `phs4_support` is the default stencil of PHS degree 4 on the scene's nodes.
 pub fn families(phs4_support: usize) -> Vec<(String, Option<Setting>)> {
     let phs = |degree, support, solver| Setting { basis: "phs", degree, support, solver };

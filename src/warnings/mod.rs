@@ -66,10 +66,10 @@ use serde::Serialize;
 /// Factor the estimated displacement error counts for, against the threshold and
 /// against `--target-error`, where the scene has singular corners: there the
 /// higher-degree reference gains no order (its stencils meet the same singularity)
-/// and is about as wrong as the run. Against finite elements on the L bracket the
-/// estimate of e_inf(u) was 0.45 of the true error at 2 mm and 0.55 graded at the
-/// corners, and 0.55 on the bracket at 2 mm (README, "Error estimate"; BENCHMARKS.md,
-/// "The bracket's estimate under corner refinement").
+/// and is about as wrong as the run: against finite elements on the L bracket and the
+/// bracket the estimate of e_inf(u) was about half the true error
+/// (docs/guide/estimate-and-warnings.md;
+/// docs/notebook/2026-11-27-singular-corners-count-double.md).
 pub const SINGULAR_ESTIMATE_FACTOR: f64 = 2.0;
 
 /// [`SINGULAR_ESTIMATE_FACTOR`] when `corners` is not empty, else 1.
@@ -86,7 +86,7 @@ pub fn displacement_estimate_factor(corners: &[SingularCorner]) -> f64 {
 pub fn singular_estimate_note(what: &str) -> String {
     format!(
         "the scene has singular corners: {what} x{SINGULAR_ESTIMATE_FACTOR} \
-         (the reference is about as wrong as the run there; README, \"Error estimate\")"
+         (the reference is about as wrong as the run there; docs/guide/estimate-and-warnings.md)"
     )
 }
 
@@ -188,7 +188,7 @@ fn advice(params: &NavierParams, material: &Material) -> String {
             )),
             Unknowns::DisplacementPressure if !matches!(params.approximation.basis, Basis::RbfFd { degree: 3.., .. }) => s.push_str(
                 "; near the incompressible limit the displacement-pressure form needs basis = \"phs\" with degree >= 3 \
-                 (README, \"Near-incompressible solids\")",
+                 (docs/methods/incompressible.md)",
             ),
             Unknowns::DisplacementPressure => {}
         }
@@ -293,7 +293,7 @@ fn equilibrium(q: &Equilibrium, threshold: f64, checks: &mut Checks, params: &Na
         });
     } else if singular && q.relative > threshold {
         checks.notes.push(format!(
-            "{what}: the reactions at the singular corners converge slowly (README, \"Error estimate and warnings\"); below the warning level {limit:.0e}"
+            "{what}: the reactions at the singular corners converge slowly (docs/guide/estimate-and-warnings.md); below the warning level {limit:.0e}"
         ));
     }
 }
@@ -314,7 +314,7 @@ pub fn unbalanced_note(unbalanced: &[crate::navier::sector::Unbalanced]) -> Opti
     }
     let list: Vec<String> = by_reason.into_iter().map(|(why, places)| format!("{} ({why})", places.join(", "))).collect();
     Some(format!(
-        "not balanced: {}; the solution may carry a spurious load there, which only the error estimate shows (README, \"Known limits\", re-entrant corners)",
+        "not balanced: {}; the solution may carry a spurious load there, which only the error estimate shows (docs/limits.md, re-entrant corners)",
         list.join("; ")
     ))
 }

@@ -7,8 +7,8 @@ use crate::navier::Estimate;
 use crate::peridynamics::PdSolution;
 
 /// Horizon-to-spacing ratio `m = delta / h` below which the bond-based quadrature
-/// is too coarse to approximate the nonlocal integral (README, "Peridynamics at
-/// m < 3": the error no longer falls with the horizon).
+/// is too coarse to approximate the nonlocal integral: the error no longer falls with
+/// the horizon (docs/guide/estimate-and-warnings.md, "Outcomes at the extremes").
 pub const PD_MIN_RATIO: f64 = 3.0;
 
 /// The checks of a static peridynamic run: `m < 3` is warned (a discretisation that
@@ -24,7 +24,7 @@ pub fn peridynamics_static(sol: &PdSolution, estimate: &Estimate, threshold: f64
             check: "pd-horizon-ratio",
             message: format!(
                 "peridynamics.m = {m} is below {PD_MIN_RATIO}: a horizon spans too few nodes for the bond quadrature, \
-                 and errors of order 0.1 to 0.5 are to be expected whatever the horizon (README, \"Peridynamics at m < 3\"); \
+                 and errors of order 0.1 to 0.5 are to be expected whatever the horizon (docs/guide/estimate-and-warnings.md, \"Outcomes at the extremes\"); \
                  use m >= 3"
             ),
         });

@@ -126,9 +126,9 @@ fn radial(c: &Ctx, s: &ApproximationSpec, kind: BasisKind, degree: u32) -> Resul
         return Ok(Radial::Phs { order });
     }
     let shape = c.need("approximation.shape", s.shape, "an RBF basis needs shape (in units of the node spacing)")?;
-    // Measured on lame.toml (degree 2): e_inf(u) 0.8-2.2 at shape 0.01-0.2 (the radial
-    // functions become spikes) and 0.19-1.1 at 200-1000 (flat: the radial part is lost
-    // to round-off); 1e-3 to 1e-2 everywhere in [1, 20], also on Kirsch at degree 4.
+    // Below the range the radial functions become spikes, above it flat (the radial
+    // part is lost to round-off), and the errors were O(1) (docs/methods/rbf-fd.md;
+    // docs/notebook/round2-time-against-accuracy-basis-spacing.md, "From the code comments").
     if !(SHAPE_RANGE.0..=SHAPE_RANGE.1).contains(&shape) {
         return c.err(
             "approximation.shape",
@@ -210,7 +210,7 @@ pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dyna
             ),
         );
     }
-    // Ghost nodes gave growing modes in explicit MLSM dynamics (README, known limits):
+    // Ghost nodes gave growing modes in explicit MLSM dynamics (docs/limits.md):
     // off by default for time-dependent scenes.
     let ghost_nodes = s.ghost_nodes.unwrap_or(DEFAULT_GHOST_NODES && !dynamic);
     Ok(Approximation { basis, weight, support, ghost_nodes })

@@ -143,10 +143,9 @@ pub(super) fn peridynamics(
     let correction: SurfaceCorrection = c.choose("peridynamics.correction", s.correction.as_deref())?;
     let solver = match &s.solver {
         // The PD stiffness is an M-matrix-like, diagonally dominant block Laplacian, on
-        // which the multigrid takes 10-11 iterations at every size: GMRES + AMG solves
-        // pd_manufactured (m = 3) at 5.8e4 / 1e5 / 1e6 nodes in 1.1 / 1.8 / 19.6 s,
-        // where BiCGSTAB + ILU(0), the default before, took 4.9 / 10.0 / 298 s (96 /
-        // 120 / 378 iterations) and sparse LU 60 s and 10.7 GB at 1e5 (BENCHMARKS.md).
+        // which the multigrid's iterations stay flat with the size: GMRES + AMG is far
+        // faster than BiCGSTAB + ILU(0), the default before, and than sparse LU
+        // (docs/notebook/2026-11-26-peridynamics-1e6-gmres-amg.md).
         None => SolverParams { kind: SolverKind::default_gmres(), equilibrate: true },
         Some(spec) if spec.multigrid.is_some() => {
             return c

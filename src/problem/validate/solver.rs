@@ -83,7 +83,7 @@ fn krylov(c: &Ctx, s: &SolverSpec, method: SolverMethod) -> Result<SolverKind, P
                 return c.err(
                     "solver.kind",
                     "\"petsc\" needs a build with the PETSc backend: scripts/install-petsc.sh, then \
-                     cargo build --release --features petsc (README, PETSc and MPI)",
+                     cargo build --release --features petsc (docs/guide/petsc-mpi.md)",
                 );
             }
             if preconditioner.petsc_name().is_none() {
