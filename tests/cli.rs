@@ -314,6 +314,15 @@ fn convergence_two_levels() {
         let eff = num(level, "estimated_e_inf_u") / num(level, "e_inf_u");
         assert!((0.5..=2.0).contains(&eff), "effectivity {eff}: {level}");
     }
+    // The plot of the errors against the spacing (issue 50): SVG and PNG, a curve per column.
+    let svg = std::fs::read_to_string(res.join("convergence.svg")).expect("convergence.svg");
+    for curve in ["e_inf(u), exact", "e_inf(u), estimated", "u, difference to the next level"] {
+        assert!(svg.contains(curve), "no curve {curve} in convergence.svg");
+    }
+    assert_eq!(&std::fs::read(res.join("convergence.png")).expect("convergence.png")[1..4], b"PNG");
+    // The terminal lists the plot among the files written.
+    let o = mlsm(tmp.path(), &["convergence", "scene.toml", "--levels", "1", "--out", res.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("convergence.svg, convergence.png"), "{}", describe(&o));
 }
 
 /// A scene without an exact solution (the manufactured template with its [exact]
@@ -866,6 +875,10 @@ fn compare_end_to_end_with_vtk_read_back() {
         let vtu = mlsm::output::read_vtu(&res.join(r["vtu"].as_str().unwrap())).unwrap();
         let field = |name: &str| vtu.fields.get(name).unwrap_or_else(|| panic!("{name} missing")).1.clone();
         let (pd, local) = (field("peridynamic_displacement"), field("local_displacement"));
+        // `displacement` for ParaView's Warp By Vector: the peridynamic one, 3 components, z = 0.
+        assert_eq!(vtu.fields["displacement"].0, 3);
+        assert_eq!(field("displacement"), pd, "{}", r["vtu"]);
+        assert!(pd.chunks(3).all(|u| u[2] == 0.0));
         let diff = pd.iter().zip(&local).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         let max = local.iter().map(|v| v.abs()).fold(0.0, f64::max);
         let e = num(r, "e_inf_whole");
@@ -1438,4 +1451,118 @@ fn a_dynamic_run_names_the_corners_and_holes_it_does_not_balance() {
     assert!(unbalanced.iter().all(|u| u["reason"].as_str().unwrap().contains("dynamic")), "{s}");
     let notes = s["notes"].as_array().unwrap();
     assert!(notes.iter().any(|n| n.as_str().unwrap().starts_with("not balanced: the re-entrant corner at (6.0000e-2, 1.4000e-1)")), "{s}");
+}
+
+/// The largest |u| and von Mises stress, in summary.json (`extremes`) and on the
+/// terminal with units and places (issue 50), for a static Navier run; they are the
+/// largest values of solution.vtu's arrays, at their nodes.
+#[test]
+fn a_static_run_reports_its_largest_displacement_and_stress() {
+    let tmp = TempDir::new().unwrap();
+    write(tmp.path(), "scene.toml", TEMPLATE);
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "scene.toml", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let x = &read_json(&res.join("summary.json"))["extremes"];
+    let vtu = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
+    let (u, vm) = (&vtu.fields["displacement"].1, &vtu.fields["von_mises"].1);
+    let magnitudes: Vec<f64> = u.chunks(3).map(|u| u[0].hypot(u[1])).collect();
+    let argmax = |v: &[f64]| (0..v.len()).fold(0, |b, i| if v[i] > v[b] { i } else { b });
+    let (i, j) = (argmax(&magnitudes), argmax(vm));
+    assert_eq!(num(x, "max_displacement_m"), magnitudes[i], "{x}");
+    assert_eq!(num(x, "max_von_mises_pa"), vm[j], "{x}");
+    let at = |key: &str| [x[key][0].as_f64().unwrap(), x[key][1].as_f64().unwrap()];
+    assert_eq!(at("max_displacement_at"), [vtu.points[i][0], vtu.points[i][1]]);
+    assert_eq!(at("max_von_mises_at"), [vtu.points[j][0], vtu.points[j][1]]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out.lines().find(|l| l.starts_with("largest: |u| ")).unwrap_or_else(|| panic!("no extremes line: {out}"));
+    assert!(line.contains(&format!("{:.3e} m at (", magnitudes[i])) && line.contains(" Pa at ("), "{line}");
+}
+
+/// pd_manufactured and pd_tension run the peridynamic model unless told otherwise
+/// (their `model` key, issue 50); `--model navier` still runs the Navier model. The
+/// peridynamic run reports its largest displacement and stress too.
+#[test]
+fn peridynamic_scenes_run_peridynamics_and_report_their_extremes() {
+    let tmp = TempDir::new().unwrap();
+    for name in ["pd_manufactured", "pd_tension"] {
+        let o = mlsm(tmp.path(), &["check", &format!("{}/problems/{name}.toml", env!("CARGO_MANIFEST_DIR"))]);
+        assert!(String::from_utf8_lossy(&o.stdout).contains("model: peridynamics"), "{}", describe(&o));
+    }
+    write(tmp.path(), "pd.toml", &shipped("pd_tension"));
+    let res = tmp.path().join("pd");
+    let o = mlsm(tmp.path(), &["run", "pd.toml", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    assert_eq!(s["model"], "peridynamics", "{s}");
+    let x = &s["extremes"];
+    // Uniform tension 1 MPa, E = 70 GPa over 1 m: |u| about 1.5e-5 m at the loaded end.
+    assert!((1e-5..2e-5).contains(&num(x, "max_displacement_m")), "{x}");
+    assert!(num(x, "max_von_mises_pa") > 5e5, "{x}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("largest: |u| "), "{}", describe(&o));
+    let res = tmp.path().join("navier");
+    let o = mlsm(tmp.path(), &["--quiet", "run", "pd.toml", "--model", "navier", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let s = read_json(&res.join("summary.json"));
+    assert!(s["model"].is_null() && s["formulation"] == "displacement", "{s}");
+}
+
+/// A dynamic run prints its step against its own scheme's stability limit, never
+/// as `dt 7.5e-6 s (stable 6.7e-6 s)` (issue 50), writes that limit to summary.json,
+/// and reports the largest displacement of its final state.
+#[test]
+fn a_dynamic_run_shows_its_step_against_the_schemes_limit_and_its_final_extremes() {
+    let tmp = TempDir::new().unwrap();
+    let scene = edit(&shipped("steel_plate_dynamic"), &[("m = 6", "m = 3"), ("end_time = 1e-3", "end_time = 2e-4")]);
+    write(tmp.path(), "dyn.toml", &scene);
+    let res = tmp.path().join("res");
+    let o = mlsm(tmp.path(), &["run", "dyn.toml", "--out", res.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(!out.contains("(stable "), "{out}");
+    let line = out.lines().find(|l| l.contains("time step ")).unwrap_or_else(|| panic!("no time step: {out}"));
+    assert!(line.contains(" <= ") && line.contains("the rk4 stability limit (0."), "{line}");
+    let s = read_json(&res.join("summary.json"));
+    let (dt, limit) = (num(&s["integration"], "time_step"), num(&s, "time_step_limit"));
+    assert!((limit / num(&s["integration"], "stable_time_step") - std::f64::consts::SQRT_2).abs() < 1e-12, "{s}");
+    assert!(dt <= limit && dt > 0.5 * limit, "{dt} against {limit}");
+    let x = &s["extremes"];
+    assert!((num(x, "time_s") - 2e-4).abs() < 1e-12 && num(x, "max_displacement_m") > 0.0, "{x}");
+    assert!(x.get("max_von_mises_pa").is_none(), "{x}");
+    assert!(out.contains("largest at t = 2e-4 s: |u| "), "{out}");
+}
+
+/// `check` prints numbers as a reader writes them, with units (issue 50: `spacing
+/// 1.0000e0 (Grid fill)`).
+#[test]
+fn check_prints_plain_numbers_with_units() {
+    let tmp = TempDir::new().unwrap();
+    let o = mlsm(tmp.path(), &["check", &format!("{}/problems/cantilever.toml", env!("CARGO_MANIFEST_DIR"))]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("spacing 1 m (grid fill), supports of 37 nodes"), "{out}");
+    assert!(out.contains("E = 7.21e10 Pa, nu = 0.33"), "{out}");
+    assert!(!out.contains("e0") && !out.contains("Grid fill"), "{out}");
+}
+
+/// A value of the wrong type is explained in words, not serde's Rust type names
+/// (issue 50: `expected u32`, `expected f64`).
+#[test]
+fn parse_errors_name_types_in_words() {
+    let tmp = TempDir::new().unwrap();
+    let cases = [
+        (("support = 9", "support = 1.5"), "approximation.support", "expected a whole number"),
+        (("spacing = 0.05", "spacing = \"a\""), "nodes.spacing", "expected a number"),
+        (("support = 9", "support = 9\nghost_nodes = 1"), "approximation.ghost_nodes", "expected true or false"),
+        (("min = [0.0, 0.0]", "min = 0.0"), "domain.region[0].min", "expected a list"),
+    ];
+    for ((from, to), field, words) in cases {
+        write(tmp.path(), "bad.toml", &scene(&[(from, to)]));
+        let o = mlsm(tmp.path(), &["check", "bad.toml"]);
+        assert_eq!(o.status.code(), Some(2), "{}", describe(&o));
+        let err = stderr(&o);
+        assert!(err.contains(field) && err.contains(words), "{to}: {err}");
+        for rust in ["u32", "usize", "u64", "f64", "boolean", "sequence"] {
+            assert!(!err.contains(rust), "{to}: {err}");
+        }
+    }
 }

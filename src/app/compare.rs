@@ -1,5 +1,6 @@
 //! `mlsm compare`: peridynamics at a sequence of horizons (fixed m = delta / h) against
-//! the local solution; tables (CSV, JSON), a log-log plot (SVG) and one .vtu per run.
+//! the local solution; tables (CSV, JSON), a log-log plot (SVG) and one .vtu per run
+//! (with `displacement`, the peridynamic one, for ParaView's Warp By Vector).
 
 use super::fields::{integer, scalar, vector, write_points_vtu};
 use super::summary::Header;
@@ -140,7 +141,9 @@ fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference,
     let inner = masked_errors(displacement, &local, |i| interior[i]);
     let name = format!("{}_delta{k}.vtu", params.quadrature.name());
     let diff: Vec<[f64; 2]> = displacement.iter().zip(&local).map(|(a, b)| [a[0] - b[0], a[1] - b[1]]).collect();
+    // `displacement` (the peridynamic one, as in `solution.vtu`) for ParaView's Warp By Vector.
     let fields = vec![
+        vector("displacement", displacement.iter().copied()),
         vector("peridynamic_displacement", displacement.iter().copied()),
         vector("local_displacement", local.iter().copied()),
         vector("difference", diff.iter().copied()),

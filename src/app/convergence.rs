@@ -13,7 +13,8 @@
 //!
 //! `convergence.csv` and `convergence.json` are rewritten after every level
 //! (atomically, `complete: false` until the last), so a failure or a kill at a fine
-//! level loses nothing that finished.
+//! level loses nothing that finished; so is the plot of the errors against the
+//! spacing, `convergence.svg` and `convergence.png` (log-log).
 
 use super::summary::Header;
 use super::terminal::Terminal;
@@ -264,6 +265,7 @@ fn write_tables(
     };
     let t_out = Instant::now();
     write_csv(p, rows, dir)?;
+    let plot_note = write_plot(&p.name, rows, dir)?;
     timings.record(OUTPUT, t_out.elapsed().as_secs_f64());
     let table = ConvergenceTable {
         header: Header::new(p, &timings, t0),
@@ -282,6 +284,9 @@ fn write_tables(
     output::write_json(&dir.join("convergence.json"), &table)?;
     if print {
         print_table(&table, dir);
+        if let Some(n) = plot_note {
+            eprintln!("note: {n}");
+        }
     }
     Ok(table.warnings)
 }
@@ -330,6 +335,42 @@ fn solve_level(
     let fields =
         LevelFields { stress: sol.stress.map(|s| s.sigma), positions: sol.nodes.positions, displacement: sol.displacement, regular };
     Ok((level, fields))
+}
+
+/// The files of a study, as the terminal lists them.
+const FILES: &str = "convergence.csv, convergence.json, convergence.svg, convergence.png";
+
+/// One column of the table, where a level has it.
+type Column = fn(&Level) -> Option<f64>;
+
+/// `convergence.svg` and `convergence.png`: every error column of `rows` against the
+/// spacing `h` (log-log), the estimate dashed beside the true error it estimates;
+/// nothing before a column has a point. Returns the PNG's note (no system font).
+fn write_plot(scene: &str, rows: &[Level], dir: &Path) -> Result<Option<String>, AppError> {
+    // (label, column, dashed)
+    let columns: [(&str, Column, bool); 6] = [
+        ("e_inf(u), exact", |l| l.e_inf_u, false),
+        ("e_inf(u), estimated", |l| l.estimated_e_inf_u, true),
+        ("e_inf(sigma), exact", |l| l.e_inf_sigma, false),
+        ("e_inf(sigma), estimated", |l| l.estimated_e_inf_sigma, true),
+        ("u, difference to the next level", |l| l.difference_e_inf_u, false),
+        ("sigma, difference to the next level", |l| l.difference_e_inf_sigma, true),
+    ];
+    let series: Vec<output::Series> = columns
+        .iter()
+        .map(|(label, column, dashed)| output::Series {
+            label: label.to_string(),
+            points: rows.iter().filter_map(|l| column(l).filter(|e| *e > 0.0).map(|e| (l.h, e))).collect(),
+            dashed: *dashed,
+        })
+        .filter(|s| !s.points.is_empty())
+        .collect();
+    if series.is_empty() {
+        return Ok(None);
+    }
+    let title = format!("{scene}: error against node spacing");
+    let axes = ("node spacing h = sqrt(area / nodes) (m)", "relative error, max norm");
+    Ok(output::write_loglog_plot(&dir.join("convergence.svg"), &dir.join("convergence.png"), &title, axes, &series)?)
 }
 
 fn write_csv(p: &Problem, rows: &[Level], dir: &Path) -> Result<(), AppError> {
@@ -427,5 +468,5 @@ fn print_table(table: &ConvergenceTable, dir: &Path) {
         }
         println!();
     }
-    println!("written: {}", dir.join("convergence.csv").display());
+    println!("written: {} ({FILES})", dir.display());
 }

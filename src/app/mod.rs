@@ -1,15 +1,20 @@
 //! The commands; the only module that prints. Each command is one file: [`check`],
 //! [`run`](mod@run), [`convergence`], [`compare`], [`tradeoff`] (and `run --target-error`, [`target`]); they share the terminal progress
 //! ([`terminal`]), the point fields of `solution.vtu` ([`fields`]), the series writer
-//! of time-dependent runs ([`series`]) and the summary header ([`summary`]).
+//! of time-dependent runs ([`series`]), the summary header ([`summary`]), a run's
+//! terminal summary ([`report`]) with its largest values ([`extremes`]), and the
+//! plain numbers of the terminal ([`number`]).
 
 mod check;
 mod compare;
 mod convergence;
 mod export;
+mod extremes;
 mod fields;
+mod number;
 mod preset_trial;
 mod ranks;
+mod report;
 mod request;
 mod run;
 mod series;

@@ -1,11 +1,13 @@
 //! `mlsm run`: solve a scene with its model (or `--model`), write `solution.vtu` and
 //! `summary.json` (and the series of a time-dependent run), print a short result.
 
+use super::extremes::Extremes;
 use super::fields::{navier_fields, pd_fields, write_points_vtu};
 use super::preset_trial::{self, TrialReport};
+use super::report::{print_dynamic, print_estimate, print_navier, print_pd};
 use super::request::RunRequest;
 use super::series::Series;
-use super::summary::{Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
+use super::summary::{navier_extremes, pd_extremes, Dynamic, DynamicSummary, NavierDynamicPart, NavierSummary, PdDynamicPart, PdSummary};
 use super::target::{self, TargetReport};
 use super::terminal::Terminal;
 use super::{default_out, export, AppError};
@@ -17,7 +19,6 @@ use crate::output::{self, StagedDir};
 use crate::peridynamics::PdParams;
 use crate::petsc;
 use crate::pipeline::{RunError, OUTPUT};
-use crate::post::probe::ProbeValue;
 use crate::problem::preset::Preset;
 use crate::problem::{Model, Problem};
 use crate::warnings::{self, Checks};
@@ -163,37 +164,12 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             let before = Before { target: None, trial: trial_report.as_ref() };
             write_navier_static(&p, sol, staged, t0, &req, before, term, quiet)?
         }
-        Outcome::PdStatic(mut sol) => {
-            let n = sol.nodes.free;
-            let free = &sol.nodes.positions[..n];
-            let fields = (&sol.displacement[..n], sol.stress.as_ref());
-            let estimate = peridynamics_estimate(&p, free, (fields, &[]), &mut sol.timings, term);
-            let output = OutputStage::start();
-            let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
-            checks.warnings.extend(warnings::memory(&p));
-            write_points_vtu(&dir.join("solution.vtu"), free, &p.case.domain, pd_fields(&p.case, &sol, &estimate))?;
-            output.record(&mut sol.timings);
-            let target = publish(staged, &PdSummary::new(&p, &sol, &estimate, &checks, t0))?;
-            term.line(OUTPUT, output.seconds(), &target.display().to_string());
-            if !quiet {
-                print_pd(&sol);
-                print_estimate(&estimate);
-            }
-            report_checks(&checks, req.strict, quiet)?;
-        }
+        Outcome::PdStatic(sol) => write_pd_static(&p, sol, staged, t0, &req, term, quiet)?,
         Outcome::NavierDynamic(mut sim) => {
             let output = OutputStage::start();
             series.finish(&sim.energies, &sim.positions, (&sim.u, &sim.v), &sim.estimate)?;
             output.record(&mut sim.timings);
-            let dynamic = Dynamic {
-                nodes: sim.positions.len(),
-                report: &sim.report,
-                energies: &sim.energies,
-                timings: &sim.timings,
-                estimate: &sim.estimate,
-                unbalanced: &sim.unbalanced,
-            };
-            write_dynamic(&p, staged, dynamic, NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
+            write_dynamic(&p, staged, navier_dynamic(&sim), NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
@@ -212,11 +188,60 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
                 timings: &sim.timings,
                 estimate: &estimate,
                 unbalanced: &[],
+                extremes: final_extremes(&nodes.positions[..nodes.free], &sim.u, &sim.energies),
             };
             write_dynamic(&p, staged, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
         }
     }
     Ok(())
+}
+
+/// Estimate, write and report a static peridynamic run (its estimate is timed as its
+/// own stage, before the output stage).
+fn write_pd_static(
+    p: &Problem,
+    mut sol: crate::peridynamics::PdSolution,
+    staged: StagedDir,
+    t0: Instant,
+    req: &RunRequest,
+    term: &Terminal,
+    quiet: bool,
+) -> Result<(), AppError> {
+    let n = sol.nodes.free;
+    let free = &sol.nodes.positions[..n];
+    let fields = (&sol.displacement[..n], sol.stress.as_ref());
+    let estimate = peridynamics_estimate(p, free, (fields, &[]), &mut sol.timings, term);
+    let output = OutputStage::start();
+    let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
+    checks.warnings.extend(warnings::memory(p));
+    write_points_vtu(&staged.path().join("solution.vtu"), free, &p.case.domain, pd_fields(&p.case, &sol, &estimate))?;
+    output.record(&mut sol.timings);
+    let target = publish(staged, &PdSummary::new(p, &sol, &estimate, &checks, t0))?;
+    term.line(OUTPUT, output.seconds(), &target.display().to_string());
+    if !quiet {
+        print_pd(&sol, pd_extremes(&sol).as_ref());
+        print_estimate(&estimate);
+    }
+    report_checks(&checks, req.strict, quiet)
+}
+
+/// What a dynamic Navier run reports.
+fn navier_dynamic(sim: &crate::navier::Simulation) -> Dynamic<'_> {
+    Dynamic {
+        nodes: sim.positions.len(),
+        report: &sim.report,
+        energies: &sim.energies,
+        timings: &sim.timings,
+        estimate: &sim.estimate,
+        unbalanced: &sim.unbalanced,
+        extremes: final_extremes(&sim.positions, &sim.u, &sim.energies),
+    }
+}
+
+/// The extremes of a dynamic run's final state (the time of the last energy row).
+fn final_extremes(positions: &[[f64; 2]], u: &[[f64; 2]], energies: &[crate::dynamics::driver::EnergyRow]) -> Option<Extremes> {
+    let t = energies.last().map_or(0.0, |e| e[0]);
+    Extremes::of(positions, u, None).map(|e| e.at_time(t))
 }
 
 /// The output stage of a run: its seconds and its peak memory from [`OutputStage::start`].
@@ -285,7 +310,7 @@ fn write_navier_static(
         }
     }
     if !quiet {
-        print_navier(&sol);
+        print_navier(&sol, navier_extremes(&sol).as_ref());
     }
     report_checks(&checks, req.strict, quiet)
 }
@@ -346,69 +371,9 @@ fn write_dynamic<M: Serialize>(
     checks.notes.extend(warnings::unbalanced_note(d.unbalanced));
     let dir = publish(staged, &DynamicSummary::new(p, &d, model, &checks, t0))?;
     if !quiet {
-        let (e0, e1) = (d.energies[0], d.energies.last().expect("recorded"));
-        let r = d.report;
-        println!("nodes {}  steps {}  dt {:.3e} s (stable {:.3e} s)", d.nodes, r.steps, r.time_step, r.stable_time_step);
-        // The drift as the energy-drift check measures it (relative to the largest
-        // energies of the run, so a run starting at rest has a scale too); none when
-        // the loads do work.
-        let drift = if p.case.loads().depend_on_time() {
-            "total not conserved: the loads depend on t".to_string()
-        } else {
-            format!("total drift {:.2e} of its scale", warnings::energy_drift(d.energies))
-        };
-        println!("energy at t = 0: kinetic {:.6e}; at t = {:.3e}: kinetic {:.6e}, elastic {:.6e}; {drift}", e0[1], e1[0], e1[1], e1[2]);
-        let per = r.seconds / r.steps.max(1) as f64 / d.nodes.max(1) as f64;
-        println!("{per:.2e} s per step per node; written: {}", dir.display());
-        print_estimate(d.estimate);
+        print_dynamic(&d, p.case.loads().depend_on_time(), &dir);
     }
     report_checks(&checks, req.strict, quiet)
-}
-
-fn print_navier(sol: &crate::navier::Solution) {
-    println!("nodes {}  unknowns {} ({})  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.formulation.name(), sol.nonzeros);
-    print!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
-    match sol.solver.solver_error {
-        Some(e) => println!(", own error ~{e:.1e} of max |u|"),
-        None => println!(),
-    }
-    if let Some(why) = &sol.solver.choice {
-        println!("  ({why})");
-    }
-    if let Some(e) = &sol.errors {
-        print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", e.e_inf_u, e.rel_l2_u);
-        if let Some(s) = e.e_inf_sigma {
-            print!("  e_inf(sigma) = {s:.4e}");
-        }
-        println!();
-    }
-    print_estimate(&sol.estimate);
-    print_probes(&sol.probes);
-    if let Some(q) = &sol.equilibrium {
-        println!(
-            "equilibrium: reactions ({:.3e}, {:.3e}) + loads ({:.3e}, {:.3e}) + body ({:.3e}, {:.3e}), relative imbalance {:.1e}",
-            q.reactions[0], q.reactions[1], q.applied[0], q.applied[1], q.body[0], q.body[1], q.relative
-        );
-    }
-}
-
-/// The estimated errors, the method, its reference and cost (or why there are none).
-fn print_estimate(estimate: &Estimate) {
-    match estimate {
-        Estimate::Done(e) => {
-            print!("estimated: e_inf(u) ~ {:.2e}", e.norms.e_inf_u);
-            if let Some(t) = e.largest_u_time {
-                print!(" (largest at t = {t:.3e} s)");
-            }
-            print!("  rel_l2(u) ~ {:.2e}", e.norms.rel_l2_u);
-            if let Some(s) = e.norms.e_inf_sigma {
-                print!("  e_inf(sigma) ~ {s:.2e}");
-            }
-            println!("  ({}: {}; {:.2} s)", e.method, e.reference, e.seconds);
-        }
-        Estimate::Unavailable(method, why) => println!("estimated: unavailable ({method}: {why})"),
-        Estimate::Off => println!("estimated: off (estimate.method = \"none\")"),
-    }
 }
 
 /// A peridynamic run's fields for its estimate: `((displacement, stress), history)`.
@@ -433,35 +398,4 @@ fn peridynamics_estimate(
     timings.record(ESTIMATE, seconds);
     term.line(ESTIMATE, seconds, &estimate.note());
     estimate
-}
-
-fn print_pd(sol: &crate::peridynamics::PdSolution) {
-    println!(
-        "nodes {} (+{} constrained)  bonds {}  unknowns {}  nonzeros {}",
-        sol.nodes.free,
-        sol.nodes.constrained(),
-        sol.bonds,
-        sol.unknowns,
-        sol.nonzeros
-    );
-    println!("solver {}: relative residual {:.2e}", sol.solver.method, sol.solver.relative_residual);
-    if let Some((w, i)) = &sol.errors {
-        print!("e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", w.e_inf_u, w.rel_l2_u);
-        if let Some(i) = i {
-            print!("  interior: e_inf(u) = {:.4e}  rel_l2(u) = {:.4e}", i.e_inf_u, i.rel_l2_u);
-        }
-        println!();
-    }
-    print_probes(&sol.probes);
-}
-
-/// One line per probe: its value, and its exact value and error where known.
-fn print_probes(probes: &[ProbeValue]) {
-    for p in probes {
-        print!("probe {} ({} at [{}, {}]) = {:.6e}", p.name, p.quantity.name(), p.at[0], p.at[1], p.value);
-        if let Some(e) = p.exact {
-            print!("  exact {e:.6e}, relative error {:.2e}", (p.value - e).abs() / e.abs().max(f64::MIN_POSITIVE));
-        }
-        println!();
-    }
 }

@@ -2,6 +2,7 @@
 //! [`Header`] shared by every command (version, scene, seed, threads, peak memory,
 //! timings keyed by stage), followed by what each kind of run reports.
 
+use super::extremes::Extremes;
 use crate::case::Outputs;
 use crate::choice::Choice;
 use crate::dynamics::driver::{DynamicReport, EnergyRow};
@@ -111,6 +112,8 @@ pub(super) struct NavierSummary<'a> {
     solver: SolverSummary<'a>,
     errors: Option<ErrorNorms>,
     estimated_errors: &'a navier::Estimate,
+    /// The largest displacement and von Mises stress, and where they are.
+    extremes: Option<Extremes>,
     equilibrium: Option<navier::equilibrium::Equilibrium>,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     probes: &'a [ProbeValue],
@@ -147,6 +150,7 @@ impl<'a> NavierSummary<'a> {
             solver: SolverSummary { kind: p.navier.solver.kind.method().name(), report: &sol.solver },
             errors: sol.errors,
             estimated_errors: &sol.estimate,
+            extremes: navier_extremes(sol),
             equilibrium: sol.equilibrium,
             probes: &sol.probes,
             checks,
@@ -179,6 +183,8 @@ pub(super) struct PdSummary<'a> {
     errors: Option<ErrorNorms>,
     errors_interior: Option<ErrorNorms>,
     estimated_errors: &'a navier::Estimate,
+    /// The largest displacement and von Mises stress of the free nodes, and where they are.
+    extremes: Option<Extremes>,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     probes: &'a [ProbeValue],
     #[serde(flatten)]
@@ -207,6 +213,7 @@ impl<'a> PdSummary<'a> {
             errors: sol.errors.map(|e| e.0),
             errors_interior: sol.errors.and_then(|e| e.1),
             estimated_errors: estimate,
+            extremes: pd_extremes(sol),
             probes: &sol.probes,
             checks,
             outputs: p.case.outputs,
@@ -279,6 +286,8 @@ pub(super) struct Dynamic<'a> {
     pub estimate: &'a navier::Estimate,
     /// The re-entrant corners and holes left unbalanced (Navier), for the note.
     pub unbalanced: &'a [navier::sector::Unbalanced],
+    /// The largest displacement of the final state, and where it is.
+    pub extremes: Option<Extremes>,
 }
 
 /// `summary.json` of a time-dependent run.
@@ -289,11 +298,16 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
     nodes: usize,
     dynamics: &'a DynamicsParams,
     integration: &'a DynamicReport,
+    /// The stability limit of the scheme (s): `integration.stable_time_step`, the
+    /// central-difference limit, times the scheme's factor (RK4: sqrt 2).
+    time_step_limit: f64,
     seconds_per_step_per_node: f64,
     energy_first: EnergyRow,
     energy_last: EnergyRow,
     material: MaterialSummary,
     estimated_errors: &'a navier::Estimate,
+    /// The largest displacement of the final state, and where it is.
+    extremes: Option<Extremes>,
     #[serde(flatten)]
     model: M,
     #[serde(flatten)]
@@ -302,19 +316,38 @@ pub(super) struct DynamicSummary<'a, M: Serialize> {
 
 impl<'a, M: Serialize> DynamicSummary<'a, M> {
     pub(super) fn new(p: &'a Problem, d: &Dynamic<'a>, model: M, checks: &'a Checks, t0: Instant) -> Self {
-        let Dynamic { nodes, report, energies, timings, estimate, .. } = *d;
+        let Dynamic { nodes, report, energies, timings, estimate, extremes, .. } = *d;
         DynamicSummary {
             header: Header::new(p, timings, t0),
             nodes,
             dynamics: p.case.dynamics.as_ref().expect("dynamic run"),
             integration: report,
+            time_step_limit: stability_limit(report),
             seconds_per_step_per_node: report.seconds / report.steps.max(1) as f64 / nodes.max(1) as f64,
             energy_first: energies[0],
             energy_last: *energies.last().expect("initial energy recorded"),
             material: MaterialSummary::of(&p.case.material),
             estimated_errors: estimate,
+            extremes,
             model,
             checks,
         }
     }
+}
+
+/// The extremes of a static Navier run at its nodes.
+pub(super) fn navier_extremes(sol: &navier::Solution) -> Option<Extremes> {
+    Extremes::of(&sol.nodes.positions, &sol.displacement, sol.stress.as_ref().map(|s| s.von_mises.as_slice()))
+}
+
+/// The extremes of a static peridynamic run at its free nodes.
+pub(super) fn pd_extremes(sol: &PdSolution) -> Option<Extremes> {
+    let n = sol.nodes.free;
+    Extremes::of(&sol.nodes.positions[..n], &sol.displacement[..n], sol.stress.as_ref().map(|s| s.von_mises.as_slice()))
+}
+
+/// The stability limit of a dynamic run's scheme (s): the central-difference limit
+/// `2 / omega_max` times the scheme's factor (1; RK4 sqrt 2).
+pub(super) fn stability_limit(r: &DynamicReport) -> f64 {
+    r.stable_time_step * r.integrator.stability_factor()
 }

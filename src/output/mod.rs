@@ -10,7 +10,7 @@
 //! * [`write_vtu`] / [`read_vtu`]: XML unstructured grid with triangle cells and point data,
 //!   written with `vtkio` (inline base64, Float64/Int32 arrays, so values are bit-exact).
 //! * [`write_pvd`]: a ParaView collection (time series) file, written by hand.
-//! * [`write_loglog_svg`], [`write_front_plot`]: log-log plots labelled at every decade (SVG, plotters; PNG by resvg).
+//! * [`write_loglog_svg`], [`write_loglog_plot`], [`write_front_plot`]: log-log plots labelled at every decade (SVG, plotters; PNG by resvg).
 //! * [`write_system`]: an assembled linear system for other solvers (MatrixMarket by
 //!   `nalgebra-sparse`, PETSc binary).
 //! * [`peak_memory_bytes`], [`restart_peak`], [`peak_since`]: peak resident memory of
@@ -32,7 +32,7 @@ mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
 pub use memory::{available_memory_bytes, peak_memory_bytes, peak_since, restart_peak, PeakMark};
-pub use plot::{svg_to_png, write_front_plot, write_loglog_svg, FrontPanel, PointGroup, Series};
+pub use plot::{svg_to_png, write_front_plot, write_loglog_plot, write_loglog_svg, FrontPanel, PointGroup, Series};
 pub use staged::{remove_uncommitted, Owns, StagedDir};
 pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};
 pub use vtk::{read_vtu, write_pvd, write_vtu, write_vtu_with, FieldValues, PointField, VtuContents};

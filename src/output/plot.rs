@@ -1,6 +1,6 @@
 //! Log-log plots (plotters, SVG), written atomically: convergence curves
-//! ([`write_loglog_svg`]) and cost-accuracy fronts ([`write_front_plot`], SVG and a PNG
-//! rendered from it by resvg).
+//! ([`write_loglog_svg`], and with a PNG rendered from it by resvg
+//! [`write_loglog_plot`]) and cost-accuracy fronts ([`write_front_plot`], SVG and PNG).
 //!
 //! Both axes are logarithmic and labelled at every power of ten inside the (widened)
 //! data range, so a plot spanning 1e-9 to 1 carries ten readable labels.
@@ -105,10 +105,47 @@ fn plot_error(path: &Path) -> impl Fn(String) -> OutputError + '_ {
     move |e| OutputError::InvalidInput { path: path.to_path_buf(), detail: format!("plot: {e}") }
 }
 
-/// Write a log-log plot of `series` to `path` (SVG, 900 x 600). Colours cycle per pair
-/// of series so that a solid curve and the dashed one after it share a colour; the
-/// legend draws each line as it is drawn (dashed or solid).
+/// The palette index of each of `series`: a dashed curve right after a solid one
+/// takes its colour (so such a pair shares a colour), any other curve the next one.
+fn colours(series: &[Series]) -> Vec<usize> {
+    let mut next = 0;
+    let mut after_solid = false;
+    series
+        .iter()
+        .map(|s| {
+            if !(s.dashed && after_solid) {
+                next += 1;
+            }
+            after_solid = !s.dashed;
+            (next - 1) % PALETTE.len()
+        })
+        .collect()
+}
+
+/// Write a log-log plot of `series` to `path` (SVG, 900 x 600). A solid curve and the
+/// dashed one after it share a colour; the legend draws each line as it is drawn
+/// (dashed or solid).
 pub fn write_loglog_svg(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series]) -> Result<(), OutputError> {
+    let svg = loglog_svg(path, title, (x_label, y_label), series)?;
+    write_atomic(path, svg.as_bytes())
+}
+
+/// [`write_loglog_svg`] to `svg_path`, and the same plot as a PNG rendered from it to
+/// `png_path`. Returns a note when the PNG has no text (no system font found).
+pub fn write_loglog_plot(
+    svg_path: &Path,
+    png_path: &Path,
+    title: &str,
+    (x_label, y_label): (&str, &str),
+    series: &[Series],
+) -> Result<Option<String>, OutputError> {
+    let svg = loglog_svg(svg_path, title, (x_label, y_label), series)?;
+    write_atomic(svg_path, svg.as_bytes())?;
+    svg_to_png(&svg, png_path)
+}
+
+/// The SVG text of [`write_loglog_svg`] (errors name `path`).
+fn loglog_svg(path: &Path, title: &str, (x_label, y_label): (&str, &str), series: &[Series]) -> Result<String, OutputError> {
     let err = plot_error(path);
     let (xs, ys) = axes_of(series.iter().flat_map(|s| s.points.iter().copied())).ok_or_else(|| err("no positive finite points".into()))?;
     let mut svg = String::new();
@@ -123,8 +160,8 @@ pub fn write_loglog_svg(path: &Path, title: &str, x_label: &str, y_label: &str, 
             .build_cartesian_2d(xs, ys)
             .map_err(|e| err(e.to_string()))?;
         chart.configure_mesh().x_desc(x_label).y_desc(y_label).draw().map_err(|e| err(e.to_string()))?;
-        for (k, s) in series.iter().enumerate() {
-            let colour = PALETTE[(k / 2) % PALETTE.len()];
+        for (s, c) in series.iter().zip(colours(series)) {
+            let colour = PALETTE[c];
             let data: Vec<(f64, f64)> = s.points.iter().copied().filter(|&(x, y)| positive(x) && positive(y)).collect();
             let style = ShapeStyle::from(&colour).stroke_width(2);
             let drawn = if s.dashed {
@@ -151,7 +188,7 @@ pub fn write_loglog_svg(path: &Path, title: &str, x_label: &str, y_label: &str, 
             .map_err(|e| err(e.to_string()))?;
         root.present().map_err(|e| err(e.to_string()))?;
     }
-    write_atomic(path, svg.as_bytes())
+    Ok(svg)
 }
 
 /// A group of points of one colour in a front plot.
@@ -316,6 +353,26 @@ mod tests {
             // plotters writes each label on a line of its own inside <text>.
             assert!(svg.contains(&format!("\n{label}\n</text>")), "label {label} missing");
         }
+    }
+
+    /// A dashed curve right after a solid one shares its colour; any other curve
+    /// takes a new one.
+    #[test]
+    fn dashed_curves_share_the_colour_of_the_solid_one_before_them() {
+        let s = |dashed| Series { label: String::new(), points: Vec::new(), dashed };
+        assert_eq!(colours(&[s(false), s(true), s(false), s(true)]), [0, 0, 1, 1]);
+        assert_eq!(colours(&[s(false), s(false), s(true), s(true)]), [0, 1, 1, 2]);
+        assert_eq!(colours(&[s(true), s(true), s(false), s(true)]), [0, 1, 2, 2]);
+    }
+
+    #[test]
+    fn loglog_plot_writes_svg_and_png() {
+        let dir = tempfile::tempdir().unwrap();
+        let (svg, png) = (dir.path().join("c.svg"), dir.path().join("c.png"));
+        let series = vec![Series { label: "e_inf(u)".into(), points: vec![(0.1, 1e-2), (0.05, 2.5e-3)], dashed: false }];
+        write_loglog_plot(&svg, &png, "convergence", ("h", "error"), &series).unwrap();
+        assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+        assert!(std::fs::read_to_string(&svg).unwrap().contains("e_inf(u)"));
     }
 
     #[test]

@@ -69,8 +69,53 @@ pub fn parse(text: &str, path: &Path) -> Result<SceneSpec, ProblemError> {
     })
 }
 
+/// Serde's type names in a parse message and the words a scene's author reads.
+const TYPE_WORDS: [(&str, &str); 16] = [
+    ("u8", "a whole number (0, 1, 2, ...)"),
+    ("u16", "a whole number (0, 1, 2, ...)"),
+    ("u32", "a whole number (0, 1, 2, ...)"),
+    ("u64", "a whole number (0, 1, 2, ...)"),
+    ("usize", "a whole number (0, 1, 2, ...)"),
+    ("i8", "a whole number"),
+    ("i16", "a whole number"),
+    ("i32", "a whole number"),
+    ("i64", "a whole number"),
+    ("isize", "a whole number"),
+    ("f32", "a number"),
+    ("f64", "a number"),
+    ("bool", "true or false"),
+    ("a boolean", "true or false"),
+    ("a sequence", "a list in brackets, [...]"),
+    ("a map", "a table"),
+];
+
+/// `msg` with the Rust type names after `expected` (`expected u32`, `expected f64`)
+/// replaced by words ([`TYPE_WORDS`]), and serde's `floating point` by `number`.
+fn plain_types(msg: &str) -> String {
+    let mut out = msg.replace("invalid type: floating point", "invalid type: decimal number");
+    for (rust, words) in TYPE_WORDS {
+        let from = format!("expected {rust}");
+        let mut done = String::new();
+        let mut rest = out.as_str();
+        while let Some(k) = rest.find(&from) {
+            let end = k + from.len();
+            // Only the whole name: `expected u32`, not `expected u32x`.
+            let whole = !rest[end..].starts_with(|c: char| c.is_alphanumeric() || c == '_');
+            done.push_str(&rest[..k]);
+            done.push_str(if whole { "expected " } else { &from });
+            if whole {
+                done.push_str(words);
+            }
+            rest = &rest[end..];
+        }
+        done.push_str(rest);
+        out = done;
+    }
+    out
+}
+
 fn located(text: &str, e: &toml::de::Error) -> String {
-    let msg = e.message().trim().to_string();
+    let msg = plain_types(e.message().trim());
     match e.span() {
         Some(span) => {
             let before = &text[..span.start.min(text.len())];
@@ -265,4 +310,28 @@ fn outputs(c: &Ctx, fields: Option<&[String]>, has_exact: bool) -> Result<Output
     // The displacement is the solution itself: always written.
     o.displacement = true;
     Ok(o)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::plain_types;
+
+    /// Parse messages name no Rust type (issue 50: `expected u32`, `expected f64`).
+    #[test]
+    fn parse_messages_say_what_a_value_must_be_in_words() {
+        let cases = [
+            (
+                "invalid type: floating point `1.5`, expected usize",
+                "invalid type: decimal number `1.5`, expected a whole number (0, 1, 2, ...)",
+            ),
+            ("invalid type: string \"a\", expected f64", "invalid type: string \"a\", expected a number"),
+            ("invalid type: integer `1`, expected a boolean", "invalid type: integer `1`, expected true or false"),
+            ("invalid type: integer `3`, expected a sequence", "invalid type: integer `3`, expected a list in brackets, [...]"),
+            ("invalid value: integer `-3`, expected u32", "invalid value: integer `-3`, expected a whole number (0, 1, 2, ...)"),
+            ("expected u32x or f64", "expected u32x or f64"),
+        ];
+        for (serde, words) in cases {
+            assert_eq!(plain_types(serde), words);
+        }
+    }
 }
