@@ -1,5 +1,5 @@
 //! With the cargo feature `petsc`: compile the C side of the PETSc backend
-//! (`src/petsc/shim.c`) against the PETSc and Open MPI found by pkg-config (Debian's
+//! (`src/parallel/petsc/shim.c`) against the PETSc and Open MPI found by pkg-config (Debian's
 //! `petsc-dev` and `libopenmpi-dev`; `scripts/install-petsc.sh`). Without it: nothing.
 
 fn main() {
@@ -10,7 +10,7 @@ fn main() {
 
 #[cfg(feature = "petsc")]
 fn petsc() {
-    println!("cargo:rerun-if-changed=src/petsc/shim.c");
+    println!("cargo:rerun-if-changed=src/parallel/petsc/shim.c");
     let found = |name: &str| {
         pkg_config::Config::new()
             .probe(name)
@@ -19,7 +19,7 @@ fn petsc() {
     let petsc = found("PETSc");
     let mpi = found("ompi-c");
     let mut build = cc::Build::new();
-    build.file("src/petsc/shim.c").warnings(true);
+    build.file("src/parallel/petsc/shim.c").warnings(true);
     for dir in petsc.include_paths.iter().chain(&mpi.include_paths) {
         build.include(dir);
     }

@@ -1,6 +1,6 @@
 """Resultant force and moment of the tractions on circles around the bracket's holes,
 from a run's solution.vtu: the check behind the holes' ring balances
-(`src/navier/sector/`, BENCHMARKS.md "Balanced holes").
+(`src/models/navier/sector/`, BENCHMARKS.md "Balanced holes").
 
 A traction-free hole carries no resultant: the integral of sigma n over any circle
 that encloses the hole and nothing else is zero, and so is its moment. A discrete

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Re-entrant corners with loaded edges or a body force, balanced with the loads inside
-# their sector (src/navier/sector/loads.rs):
+# their sector (src/models/navier/sector/loads.rs):
 # 1. the shipped bracket with a vertical traction SHELF (Pa, default -1e6) on the
 #    inner horizontal edge, one of the corner's two edges: the tip deflection against
 #    P2 finite elements (`python3 benches/fem_reference.py holes base --shelf -1e6`:

@@ -1,6 +1,6 @@
 """Section forces of the bracket's column and arm from a run's solution.vtu: the
 check behind the README's analysis of re-entrant corners (Known limits) and
-`src/navier/sector.rs`.
+`src/models/navier/sector/`.
 
 Statics fixes them: a tip load F (5 MPa over the 0.06 m tip) gives in the column
 (0 <= x <= 0.06) an axial force N = -F, no shear (V = 0) and a moment of magnitude

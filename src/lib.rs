@@ -2,75 +2,49 @@
 //!
 //! 2D linear elasticity (plane stress / plane strain Navier equation) solved in strong
 //! form by meshless shape functions (MLSM), verified against closed-form solutions and
-//! cross-checked against linear bond-based peridynamics on the same plate.
+//! cross-checked against linear peridynamics on the same plate.
 //!
-//! The modules from the bottom up, one floor at a time: a module uses only modules on
-//! the floors below its own (`tests/architecture.rs` checks it).
-//! 1. [`choice`]: scene names, defaults and help of every option enum; [`output`]:
-//!    files; [`cli`]: the command line; [`expression`]: formulas of the scene file;
-//!    [`petsc`]: PETSc and MPI behind the feature `petsc`;
-//! 2. [`domain`]: geometry and nodes; [`linalg`]: sparse solvers; [`elasticity`]:
-//!    material, boundary conditions, unknown layout, stress;
-//! 3. [`mlsm`]: weighted least-squares shape functions; [`exact`]: closed-form and
-//!    manufactured solutions;
-//! 4. [`pipeline`]: stage names, timing, progress, run errors; [`post`]: error norms;
-//! 5. [`dynamics`]: explicit time integrators and the shared time loop;
-//! 6. [`case`]: the physical problem of a scene, independent of any discretisation;
-//! 7. the models: [`navier`] (MLSM collocation, static and elastodynamic) and
-//!    [`peridynamics`] (linear bond-based, static and dynamic);
-//! 8. [`problem`]: scene file (TOML) -> validated [`problem::Problem`];
-//! 9. [`resources`]: the memory a run will need, checked before it starts;
-//! 10. [`warnings`]: the checks that turn a doubtful result into a warning;
-//! 11. [`model`]: the one dispatch static/dynamic × Navier/peridynamics;
-//! 12. [`compare`]: the nonlocal-to-local comparison; [`tradeoff`]: the design and
-//!     the Pareto front of a speed-accuracy sweep;
-//! 13. [`app`]: the commands (the only printing).
+//! The folders read as the pipeline of a run:
+//! - [`scene`]: the scene file, from text to a validated [`scene::problem::Problem`];
+//! - [`physics`]: the solid, its material, conditions, stress and exact solutions;
+//! - [`domain`]: geometry, nodes and their neighbours;
+//! - [`mlsm`]: the local approximation (meshless shape functions);
+//! - [`models`]: the Navier and peridynamic models, time integration, the dispatch;
+//! - [`linalg`]: one solve contract, Krylov methods and preconditioners;
+//! - [`parallel`]: MPI ranks and PETSc, the only place that knows about ranks;
+//! - [`stage`]: what every run shares: named stages, timing, progress, run errors;
+//! - [`quality`]: error norms, warnings, the nonlocal-to-local comparison;
+//! - [`tradeoff`]: the speed-accuracy sweep, presets and `--target-error` policy;
+//! - [`output`]: files (VTK, CSV, JSON), written whole or not at all;
+//! - [`app`]: the commands and the command line (the only printing).
+//!
+//! Inside the folders, each concern sits on a floor and imports only concerns on the
+//! floors below its own (`tests/architecture.rs` reads the floors from the lines
+//! below; a folder of concerns lists its parts as `folder::part`):
+//!
+// Floor 1: scene::choice scene::expression output parallel::petsc
+// Floor 2: domain linalg physics::elasticity
+// Floor 3: mlsm physics::exact parallel::partition parallel::distributed parallel::launch
+// Floor 4: stage quality::post parallel::share
+// Floor 5: models::dynamics
+// Floor 6: physics::case
+// Floor 7: models::navier models::peridynamics
+// Floor 8: scene::problem
+// Floor 9: models::resources
+// Floor 10: quality::warnings
+// Floor 11: models::dispatch
+// Floor 12: quality::compare tradeoff
+// Floor 13: app
 
-// Floor 1
-pub mod choice;
-pub mod cli;
-pub mod expression;
-pub mod output;
-pub mod petsc;
-
-// Floor 2
-pub mod domain;
-pub mod elasticity;
-pub mod linalg;
-
-// Floor 3
-pub mod exact;
-pub mod mlsm;
-
-// Floor 4
-pub mod pipeline;
-pub mod post;
-
-// Floor 5
-pub mod dynamics;
-
-// Floor 6
-pub mod case;
-
-// Floor 7
-pub mod navier;
-pub mod peridynamics;
-
-// Floor 8
-pub mod problem;
-
-// Floor 9
-pub mod resources;
-
-// Floor 10
-pub mod warnings;
-
-// Floor 11
-pub mod model;
-
-// Floor 12
-pub mod compare;
-pub mod tradeoff;
-
-// Floor 13
 pub mod app;
+pub mod domain;
+pub mod linalg;
+pub mod mlsm;
+pub mod models;
+pub mod output;
+pub mod parallel;
+pub mod physics;
+pub mod quality;
+pub mod scene;
+pub mod stage;
+pub mod tradeoff;

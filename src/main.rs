@@ -33,12 +33,12 @@ fn main() -> ExitCode {
     // Ctrl-C: a time loop stops between steps and its staged results are removed
     // (exit 130); anywhere else the process removes its staged results and ends at once.
     let _ = ctrlc::set_handler(|| {
-        if !mlsm::pipeline::interrupt::request() {
+        if !mlsm::stage::interrupt::request() {
             mlsm::output::remove_uncommitted();
             std::process::exit(130);
         }
     });
-    let cli = mlsm::cli::Cli::parse_from(mlsm::cli::joined_negative_values(std::env::args_os()));
+    let cli = mlsm::app::cli::Cli::parse_from(mlsm::app::cli::joined_negative_values(std::env::args_os()));
     let code = match mlsm::app::run(&cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -49,6 +49,6 @@ fn main() -> ExitCode {
     // Every rank of an MPI run ends PETSc (and MPI) before it exits, after printing:
     // MPI_Finalize waits for all ranks, so no rank's non-zero exit makes mpirun kill
     // rank 0 before its message is out.
-    mlsm::petsc::finish();
+    mlsm::parallel::petsc::finish();
     code
 }

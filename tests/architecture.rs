@@ -12,11 +12,25 @@ fn src() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
 }
 
-/// The top-level module a file belongs to (`navier` for `src/navier/system.rs`).
-fn module_of(file: &Path) -> String {
+/// The concern a file belongs to: its top-level module (`linalg` for
+/// `src/linalg/amg.rs`), or `folder::part` inside a folder of concerns
+/// (`models::navier` for `src/models/navier/system.rs`). `None` for a folder's own
+/// `mod.rs`, which only declares its parts.
+fn module_of(file: &Path, groups: &[String]) -> Option<String> {
     let rel = file.strip_prefix(src()).unwrap();
-    let first = rel.components().next().unwrap().as_os_str().to_string_lossy().into_owned();
-    first.trim_end_matches(".rs").to_string()
+    let parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().trim_end_matches(".rs").to_string()).collect();
+    if groups.contains(&parts[0]) {
+        (parts.len() > 1 && parts[1] != "mod").then(|| format!("{}::{}", parts[0], parts[1]))
+    } else {
+        Some(parts[0].clone())
+    }
+}
+
+/// The folders of concerns: the `folder` of every `folder::part` on a floor.
+fn groups() -> Vec<String> {
+    let mut g: Vec<String> = floors().keys().filter_map(|u| u.split_once("::").map(|(f, _)| f.to_string())).collect();
+    g.dedup();
+    g
 }
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -30,21 +44,33 @@ fn files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// `module -> modules it names as crate::<module>` (non-test code only).
+/// `concern -> concerns it names as crate::<module>` or `crate::<folder>::<part>`
+/// (non-test code only).
 fn imports() -> BTreeMap<String, Vec<String>> {
+    let groups = groups();
     let mut all = Vec::new();
     files(&src(), &mut all);
     let mut graph: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    let ident = |s: &str| s.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect::<String>();
     for f in all {
-        let m = module_of(&f);
-        if m == "lib" || m == "main" || f.file_name().is_some_and(|n| n == "tests.rs" || n.to_string_lossy().ends_with("_tests.rs")) {
+        let name = f.file_name().unwrap().to_string_lossy();
+        if name == "lib.rs" || name == "main.rs" || name == "tests.rs" || name.ends_with("_tests.rs") {
             continue;
         }
+        let Some(m) = module_of(&f, &groups) else { continue };
         let text = std::fs::read_to_string(&f).unwrap();
         let code = text.split("#[cfg(test)]").next().unwrap();
         let deps = graph.entry(m.clone()).or_default();
         for (i, _) in code.match_indices("crate::") {
-            let name: String = code[i + 7..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+            let rest = &code[i + 7..];
+            let mut name = ident(rest);
+            if groups.contains(&name) {
+                let part = rest[name.len()..].strip_prefix("::").map(ident).unwrap_or_default();
+                if part.is_empty() {
+                    continue;
+                }
+                name = format!("{name}::{part}");
+            }
             if !name.is_empty() && name != m && !deps.contains(&name) {
                 deps.push(name);
             }
@@ -53,20 +79,41 @@ fn imports() -> BTreeMap<String, Vec<String>> {
     graph
 }
 
-/// The floor of every module: the `// Floor k` group `src/lib.rs` declares it in.
+/// The floor of every concern: the `// Floor k: a b folder::part` lines of
+/// `src/lib.rs`.
 fn floors() -> BTreeMap<String, usize> {
     let lib = std::fs::read_to_string(src().join("lib.rs")).unwrap();
-    let mut floor = 0;
     let mut out = BTreeMap::new();
     for line in lib.lines() {
-        if let Some(k) = line.strip_prefix("// Floor ") {
-            floor = k.trim().parse().expect("// Floor <number>");
-        } else if let Some(m) = line.strip_prefix("pub mod ") {
-            assert!(floor > 0, "pub mod {m} before the first // Floor line");
-            out.insert(m.trim_end_matches(';').to_string(), floor);
+        if let Some(rest) = line.strip_prefix("// Floor ") {
+            let (k, units) = rest.split_once(':').expect("// Floor <number>: <modules>");
+            let floor: usize = k.trim().parse().expect("// Floor <number>");
+            for u in units.split_whitespace() {
+                assert!(out.insert(u.to_string(), floor).is_none(), "{u} on two floors");
+            }
         }
     }
     out
+}
+
+/// Every concern on a floor is a module of the crate, and every module of the crate
+/// (top-level, or a part of a folder of concerns) is on a floor.
+#[test]
+fn every_module_is_on_exactly_one_floor() {
+    let floor = floors();
+    let groups = groups();
+    let mut all = Vec::new();
+    files(&src(), &mut all);
+    let mut found: std::collections::BTreeSet<String> = all
+        .iter()
+        .filter(|f| !f.file_name().is_some_and(|n| n == "lib.rs" || n == "main.rs"))
+        .filter_map(|f| module_of(f, &groups))
+        .collect();
+    for g in &groups {
+        found.remove(g);
+    }
+    let declared: std::collections::BTreeSet<String> = floor.keys().cloned().collect();
+    assert_eq!(found, declared, "modules of src/ against the floors of src/lib.rs");
 }
 
 #[test]
@@ -139,7 +186,7 @@ fn architecture_page_names_only_files_that_exist() {
 }
 
 /// The module path of a source file: `["linalg", "amg"]` for `src/linalg/amg.rs`,
-/// `["navier", "sector"]` for `src/navier/sector/mod.rs`.
+/// `["navier", "sector"]` for `src/models/navier/sector/mod.rs`.
 fn module_path(file: &Path) -> Vec<String> {
     let rel = file.strip_prefix(src()).unwrap().with_extension("");
     let mut parts: Vec<String> = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();

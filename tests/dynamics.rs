@@ -1,10 +1,10 @@
 //! Time integrators on the seed's closed-form rod (seed 000, sec. 4.2-4.3): observed
 //! orders of u, v and a (table 4.3.1) and the energy exchange.
 
-use mlsm::choice::Choice;
-use mlsm::dynamics::rod::Rod;
-use mlsm::dynamics::{Integrator, SecondOrderSystem, State};
-use mlsm::post::observed_order;
+use mlsm::scene::choice::Choice;
+use mlsm::models::dynamics::rod::Rod;
+use mlsm::models::dynamics::{Integrator, SecondOrderSystem, State};
+use mlsm::quality::post::observed_order;
 
 const ROD: Rod = Rod { nodes: 40, c: 0.125, rho: 1.0 };
 

@@ -9,9 +9,9 @@
 mod common;
 
 use common::{f, i, s, scene};
-use mlsm::navier::{Estimate, Solution};
-use mlsm::problem::Problem;
-use mlsm::warnings::{navier_static, Checks};
+use mlsm::models::navier::{Estimate, Solution};
+use mlsm::scene::problem::Problem;
+use mlsm::quality::warnings::{navier_static, Checks};
 
 /// A shipped scene with the estimate on and `edits`.
 fn estimated(name: &str, edits: &[(&'static str, Option<toml::Value>)]) -> Problem {
@@ -218,7 +218,7 @@ fn with_singular_corners_the_displacement_estimate_counts_double() {
 /// 2026-11-27, before named in the note).
 #[test]
 fn an_unbalanced_corner_or_hole_is_a_note() {
-    use mlsm::navier::sector::Around;
+    use mlsm::models::navier::sector::Around;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/bracket_variants/L.toml");
     let l = std::fs::read_to_string(&path).unwrap();
     let short = l[..l.find("[[probe]]").expect("the L has a probe")].replace("[0.2, 0.14], [0.2, 0.2]", "[0.07, 0.14], [0.07, 0.2]");

@@ -4,8 +4,8 @@
 mod common;
 
 use common::{f, s, scene, solve};
-use mlsm::navier::Solution;
-use mlsm::problem::Problem;
+use mlsm::models::navier::Solution;
+use mlsm::scene::problem::Problem;
 
 /// The trapezoidal law of dam engineering: on the horizontal section at height `y0`
 /// (width `b`, from the vertical upstream face x = 0), `sigma_yy = -N/b + k (x - b/2)`
@@ -171,7 +171,7 @@ fn body_force_and_initial_state_formulas_match_their_numeric_forms() {
     );
     assert_ne!(a.case.dynamics.as_ref().unwrap().initial_velocity, b.case.dynamics.as_ref().unwrap().initial_velocity);
     let run = |p: &Problem| {
-        let mlsm::model::Outcome::PdDynamic(sim) = mlsm::model::solve(p, &mlsm::pipeline::Silent, |_| Ok(())).unwrap() else {
+        let mlsm::models::dispatch::Outcome::PdDynamic(sim) = mlsm::models::dispatch::solve(p, &mlsm::stage::Silent, |_| Ok(())).unwrap() else {
             panic!("a peridynamic dynamic run")
         };
         sim.v

@@ -11,10 +11,10 @@ mod common;
 
 use common::{f, i, s, scene};
 use mlsm::linalg::SolveError;
-use mlsm::navier::Solution;
-use mlsm::pipeline::{RunError, Silent};
-use mlsm::problem::Problem;
-use mlsm::warnings::{navier_static, peridynamics_static, Checks};
+use mlsm::models::navier::Solution;
+use mlsm::stage::{RunError, Silent};
+use mlsm::scene::problem::Problem;
+use mlsm::quality::warnings::{navier_static, peridynamics_static, Checks};
 
 /// Solve a Navier scene and check it.
 fn run(p: &Problem) -> (Solution, Checks) {
@@ -168,7 +168,7 @@ fn overflow_and_underflow_are_named() {
     let m = refusal("cantilever", &[("exact.load", f(1e-310))]);
     assert!(m.contains("exact.load") && m.contains("smallest normal double"), "{m}");
     let p = scene("lame", &[("exact.pressure", f(1e300)), ("material.E", f(1e-10))]);
-    match mlsm::navier::solve(&p.case, &p.navier, &Silent) {
+    match mlsm::models::navier::solve(&p.case, &p.navier, &Silent) {
         Err(RunError::Solve(e @ SolveError::Overflow { .. })) => assert!(e.to_string().contains("overflow"), "{e}"),
         Err(e) => panic!("expected an overflow, got {e}"),
         Ok(_) => panic!("expected an overflow, the run succeeded"),
@@ -185,11 +185,11 @@ fn overflow_and_underflow_are_named() {
 #[test]
 fn peridynamics_below_m_3_is_warned() {
     for (m, warned) in [(1, true), (2, true), (3, false)] {
-        let mut p = scene("pd_manufactured", &[("peridynamics.horizon", f(0.1)), ("peridynamics.m", i(m))]);
-        let params = p.peridynamics.take().expect("[peridynamics]");
-        let sol = mlsm::peridynamics::solve(&p.case, &params, &Silent).unwrap_or_else(|e| panic!("m = {m}: {e}"));
+        let p = scene("pd_manufactured", &[("peridynamics.horizon", f(0.1)), ("peridynamics.m", i(m))]);
+        let params = *p.model.peridynamics().expect("[peridynamics]");
+        let sol = mlsm::models::peridynamics::solve(&p.case, &params, &Silent).unwrap_or_else(|e| panic!("m = {m}: {e}"));
         let free = &sol.nodes.positions[..sol.nodes.free];
-        let estimate = mlsm::compare::estimate::local_model(&p, free, (&sol.displacement[..sol.nodes.free], sol.stress.as_ref()), &[]);
+        let estimate = mlsm::quality::compare::estimate::local_model(&p, free, (&sol.displacement[..sol.nodes.free], sol.stress.as_ref()), &[]);
         let checks = peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
         let e = sol.errors.unwrap().0.e_inf_u;
         let est = estimate.done().unwrap_or_else(|| panic!("m = {m}: no estimate: {estimate:?}")).norms.e_inf_u;
@@ -213,16 +213,16 @@ fn peridynamics_below_m_3_is_warned() {
 #[test]
 fn an_iterative_solver_that_stops_names_its_limit() {
     let p = scene("lame", &[("solver.kind", s("lu"))]);
-    let lu = mlsm::navier::solve(&p.case, &p.navier, &Silent).unwrap();
+    let lu = mlsm::models::navier::solve(&p.case, &p.navier, &Silent).unwrap();
     let p = scene("lame", &[("solver.kind", s("bicgstab"))]);
-    let it = mlsm::navier::solve(&p.case, &p.navier, &Silent).unwrap();
+    let it = mlsm::models::navier::solve(&p.case, &p.navier, &Silent).unwrap();
     let (a, b) = (lu.errors.unwrap(), it.errors.unwrap());
     eprintln!("lame, BiCGSTAB: {} iterations, e_inf(u) {:.4e} (LU {:.4e})", it.solver.iterations, b.e_inf_u, a.e_inf_u);
     // Residual 1e-10 of the equilibrated system against a discretisation error of
     // 1.4e-4: the errors agree to 1e-4 of themselves.
     assert!((a.e_inf_u - b.e_inf_u).abs() <= 1e-4 * a.e_inf_u, "{a:?} vs {b:?}");
     let p = scene("lame", &[("solver.kind", s("bicgstab")), ("solver.max_iterations", i(20))]);
-    match mlsm::navier::solve(&p.case, &p.navier, &Silent) {
+    match mlsm::models::navier::solve(&p.case, &p.navier, &Silent) {
         Err(RunError::Solve(e @ SolveError::NoConvergence { .. })) => {
             let m = e.to_string();
             assert!(m.contains("stopped by the iteration limit (solver.max_iterations = 20)"), "{m}");

@@ -7,9 +7,9 @@
 mod common;
 
 use common::{f, s, scene};
-use mlsm::navier::Estimate;
-use mlsm::pipeline::Silent;
-use mlsm::problem::Problem;
+use mlsm::models::navier::Estimate;
+use mlsm::stage::Silent;
+use mlsm::scene::problem::Problem;
 use std::path::Path;
 
 /// `local-model` on the shipped peridynamic scenes with an exact solution, at their
@@ -20,14 +20,14 @@ use std::path::Path;
 #[test]
 fn local_model_tracks_the_peridynamic_error() {
     for name in ["pd_manufactured", "pd_trig", "pd_tension"] {
-        let base = scene(name, &[]).peridynamics.expect("[peridynamics]").horizon;
+        let base = scene(name, &[]).model.peridynamics().copied().expect("[peridynamics]").horizon;
         for horizon in [base, base / 2.0] {
             let p = scene(name, &[("model", s("peridynamics")), ("peridynamics.horizon", f(horizon))]);
-            let params = p.peridynamics.expect("[peridynamics]");
-            let sol = mlsm::peridynamics::solve(&p.case, &params, &Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let params = p.model.peridynamics().copied().expect("[peridynamics]");
+            let sol = mlsm::models::peridynamics::solve(&p.case, &params, &Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
             let n = sol.nodes.free;
             let estimate =
-                mlsm::compare::estimate::local_model(&p, &sol.nodes.positions[..n], (&sol.displacement[..n], sol.stress.as_ref()), &[]);
+                mlsm::quality::compare::estimate::local_model(&p, &sol.nodes.positions[..n], (&sol.displacement[..n], sol.stress.as_ref()), &[]);
             let est = estimate.done().unwrap_or_else(|| panic!("{name}: no estimate: {estimate:?}"));
             let e = sol.errors.expect("exact solution").0.e_inf_u;
             let own = est.reference_estimated_e_inf_u.expect("a static reference estimates itself");
@@ -38,7 +38,7 @@ fn local_model_tracks_the_peridynamic_error() {
                 est.seconds
             );
             assert!((0.5..=2.0).contains(&(est.norms.e_inf_u / e)), "{name} delta = {horizon}: effectivity {}", est.norms.e_inf_u / e);
-            assert!(own * mlsm::warnings::LOCAL_REFERENCE_MARGIN < est.norms.e_inf_u, "{name}: the reference is too coarse to judge it");
+            assert!(own * mlsm::quality::warnings::LOCAL_REFERENCE_MARGIN < est.norms.e_inf_u, "{name}: the reference is too coarse to judge it");
         }
     }
 }
@@ -49,10 +49,10 @@ fn local_model_tracks_the_peridynamic_error() {
 #[test]
 fn a_coarse_local_reference_is_refined() {
     let p = scene("pd_manufactured", &[("model", s("peridynamics")), ("nodes.spacing", f(0.1)), ("peridynamics.horizon", f(0.05))]);
-    let params = p.peridynamics.expect("[peridynamics]");
-    let sol = mlsm::peridynamics::solve(&p.case, &params, &Silent).unwrap();
+    let params = p.model.peridynamics().copied().expect("[peridynamics]");
+    let sol = mlsm::models::peridynamics::solve(&p.case, &params, &Silent).unwrap();
     let n = sol.nodes.free;
-    let estimate = mlsm::compare::estimate::local_model(&p, &sol.nodes.positions[..n], (&sol.displacement[..n], sol.stress.as_ref()), &[]);
+    let estimate = mlsm::quality::compare::estimate::local_model(&p, &sol.nodes.positions[..n], (&sol.displacement[..n], sol.stress.as_ref()), &[]);
     let est = estimate.done().unwrap_or_else(|| panic!("no estimate: {estimate:?}"));
     let e = sol.errors.unwrap().0.e_inf_u;
     eprintln!("coarse reference: e_inf(u) {e:.2e}, estimated {:.2e} against {}", est.norms.e_inf_u, est.reference);
@@ -144,18 +144,18 @@ fn refined_tracks_the_dynamic_error() {
     for (spacing, integrator) in [(0.1, "rk4"), (0.05, "rk4"), (0.05, "verlet")] {
         let p = standing_wave(spacing, integrator);
         let d = p.case.dynamics.as_ref().unwrap();
-        let sim = mlsm::navier::simulate(&p.case, &p.navier, d, &Silent, |_| Ok(())).unwrap_or_else(|e| panic!("{e}"));
+        let sim = mlsm::models::navier::simulate(&p.case, &p.navier, d, &Silent, |_| Ok(())).unwrap_or_else(|e| panic!("{e}"));
         let exact_at = |t: f64| -> Vec<[f64; 2]> {
             sim.positions.iter().map(|q| [1e-3 * (std::f64::consts::PI * q[0]).sin() * (WAVE_FREQUENCY * t).cos(), 0.0]).collect()
         };
-        assert_eq!(sim.history.len(), mlsm::dynamics::driver::HISTORY_SAMPLES.min(sim.report.steps), "h = {spacing}: states kept");
+        assert_eq!(sim.history.len(), mlsm::models::dynamics::driver::HISTORY_SAMPLES.min(sim.report.steps), "h = {spacing}: states kept");
         let (t_end, u_end) = sim.history.last().unwrap();
         assert_eq!(u_end, &sim.u, "the last state kept is the final one");
         // Space-time error over the kept states: all of them side by side.
         let u: Vec<[f64; 2]> = sim.history.iter().flat_map(|(_, u)| u.iter().copied()).collect();
         let exact: Vec<[f64; 2]> = sim.history.iter().flat_map(|(t, _)| exact_at(*t)).collect();
-        let (e, _) = mlsm::post::relative_errors(&u, &exact);
-        let (e_end, _) = mlsm::post::relative_errors(u_end, &exact_at(*t_end));
+        let (e, _) = mlsm::quality::post::relative_errors(&u, &exact);
+        let (e_end, _) = mlsm::quality::post::relative_errors(u_end, &exact_at(*t_end));
         let Estimate::Done(est) = &sim.estimate else { panic!("h = {spacing}: no estimate: {:?}", sim.estimate) };
         let eff = est.norms.e_inf_u / e;
         eprintln!(
@@ -176,6 +176,6 @@ fn refined_tracks_the_dynamic_error() {
 #[test]
 fn a_dynamic_estimate_can_be_switched_off() {
     let p = scene("steel_plate_dynamic", &[("model", s("navier")), ("estimate.method", s("none")), ("dynamics.end_time", f(1e-5))]);
-    let sim = mlsm::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
+    let sim = mlsm::models::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
     assert!(matches!(sim.estimate, Estimate::Off));
 }

@@ -6,7 +6,7 @@ mod common;
 use common::*;
 
 /// `max |u - u_ref| / max |u_ref|` over the nodes (displacement vectors).
-fn relative_difference(u: &mlsm::navier::Solution, reference: &mlsm::navier::Solution) -> f64 {
+fn relative_difference(u: &mlsm::models::navier::Solution, reference: &mlsm::models::navier::Solution) -> f64 {
     let scale = reference.displacement.iter().fold(0.0f64, |m, v| m.max(v[0].hypot(v[1])));
     let diff = reference.displacement.iter().zip(&u.displacement).fold(0.0f64, |m, (a, b)| m.max((a[0] - b[0]).hypot(a[1] - b[1])));
     diff / scale
@@ -105,7 +105,7 @@ fn lame_thick_cylinder() {
 /// 1e-10 relative leaves four orders for the different rounding of lambda and mu).
 #[test]
 fn plane_stress_and_plane_strain_are_consistent() {
-    use mlsm::elasticity::material::PlaneModel;
+    use mlsm::physics::elasticity::material::PlaneModel;
     // Plane stress with nu = 1/4 is not a bond-based PD material: drop the [peridynamics] table.
     let stress = scene("steel_plate", &[("material.plane", s("stress")), ("nodes.spacing", f(0.02)), ("peridynamics", None)]);
     let mut strain = stress.clone();
@@ -223,8 +223,8 @@ fn degenerate_support_is_reported() {
     let mut edits = published();
     edits.extend([("approximation.support", i(9)), ("nodes.spacing", f(0.5))]);
     let p = scene("cantilever", &edits);
-    match mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent) {
-        Err(mlsm::pipeline::RunError::Shape(e)) => {
+    match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent) {
+        Err(mlsm::stage::RunError::Shape(e)) => {
             let msg = e.to_string();
             assert!(msg.contains("node") && msg.contains("degenerate support"), "{msg}");
         }
@@ -248,9 +248,9 @@ fn degenerate_rbf_support_is_reported_after_widening() {
          [nodes]\nspacing = 0.1\nfill = \"grid\"\n[approximation]\nbasis = \"phs\"\ndegree = 4\n\
          [material]\nE = 1.0\nnu = 0.3\nplane = \"stress\"\n{boundary}"
     );
-    let p = mlsm::problem::Problem::from_str(&text, std::path::Path::new("strip.toml")).unwrap();
-    match mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent) {
-        Err(mlsm::pipeline::RunError::Shape(e)) => {
+    let p = mlsm::scene::problem::Problem::from_str(&text, std::path::Path::new("strip.toml")).unwrap();
+    match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent) {
+        Err(mlsm::stage::RunError::Shape(e)) => {
             let msg = e.to_string();
             assert!(msg.contains("degenerate support at node") && msg.contains("rank < 15"), "{msg}");
             assert!(e.support > 37 && e.ratio < 1e-10, "{e:?}");
@@ -298,7 +298,7 @@ fn tip_deflections(path: &str, extra: &str, hs: &[f64]) -> Vec<(f64, usize)> {
     let text = std::fs::read_to_string(&path).unwrap() + extra;
     let mut doc: toml::Table = toml::from_str(&text).unwrap();
     doc.insert("estimate".into(), toml::Value::Table(toml::toml! { method = "none" }));
-    let p = mlsm::problem::Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"));
+    let p = mlsm::scene::problem::Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"));
     hs.iter()
         .map(|&h| {
             let sol = solve(&p.with_spacing(h).unwrap());
@@ -348,7 +348,7 @@ fn reentrant_corners_on_scattered_nodes_converge_to_the_finite_element_tip() {
 /// (`benches/bracket_variants/L_manufactured.toml`: its displacement on the base, its
 /// tractions on every other edge, the re-entrant corner's two edges loaded, its body
 /// force; estimate off) with the node seed, spacing, solver and formulation given.
-fn loaded_l(seed: i64, h: f64, solver: &str, formulation: &str) -> mlsm::problem::Problem {
+fn loaded_l(seed: i64, h: f64, solver: &str, formulation: &str) -> mlsm::scene::problem::Problem {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/bracket_variants/L_manufactured.toml");
     let mut doc: toml::Table = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     let mut set = |table: &str, key: &str, value: toml::Value| {
@@ -359,7 +359,7 @@ fn loaded_l(seed: i64, h: f64, solver: &str, formulation: &str) -> mlsm::problem
     set("nodes", "spacing", h.into());
     set("solver", "kind", solver.into());
     set("approximation", "formulation", formulation.into());
-    mlsm::problem::Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"))
+    mlsm::scene::problem::Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A re-entrant corner with loaded edges and a body force is balanced with the loads
@@ -433,14 +433,14 @@ fn iterative_and_direct_solutions_agree_on_every_shipped_scene() {
     let fragile = [("bracket", "BiCGSTAB+ILUT")];
     for name in ["cantilever", "kirsch", "lame", "flamant", "bracket", "steel_plate", "manufactured_dirichlet", "manufactured_traction"] {
         let lu = solve(&scene(name, &[("solver.kind", s("lu"))]));
-        let agree = |it: &mlsm::navier::Solution, method: &str| {
+        let agree = |it: &mlsm::models::navier::Solution, method: &str| {
             let difference = relative_difference(it, &lu);
             eprintln!("{name}, {method}: {} iterations, max|u_it - u_lu| / max|u_lu| = {difference:.1e}", it.solver.iterations);
             assert!(difference <= 1e-7, "{name}, {method}: {difference:.1e}");
         };
         for (kind, method) in [("bicgstab", "BiCGSTAB+ILUT"), ("gmres", "GMRES+AMG")] {
             let p = scene(name, &[("solver.kind", s(kind))]);
-            match mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent) {
+            match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent) {
                 Ok(it) => agree(&it, method),
                 Err(e) => {
                     let m = e.to_string();

@@ -5,17 +5,17 @@
 mod common;
 
 use common::*;
-use mlsm::dynamics::Integrator;
-use mlsm::peridynamics::simulate;
-use mlsm::pipeline::{RunError, Silent};
-use mlsm::problem::Problem;
+use mlsm::models::dynamics::Integrator;
+use mlsm::models::peridynamics::simulate;
+use mlsm::stage::{RunError, Silent};
+use mlsm::scene::problem::Problem;
 
 /// Final time, displacement (flat) and energy history of a run.
 type Run = (f64, Vec<f64>, Vec<[f64; 4]>);
 
 /// Final time, displacement and energy history of a run of `p`.
 fn run(p: &Problem) -> Result<Run, RunError> {
-    let sim = simulate(&p.case, p.peridynamics.as_ref().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()))?;
+    let sim = simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()))?;
     Ok((sim.energies.last().unwrap()[0], sim.u.iter().flatten().copied().collect(), sim.energies))
 }
 
@@ -111,7 +111,7 @@ fn unstable_time_step_is_refused() {
 /// h = 0.02, 0.01 and 0.005 (README, known limits); that is asserted too.
 #[test]
 fn mlsm_elastodynamics_is_stable_and_conserves_energy() {
-    let navier = |p: &Problem| mlsm::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()));
+    let navier = |p: &Problem| mlsm::models::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()));
     let total = |e: &[f64; 4]| e[1] + e[2] + e[3];
     for integrator in ["verlet", "rk4"] {
         let p = scene("steel_plate_dynamic", &[("nodes.spacing", f(0.02)), ("dynamics.integrator", s(integrator))]);

@@ -9,11 +9,12 @@
 mod common;
 
 use common::*;
-use mlsm::exact::{ExactSolution, Polynomial};
-use mlsm::peridynamics::solve::Discretisation;
-use mlsm::peridynamics::{Kernel, Micromodulus};
-use mlsm::pipeline::{Silent, StageTimer};
-use mlsm::problem::Problem;
+use mlsm::physics::exact::{ExactSolution, Polynomial};
+use mlsm::models::peridynamics::solve::Discretisation;
+use mlsm::models::peridynamics::{Kernel, Micromodulus};
+use mlsm::parallel::petsc::World;
+use mlsm::stage::{Silent, StageTimer};
+use mlsm::scene::problem::Problem;
 
 const RULES: [&str; 7] = ["full-area", "partial-area", "gauss2x2", "triangle-p1", "triangle-p2", "triangle-p3", "ac"];
 
@@ -39,7 +40,7 @@ fn cubic_scene(rule: &str, kernel: Option<f64>, horizon: f64) -> Problem {
 
 fn discretise(p: &Problem) -> Discretisation {
     let exact = p.case.exact_solution();
-    Discretisation::new(&p.case, p.peridynamics.as_ref().unwrap(), exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap()
+    Discretisation::new(&p.case, p.model.peridynamics().unwrap(), exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap()
 }
 
 /// `u` evaluated at every node (free and constrained).
@@ -162,7 +163,7 @@ fn cubic_fields_are_reproduced_by_the_compatible_weights() {
 #[test]
 fn cubic_solution_is_exact_with_the_compatible_weights() {
     let p = cubic_scene("ac", None, 0.1);
-    let sol = mlsm::peridynamics::solve(&p.case, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
+    let sol = mlsm::models::peridynamics::solve(&p.case, p.model.peridynamics().unwrap(), &Silent).unwrap();
     let (whole, interior) = sol.errors.unwrap();
     eprintln!("cubic: e_inf {:.2e}, interior {:.2e}", whole.e_inf_u, interior.unwrap().e_inf_u);
     assert!(whole.e_inf_u < 1e-12, "{}", whole.e_inf_u);
@@ -178,7 +179,7 @@ fn continuum_operator_of_calibrated_kernels_is_navier_on_cubics() {
     use std::num::NonZeroUsize;
     let p = cubic_scene("ac", None, 0.1);
     let poly = Polynomial::new(UX, UY, p.case.material).unwrap();
-    let moment = mlsm::peridynamics::kernel::fourth_moment(&p.case.material);
+    let moment = mlsm::models::peridynamics::kernel::fourth_moment(&p.case.material);
     let x = [0.37, 0.61];
     let r_rule = GaussLegendre::new(NonZeroUsize::new(20).unwrap());
     let t_rule = GaussLegendre::new(NonZeroUsize::new(64).unwrap());
@@ -283,11 +284,11 @@ fn local_limit(rule: &str) -> (f64, Vec<f64>) {
                 "pd_manufactured",
                 &[("peridynamics.horizon", f(delta)), ("peridynamics.quadrature", s(rule)), ("peridynamics.solver.kind", s("lu"))],
             );
-            let sol = mlsm::peridynamics::solve(&p.case, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
+            let sol = mlsm::models::peridynamics::solve(&p.case, p.model.peridynamics().unwrap(), &Silent).unwrap();
             sol.errors.unwrap().0.e_inf_u
         })
         .collect();
-    let order = mlsm::post::observed_order(&deltas, &errors).unwrap();
+    let order = mlsm::quality::post::observed_order(&deltas, &errors).unwrap();
     eprintln!("{rule}: e_inf {errors:?} -> order {order:.2}");
     (order, errors)
 }
@@ -321,13 +322,13 @@ fn free_edges_converge_at_first_order() {
         .iter()
         .map(|&delta| {
             let p = scene("pd_tension", &[("peridynamics.horizon", f(delta))]);
-            let sol = mlsm::peridynamics::solve(&p.case, p.peridynamics.as_ref().unwrap(), &Silent).unwrap();
+            let sol = mlsm::models::peridynamics::solve(&p.case, p.model.peridynamics().unwrap(), &Silent).unwrap();
             let (w, i) = sol.errors.unwrap();
             (w.rel_l2_u, i.unwrap().e_inf_u)
         })
         .collect();
     let l2: Vec<f64> = errors.iter().map(|e| e.0).collect();
-    let order = mlsm::post::observed_order(&deltas, &l2).unwrap();
+    let order = mlsm::quality::post::observed_order(&deltas, &l2).unwrap();
     eprintln!("pd_tension: {errors:?} -> whole-plate L2 order {order:.2}");
     assert!(order > 0.8, "{order}");
     assert!(errors[2].1 < errors[0].1 / 2.0, "interior error must decrease: {errors:?}");
@@ -343,7 +344,7 @@ fn owned_rows_of_two_ranks_make_the_whole_stiffness() {
     let d = discretise(&p);
     let body: Vec<[f64; 2]> = (0..d.nodes.free).map(|i| [1.0 + i as f64, -0.5 * i as f64]).collect();
     let (whole, load) = d.bonds().stiffness(&body).unwrap();
-    let owner = mlsm::linalg::partition::morton_owners(&d.nodes.positions[..d.nodes.free], 2);
+    let owner = mlsm::parallel::partition::morton_owners(&d.nodes.positions[..d.nodes.free], 2);
     let mut entries = Vec::new();
     let mut joined = vec![0.0; load.len()];
     for rank in 0..2 {
@@ -379,18 +380,18 @@ fn a_rank_builds_the_rows_of_its_nodes_from_its_halo() {
     for (rule, correction) in [("ac", "volume"), ("ac", "none"), ("full-area", "volume"), ("partial-area", "none"), ("gauss2x2", "volume")]
     {
         let mut p = cubic_scene(rule, None, 0.1);
-        p.peridynamics.as_mut().unwrap().correction = if correction == "volume" {
-            mlsm::peridynamics::SurfaceCorrection::Volume
+        p.model.peridynamics_mut().unwrap().correction = if correction == "volume" {
+            mlsm::models::peridynamics::SurfaceCorrection::Volume
         } else {
-            mlsm::peridynamics::SurfaceCorrection::None
+            mlsm::models::peridynamics::SurfaceCorrection::None
         };
         let whole = discretise(&p);
         let body: Vec<[f64; 2]> = (0..whole.nodes.free).map(|i| [1.0 + i as f64, -0.5 * i as f64]).collect();
         let exact = p.case.exact_solution();
         let (mut bonds, mut complete, mut compatible) = (0, 0, 0);
         for rank in 0..2 {
-            let params = p.peridynamics.as_ref().unwrap();
-            let part = Discretisation::on_rank(&p.case, params, exact.as_deref(), &mut StageTimer::new(&Silent), Some((2, rank))).unwrap();
+            let params = p.model.peridynamics().unwrap();
+            let part = Discretisation::on_rank(&p.case, params, exact.as_deref(), &mut StageTimer::new(&Silent), Some(World { rank, size: 2 })).unwrap();
             let own = |i: usize| part.owns(i);
             let (a, a_load) = part.bonds().stiffness_rows(&body, own).unwrap();
             let (b, b_load) = whole.bonds().stiffness_rows(&body, own).unwrap();

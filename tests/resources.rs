@@ -1,4 +1,4 @@
-//! The memory estimate made before a run (`mlsm::resources`) against the peak the
+//! The memory estimate made before a run (`mlsm::models::resources`) against the peak the
 //! run measured (`summary.json`: `estimated_peak_memory_bytes`, `peak_memory_bytes`,
 //! Linux VmHWM), and the refusals it drives. Each run is its own process, so each
 //! peak is that run's.

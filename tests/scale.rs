@@ -4,9 +4,9 @@
 //! round-off), and the same relative errors up to the round-off sensitivity of the
 //! discrete problem.
 
-use mlsm::navier::Discretisation;
-use mlsm::pipeline::{Silent, StageTimer};
-use mlsm::problem::Problem;
+use mlsm::models::navier::Discretisation;
+use mlsm::stage::{Silent, StageTimer};
+use mlsm::scene::problem::Problem;
 use std::path::Path;
 
 /// `problems/<name>.toml` with `nodes.fill = fill` and every length multiplied by `factor`.
@@ -52,7 +52,7 @@ fn scaled(name: &str, fill: &str, factor: f64) -> Problem {
 fn run(p: &Problem) -> (Discretisation, f64, f64) {
     let exact = p.case.exact_solution();
     let disc = Discretisation::new(&p.case, &p.navier, exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap();
-    let sol = mlsm::navier::solve(&p.case, &p.navier, &Silent).unwrap();
+    let sol = mlsm::models::navier::solve(&p.case, &p.navier, &Silent).unwrap();
     let e = sol.errors.unwrap();
     (disc, e.e_inf_u, e.e_inf_sigma.unwrap())
 }

@@ -12,8 +12,8 @@
 //! symmetric family, which the Dirichlet collar completes), so the semi-discrete
 //! systems reduce to `u'' = f / rho` and the error left is the time integration's.
 
-use mlsm::pipeline::{RunError, Silent};
-use mlsm::problem::Problem;
+use mlsm::stage::{RunError, Silent};
+use mlsm::scene::problem::Problem;
 use std::path::Path;
 
 const A: f64 = 1e-3;
@@ -121,7 +121,7 @@ fn mlsm_follows_time_dependent_tractions_displacements_and_body_force() {
         let (mut eu, mut ev) = ([0.0; 2], [0.0; 2]);
         for (k, dt) in STEPS.into_iter().enumerate() {
             let p = scene(nu, true, integrator, false, dt);
-            let sim = mlsm::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
+            let sim = mlsm::models::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
             let t = sim.energies.last().unwrap()[0];
             assert!((t - 1.0).abs() < 1e-12, "{t}");
             eu[k] = error(&sim.positions, &sim.u, t, nu);
@@ -152,7 +152,7 @@ fn frozen_time_differs() {
     for c in &mut frozen.case.conditions {
         c.value = c.value.at_time(0.0);
     }
-    let sim = mlsm::navier::simulate(&frozen.case, &frozen.navier, frozen.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
+    let sim = mlsm::models::navier::simulate(&frozen.case, &frozen.navier, frozen.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
     let e = error(&sim.positions, &sim.u, 1.0, nu);
     eprintln!("MLSM with loads frozen at t = 0: max |u - u_exact| / a = {e:.2e}");
     assert!(e > 0.1, "{e}");
@@ -170,7 +170,7 @@ fn peridynamics_follows_a_moving_collar_and_body_force() {
     for (k, dt) in STEPS.into_iter().enumerate() {
         let p = scene(nu, false, "rk4", true, dt);
         let sim =
-            mlsm::peridynamics::simulate(&p.case, p.peridynamics.as_ref().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()))
+            mlsm::models::peridynamics::simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()))
                 .unwrap();
         let nodes = &sim.discretisation.nodes;
         let t = sim.energies.last().unwrap()[0];
@@ -193,11 +193,11 @@ fn a_load_that_blows_up_in_time_names_its_formula() {
     assert!(text.contains("sqrt(1e-4 - t)"));
     for model in ["navier", "peridynamics"] {
         let mut q = Problem::from_str(&text, Path::new("blowup.toml")).unwrap();
-        q.peridynamics.as_mut().unwrap().horizon = 0.3;
+        q.model.peridynamics_mut().unwrap().horizon = 0.3;
         let dynamics = q.case.dynamics.as_ref().unwrap();
         let err = match model {
-            "navier" => mlsm::navier::simulate(&q.case, &q.navier, dynamics, &Silent, |_| Ok(())).err(),
-            _ => mlsm::peridynamics::simulate(&q.case, q.peridynamics.as_ref().unwrap(), dynamics, &Silent, |_| Ok(())).err(),
+            "navier" => mlsm::models::navier::simulate(&q.case, &q.navier, dynamics, &Silent, |_| Ok(())).err(),
+            _ => mlsm::models::peridynamics::simulate(&q.case, q.model.peridynamics().unwrap(), dynamics, &Silent, |_| Ok(())).err(),
         };
         let err = err.unwrap_or_else(|| panic!("{model}: the run should fail"));
         let message = err.to_string();
@@ -240,10 +240,10 @@ fn the_shipped_pulse_gives_the_plate_the_impulse_of_its_load() {
     let p = Problem::from_str(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
     let (rho, impulse) = (8000.0, 0.3 * 100e6 * 1e-4 / 2.0);
     let dynamics = p.case.dynamics.as_ref().unwrap();
-    let pd = mlsm::peridynamics::simulate(&p.case, p.peridynamics.as_ref().unwrap(), dynamics, &Silent, |_| Ok(())).unwrap();
+    let pd = mlsm::models::peridynamics::simulate(&p.case, p.model.peridynamics().unwrap(), dynamics, &Silent, |_| Ok(())).unwrap();
     let volumes = &pd.discretisation.nodes.volumes;
     let pd_momentum = (0..2).map(|c| pd.v.iter().zip(volumes).map(|(v, w)| rho * w * v[c]).sum::<f64>()).collect::<Vec<_>>();
-    let navier = mlsm::navier::simulate(&p.case, &p.navier, dynamics, &Silent, |_| Ok(())).unwrap();
+    let navier = mlsm::models::navier::simulate(&p.case, &p.navier, dynamics, &Silent, |_| Ok(())).unwrap();
     let areas = mlsm::domain::cells::nodal_areas(&navier.positions, &mlsm::domain::cells::cells_inside(&p.case.domain, &navier.positions));
     let mlsm_momentum = (0..2).map(|c| navier.v.iter().zip(&areas).map(|(v, a)| rho * a * v[c]).sum::<f64>()).collect::<Vec<_>>();
     let rel = |m: &[f64]| ((m[0] - impulse).abs() / impulse, m[1].abs() / impulse);
@@ -273,10 +273,10 @@ fn a_load_faster_than_the_step_resolves_is_warned() {
         };
         let p = Problem::from_str(&text, &path).unwrap();
         let dynamics = p.case.dynamics.as_ref().unwrap();
-        let pd = mlsm::peridynamics::simulate(&p.case, p.peridynamics.as_ref().unwrap(), dynamics, &Silent, |_| Ok(())).unwrap();
+        let pd = mlsm::models::peridynamics::simulate(&p.case, p.model.peridynamics().unwrap(), dynamics, &Silent, |_| Ok(())).unwrap();
         let dt = pd.report.time_step;
-        let pd_spacing = p.peridynamics.map(|pd| pd.horizon / pd.ratio).unwrap();
-        let warning = mlsm::warnings::load_time_resolution(&p.case, pd_spacing, dt, dynamics.end_time, dynamics.integrator, 1e-2);
+        let pd_spacing = p.model.peridynamics().map(|pd| pd.horizon / pd.ratio).unwrap();
+        let warning = mlsm::quality::warnings::load_time_resolution(&p.case, pd_spacing, dt, dynamics.end_time, dynamics.integrator, 1e-2);
         (pd.u, dt, warning)
     };
     let (reference, _, _) = run(Some(6.25e-8));
@@ -310,9 +310,9 @@ fn a_narrow_moving_load_is_read_where_it_acts() {
         assert!(text.contains(&load), "the edit must hit the right edge's load");
         let p = Problem::from_str(&text, &path).unwrap();
         let d = p.case.dynamics.as_ref().unwrap();
-        let pd = p.peridynamics.unwrap();
+        let pd = p.model.peridynamics().copied().unwrap();
         let h = spacing.unwrap_or(pd.horizon / pd.ratio);
-        mlsm::warnings::load_time_resolution(&p.case, h, 7.1e-6, d.end_time, d.integrator, 1e-2)
+        mlsm::quality::warnings::load_time_resolution(&p.case, h, 7.1e-6, d.end_time, d.integrator, 1e-2)
     };
     let fast = check(6.3e4, None).expect("a spot crossing a sample in 9e-7 s is not resolved by 7.1e-6 s steps");
     assert!(fast.message.contains("boundary[1].value"), "{}", fast.message);

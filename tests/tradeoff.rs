@@ -5,8 +5,8 @@
 
 mod common;
 
-use mlsm::problem::preset::Preset;
-use mlsm::problem::Problem;
+use mlsm::scene::problem::preset::Preset;
+use mlsm::scene::problem::Problem;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use mlsm::cli::Cli;
+use mlsm::app::cli::Cli;
 use mlsm::output::read_vtu;
 use std::path::PathBuf;
 
@@ -27,7 +27,7 @@ fn vtu_reads_back_with_expected_arrays() {
     let (_dir, scene_path, out) = run_scene("kirsch", |t| t.replace("spacing = 0.04", "spacing = 0.1"));
 
     // The same run through the library, to compare values.
-    let p = mlsm::problem::Problem::from_file(&scene_path).unwrap();
+    let p = mlsm::scene::problem::Problem::from_file(&scene_path).unwrap();
     let sol = solve(&p);
     let vtu = read_vtu(&out.join("solution.vtu")).unwrap();
     let n = sol.nodes.len();

@@ -3,8 +3,8 @@
 
 use super::number::plain;
 use super::AppError;
-use crate::choice::Choice;
-use crate::problem::Problem;
+use crate::scene::choice::Choice;
+use crate::scene::problem::Problem;
 use std::path::Path;
 
 /// Validate `scene`; unless `quiet`, print its parts and settings.
@@ -28,7 +28,7 @@ fn count(n: usize, word: &str) -> String {
 /// The lines `check` prints about a valid scene.
 fn describe(p: &Problem) -> Vec<String> {
     let mut lines = vec![
-        format!("model: {} (what `mlsm run` solves; --model overrides)", p.model.name()),
+        format!("model: {} (what `mlsm run` solves; --model overrides)", p.model.kind().name()),
         format!("boundary parts: {}", p.case.domain.parts.join(", ")),
     ];
     lines.extend(p.notes.iter().map(|n| format!("note: {n}")));
@@ -51,7 +51,7 @@ fn describe(p: &Problem) -> Vec<String> {
         };
         lines.push(format!("dynamics: density {} kg/m^3, end time {} s, {scheme}, time step {step}", plain(d.density), plain(d.end_time)));
     }
-    if let Some(pd) = &p.peridynamics {
+    if let Some(pd) = p.model.peridynamics() {
         lines.push(format!(
             "peridynamics: horizon {} m, m = {} (node spacing h = {} m), {} per cell, quadrature {}, kernel {}",
             plain(pd.horizon),

@@ -6,15 +6,15 @@ use super::fields::{integer, scalar, vector, write_points_vtu};
 use super::summary::Header;
 use super::terminal::Terminal;
 use super::AppError;
-use crate::choice::Choice;
-use crate::compare::LocalReference;
-use crate::model;
+use crate::scene::choice::Choice;
+use crate::quality::compare::LocalReference;
+use crate::models::dispatch;
 use crate::output::{self, Series, StagedDir};
-use crate::peridynamics::solve::interior_flags;
-use crate::peridynamics::{PdParams, Quadrature};
-use crate::pipeline::{Stage, StageTimings, OUTPUT};
-use crate::post::{masked_errors, observed_order};
-use crate::problem::{Model, Problem};
+use crate::models::peridynamics::solve::interior_flags;
+use crate::models::peridynamics::{PdParams, Quadrature};
+use crate::stage::{Stage, StageTimings, OUTPUT};
+use crate::quality::post::{masked_errors, observed_order};
+use crate::scene::problem::{ModelParams, Problem};
 use serde::Serialize;
 use std::ffi::OsStr;
 use std::path::Path;
@@ -72,7 +72,7 @@ struct Table<'a> {
     reference: String,
     m: f64,
     kernel: String,
-    correction: crate::peridynamics::SurfaceCorrection,
+    correction: crate::models::peridynamics::SurfaceCorrection,
     rows: Vec<Row>,
     orders: Vec<Orders>,
 }
@@ -98,7 +98,7 @@ struct Plan {
 
 /// Every peridynamic run of the comparison, each checked before the first solve.
 fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
-    let Some(base) = p.peridynamics else {
+    let Some(base) = p.model.peridynamics().copied() else {
         return Err(AppError::Usage(format!("{}: compare needs a [peridynamics] table (horizon, quadrature, ...)", p.source.display())));
     };
     let quadratures = quadratures(req, &base)?;
@@ -122,7 +122,7 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
     for &q in &quadratures {
         for &delta in &deltas {
             let params = PdParams { horizon: delta, ratio: m, quadrature: q, ..base };
-            runs.push(Problem { model: Model::Peridynamics, ..p.with_peridynamics(params)? });
+            runs.push(Problem { model: ModelParams::Peridynamics(params), ..p.with_peridynamics(params)? });
         }
     }
     Ok(Plan { quadratures, deltas, m, runs })
@@ -130,10 +130,10 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
 
 /// Solve run `k` and compare it with the reference; writes its .vtu.
 fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference, dir: &Path, term: &Terminal) -> Result<Row, AppError> {
-    let params = run.peridynamics.expect("a peridynamic run");
+    let params = run.model.peridynamics().copied().expect("a peridynamic run");
     let t0 = Instant::now();
     let mark = output::restart_peak();
-    let outcome = model::solve(run, term, |_| Ok(())).map_err(|e| AppError::of_scene(p, e))?;
+    let outcome = dispatch::solve(run, term, |_| Ok(())).map_err(|e| AppError::of_scene(p, e))?;
     let (free, displacement) = (outcome.positions(), outcome.displacement());
     let interior = interior_flags(&p.case.domain, free, params.horizon);
     let local = reference.displacement_at(free)?;
@@ -155,8 +155,8 @@ fn compare_run(p: &Problem, run: &Problem, k: usize, reference: &LocalReference,
         AppError::Usage(format!("delta = {}: no node lies at distance >= delta from the boundary; use smaller horizons", params.horizon))
     })?;
     let bonds = match &outcome {
-        model::Outcome::PdStatic(s) => s.bonds,
-        model::Outcome::PdDynamic(s) => s.discretisation.families.bonds(),
+        dispatch::Outcome::PdStatic(s) => s.bonds,
+        dispatch::Outcome::PdDynamic(s) => s.discretisation.families.bonds(),
         _ => unreachable!("a peridynamic run"),
     };
     Ok(Row {
@@ -211,7 +211,7 @@ fn compare_owns(name: &OsStr) -> bool {
 /// folder that replaces `out` when everything is written.
 pub(super) fn compare(p: &Problem, req: CompareRequest, out: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
     let Plan { quadratures, deltas, m, runs } = planned_runs(p, &req)?;
-    let base = p.peridynamics.expect("checked");
+    let base = p.model.peridynamics().copied().expect("checked");
     let reference_problem = match req.reference_spacing {
         Some(h) if p.case.exact.is_none() => p.with_spacing(h)?,
         _ => p.clone(),
@@ -228,7 +228,7 @@ pub(super) fn compare(p: &Problem, req: CompareRequest, out: &Path, term: &Termi
     timings.record(REFERENCE, t0.elapsed().as_secs_f64());
     let mut rows = Vec::new();
     for (k, run) in runs.iter().enumerate() {
-        let params = run.peridynamics.expect("a peridynamic run");
+        let params = run.model.peridynamics().copied().expect("a peridynamic run");
         if !quiet {
             let (q, d, h) = (params.quadrature.name(), params.horizon, params.spacing());
             eprintln!("run {} of {}: {q} delta = {d:.4e} (h = {h:.4e})", k + 1, runs.len());

@@ -19,18 +19,18 @@
 use super::summary::Header;
 use super::terminal::Terminal;
 use super::{create_dir, AppError};
-use crate::choice::Choice;
+use crate::scene::choice::Choice;
 use crate::domain::Point;
 use crate::mlsm::interpolate::mls_values;
-use crate::navier::{self, EstimateMethod};
+use crate::models::navier::{self, EstimateMethod};
 use crate::output;
-use crate::pipeline::{RunError, Stage, StageTimings, OUTPUT};
-use crate::post::observed_order;
-use crate::post::probe::ProbeQuantity;
-use crate::post::relative_errors;
-use crate::post::richardson::{extrapolate, Extrapolation};
-use crate::problem::Problem;
-use crate::warnings::{displacement_estimate_factor, singular_corners, singular_estimate_note};
+use crate::stage::{RunError, Stage, StageTimings, OUTPUT};
+use crate::quality::post::observed_order;
+use crate::quality::post::probe::ProbeQuantity;
+use crate::quality::post::relative_errors;
+use crate::quality::post::richardson::{extrapolate, Extrapolation};
+use crate::scene::problem::Problem;
+use crate::quality::warnings::{displacement_estimate_factor, singular_corners, singular_estimate_note};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -136,7 +136,7 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
         }
     }
     // Refuse an unaffordable finest level before solving the coarse ones.
-    crate::resources::check(&p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?)?;
+    crate::models::resources::check(&p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?)?;
     create_dir(dir)?;
     let t0 = Instant::now();
     let area = p.case.domain.area_estimate(400);

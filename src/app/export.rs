@@ -15,7 +15,7 @@
 
 use super::{create_dir, AppError};
 use crate::linalg::{relative_residual, SolveReport};
-use crate::navier::solve::LinearSystem;
+use crate::models::navier::solve::LinearSystem;
 use crate::output::{self, ColumnMatrix};
 use serde::Serialize;
 use std::path::Path;

@@ -2,15 +2,15 @@
 //! the writing of a point set with its Delaunay cells.
 
 use super::AppError;
-use crate::case::Case;
+use crate::physics::case::Case;
 use crate::domain::{cells::cells_inside, Domain};
-use crate::elasticity::material::PlaneModel;
-use crate::elasticity::stress::{strain, Gradient, StressField};
-use crate::navier::equations::ComponentEquation;
-use crate::navier::{Estimate, Solution};
+use crate::physics::elasticity::material::PlaneModel;
+use crate::physics::elasticity::stress::{strain, Gradient, StressField};
+use crate::models::navier::equations::ComponentEquation;
+use crate::models::navier::{Estimate, Solution};
 use crate::output::{self, FieldValues, PointField};
-use crate::peridynamics::PdSolution;
-use crate::post::ExactFields;
+use crate::models::peridynamics::PdSolution;
+use crate::quality::post::ExactFields;
 use std::borrow::Cow;
 use std::path::Path;
 

@@ -5,6 +5,7 @@
 //! terminal summary ([`report`]) with its largest values ([`extremes`]), and the
 //! plain numbers of the terminal ([`number`]).
 
+pub mod cli;
 mod check;
 mod compare;
 mod convergence;
@@ -23,10 +24,10 @@ mod target;
 mod terminal;
 mod tradeoff;
 
-use crate::cli::{Cli, Command, ModelArg};
+use crate::app::cli::{Cli, Command, ModelArg};
 use crate::output::OutputError;
-use crate::pipeline::RunError;
-use crate::problem::{Model, Problem, ProblemError};
+use crate::stage::RunError;
+use crate::scene::problem::{Model, Problem, ProblemError};
 use std::path::{Path, PathBuf};
 use terminal::Terminal;
 
@@ -59,11 +60,11 @@ impl AppError {
             RunError::UnstableTimeStep { .. } => "dynamics.time_step".to_string(),
             RunError::BadFormula { field, .. } => field.clone(),
             RunError::Formula { field, reason } => {
-                return AppError::Problem(ProblemError { file: p.source.clone(), field: field.clone(), reason: reason.clone(), kind: crate::problem::ProblemErrorKind::Invalid })
+                return AppError::Problem(ProblemError { file: p.source.clone(), field: field.clone(), reason: reason.clone(), kind: crate::scene::problem::ProblemErrorKind::Invalid })
             }
             _ => return e.into(),
         };
-        AppError::Problem(ProblemError { file: p.source.clone(), field, reason: e.to_string(), kind: crate::problem::ProblemErrorKind::Invalid })
+        AppError::Problem(ProblemError { file: p.source.clone(), field, reason: e.to_string(), kind: crate::scene::problem::ProblemErrorKind::Invalid })
     }
 }
 
@@ -99,14 +100,14 @@ impl AppError {
 /// Run the command of `cli`.
 pub fn run(cli: &Cli) -> Result<(), AppError> {
     let term = Terminal::new(cli.quiet);
-    let launched = crate::petsc::launched_ranks();
+    let launched = crate::parallel::petsc::launched_ranks();
     if launched > 1 && !matches!(cli.command, Command::Run { .. }) {
         return Err(AppError::Usage(format!("mpirun started {launched} ranks: only `mlsm run` runs over MPI")));
     }
     match &cli.command {
         Command::Check { scene } => check::run(scene, cli.quiet),
         Command::Options => {
-            print!("{}", crate::problem::reference::markdown());
+            print!("{}", crate::scene::problem::reference::markdown());
             Ok(())
         }
         Command::Run {

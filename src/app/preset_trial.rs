@@ -12,11 +12,11 @@
 
 use super::request::RunRequest;
 use super::AppError;
-use crate::choice::Choice;
-use crate::navier::{self, EstimateMethod};
-use crate::pipeline::Progress;
-use crate::problem::preset::Preset;
-use crate::problem::{Model, Problem};
+use crate::scene::choice::Choice;
+use crate::models::navier::{self, EstimateMethod};
+use crate::stage::Progress;
+use crate::scene::problem::preset::Preset;
+use crate::scene::problem::{Model, Problem};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -57,15 +57,15 @@ pub(super) fn trial_problem(p: &Problem, req: &RunRequest) -> Result<Option<Prob
     let Some(trial) = p.preset.and_then(Preset::trial) else { return Ok(None) };
     let asked_otherwise = req.spacing.is_some() || req.export_system.is_some() || req.target.is_some();
     let petsc = p.navier.solver.kind.method() == crate::linalg::SolverMethod::Petsc;
-    if p.model != Model::Navier || p.case.dynamics.is_some() || asked_otherwise || petsc {
+    if p.model.kind() != Model::Navier || p.case.dynamics.is_some() || asked_otherwise || petsc {
         return Ok(None);
     }
     let mut t = Problem::from_file_with_preset(&req.scene, Some(trial))?;
-    t.model = Model::Navier;
+    t.model = t.model.running(Model::Navier).expect("the Navier model always runs");
     if !t.navier.estimate.method.static_navier_estimates() {
         t.navier.estimate.method = EstimateMethod::HigherDegree;
     }
-    crate::resources::check(&t)?;
+    crate::models::resources::check(&t)?;
     Ok(Some(t))
 }
 
@@ -80,7 +80,7 @@ pub(super) fn attempt(p: &Problem, trial: Problem, progress: &dyn Progress) -> R
     let norms = solution.estimate.done().map(|e| e.norms);
     // A displacement estimate counts as the `estimate` check counts it: double at
     // singular corners, where its reference is about as wrong as the run.
-    let corners = || crate::warnings::displacement_estimate_factor(&crate::warnings::singular_corners(&trial.case, &solution.nodes));
+    let corners = || crate::quality::warnings::displacement_estimate_factor(&crate::quality::warnings::singular_corners(&trial.case, &solution.nodes));
     let (norm, estimate) = match norms {
         Some(n) => match n.e_inf_sigma {
             Some(s) => ("e_inf_sigma", Some(s)),
@@ -89,7 +89,7 @@ pub(super) fn attempt(p: &Problem, trial: Problem, progress: &dyn Progress) -> R
         None => (if trial.case.outputs.stress { "e_inf_sigma" } else { "e_inf_u" }, None),
     };
     let warned: Vec<&str> =
-        crate::warnings::navier_static(&solution, &trial.navier, &trial.case).warnings.iter().map(|w| w.check).collect();
+        crate::quality::warnings::navier_static(&solution, &trial.navier, &trial.case).warnings.iter().map(|w| w.check).collect();
     let kept = warned.is_empty() && estimate.is_some_and(|e| e <= floor);
     let trial_name = trial.preset.map_or("?", |t| t.name());
     let reason = match (kept, estimate) {

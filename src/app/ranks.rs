@@ -4,16 +4,16 @@
 
 use super::request::RunRequest;
 use super::AppError;
-use crate::choice::Choice;
-use crate::linalg::{Krylov, Preconditioner, SolverKind, SolverParams, GMRES_RESTART};
-use crate::petsc;
-use crate::problem::{Model, Problem};
+use crate::scene::choice::Choice;
+use crate::linalg::{SolverKind, SolverParams};
+use crate::parallel::{launch, petsc};
+use crate::scene::problem::{ModelParams, Problem};
 
 /// The solver of the model `p` runs.
 fn active_solver(p: &mut Problem) -> &mut SolverParams {
-    match (p.model, p.peridynamics.as_mut()) {
-        (Model::Peridynamics, Some(pd)) => &mut pd.solver,
-        _ => &mut p.navier.solver,
+    match &mut p.model {
+        ModelParams::Peridynamics(pd) => &mut pd.solver,
+        ModelParams::Navier { .. } => &mut p.navier.solver,
     }
 }
 
@@ -43,40 +43,14 @@ pub(super) fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<(), AppEr
             return Err(AppError::Usage(format!("{why}: --target-error and --export-system run in one process; run them without mpirun")));
         }
         if world.rank > 0 {
-            silence_this_rank();
+            launch::silence_this_rank();
         }
-        let (kind, note) = match active_solver(p).kind {
-            SolverKind::Lu => {
-                let (tolerance, max_iterations) = (1e-10, 500);
-                let kind = SolverKind::Petsc { krylov: Krylov { preconditioner: Preconditioner::Amg, tolerance, max_iterations }, restart: GMRES_RESTART, direct: true };
-                (kind, "solver.kind = \"lu\": MUMPS's distributed sparse LU in PETSc".to_string())
-            }
-            SolverKind::Auto(Krylov { preconditioner, tolerance, max_iterations }) if preconditioner.petsc_name().is_some() => {
-                // LU while its factors fit (memory only: no fallback follows a failed
-                // PETSc iteration, so the in-process choice by time does not apply).
-                let estimate = crate::resources::of(p);
-                let available = crate::output::available_memory_bytes();
-                let direct = matches!(active_solver(p).kind.resolve(estimate.unknowns, estimate.nonzeros, available).0, SolverKind::Lu);
-                let kind = SolverKind::Petsc { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart: GMRES_RESTART, direct };
-                let what = if direct { "the LU factors fit: MUMPS's distributed sparse LU" } else { "the LU factors do not fit: GMRES" };
-                (kind, format!("auto: {what} ({})", kind.label()))
-            }
-            kind @ SolverKind::Petsc { .. } => (kind, String::new()),
-            SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations })
-            | SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, .. }
-                if preconditioner.petsc_name().is_some() =>
-            {
-                let kind = SolverKind::Petsc { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart: GMRES_RESTART, direct: false };
-                (kind, format!("PETSc's KSP ({}) in place of the in-process Krylov solver", kind.label()))
-            }
-            other => {
-                return Err(AppError::Usage(format!(
-                    "{why}: solver {} has no PETSc counterpart (PETSc has no ILUT); over MPI ranks use \
-                     preconditioner amg, ilu0 or jacobi, or solver.kind = \"lu\"",
-                    other.label()
-                )))
-            }
-        };
+        let kind = active_solver(p).kind;
+        let (kind, note) = launch::solver_on_ranks(kind, || {
+            let estimate = crate::models::resources::of(p);
+            (estimate.unknowns, estimate.nonzeros)
+        })
+        .map_err(|e| AppError::Usage(format!("{why}: {e}")))?;
         active_solver(p).kind = kind;
         if !note.is_empty() {
             p.notes.push(format!("{} MPI ranks; {note}", world.size));
@@ -90,19 +64,4 @@ pub(super) fn start_petsc(p: &mut Problem, req: &RunRequest) -> Result<(), AppEr
         )));
     }
     Ok(())
-}
-
-/// Send this process's stdout and stderr to /dev/null (the ranks above 0 of an MPI
-/// run: rank 0 reports for all).
-fn silence_this_rank() {
-    #[cfg(unix)]
-    if let Ok(null) = std::fs::OpenOptions::new().write(true).open("/dev/null") {
-        use std::os::unix::io::AsRawFd;
-        // SAFETY: dup2 onto the standard descriptors of this process; `null` stays
-        // open until the duplicates exist.
-        unsafe {
-            libc::dup2(null.as_raw_fd(), 1);
-            libc::dup2(null.as_raw_fd(), 2);
-        }
-    }
 }

@@ -5,15 +5,15 @@
 use super::extremes::Extremes;
 use super::number::plain;
 use super::summary::{stability_limit, Dynamic};
-use crate::choice::Choice;
-use crate::dynamics::driver::DynamicReport;
-use crate::navier::Estimate;
-use crate::post::probe::ProbeValue;
-use crate::warnings;
+use crate::scene::choice::Choice;
+use crate::models::dynamics::driver::DynamicReport;
+use crate::models::navier::Estimate;
+use crate::quality::post::probe::ProbeValue;
+use crate::quality::warnings;
 use std::path::Path;
 
 /// The result of a static Navier run.
-pub(super) fn print_navier(sol: &crate::navier::Solution, extremes: Option<&Extremes>) {
+pub(super) fn print_navier(sol: &crate::models::navier::Solution, extremes: Option<&Extremes>) {
     println!("nodes {}  unknowns {} ({})  nonzeros {}", sol.nodes.len(), sol.unknowns, sol.formulation.name(), sol.nonzeros);
     print!("solver {}: {} iterations, relative residual {:.2e}", sol.solver.method, sol.solver.iterations, sol.solver.relative_residual);
     match sol.solver.solver_error {
@@ -42,7 +42,7 @@ pub(super) fn print_navier(sol: &crate::navier::Solution, extremes: Option<&Extr
 }
 
 /// The result of a static peridynamic run.
-pub(super) fn print_pd(sol: &crate::peridynamics::PdSolution, extremes: Option<&Extremes>) {
+pub(super) fn print_pd(sol: &crate::models::peridynamics::PdSolution, extremes: Option<&Extremes>) {
     println!(
         "nodes {} (+{} constrained)  bonds {}  unknowns {}  nonzeros {}",
         sol.nodes.free,
@@ -145,7 +145,7 @@ fn print_probes(probes: &[ProbeValue]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::Integrator;
+    use crate::models::dynamics::Integrator;
 
     fn report(integrator: Integrator, time_step: f64) -> DynamicReport {
         DynamicReport { integrator, time_step, stable_time_step: 6.655e-6, steps: 133, force_evaluations: 1, seconds: 0.1 }

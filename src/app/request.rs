@@ -1,7 +1,7 @@
 //! What `mlsm run` was asked for: the command line's scene and overrides, read once
 //! by [`super`] and handed to the run, the preset trial and the rank start-up.
 
-use crate::problem::Model;
+use crate::scene::problem::Model;
 use crate::tradeoff::target::Target;
 use std::path::PathBuf;
 

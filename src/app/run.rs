@@ -11,17 +11,17 @@ use super::summary::{navier_extremes, pd_extremes, Dynamic, DynamicSummary, Navi
 use super::target::{self, TargetReport};
 use super::terminal::Terminal;
 use super::{default_out, export, AppError};
-use crate::choice::Choice;
-use crate::model::{self, Outcome};
-use crate::navier::estimate::ESTIMATE;
-use crate::navier::Estimate;
+use crate::scene::choice::Choice;
+use crate::models::dispatch::{self, Outcome};
+use crate::models::navier::estimate::ESTIMATE;
+use crate::models::navier::Estimate;
 use crate::output::{self, StagedDir};
-use crate::peridynamics::PdParams;
-use crate::petsc;
-use crate::pipeline::{RunError, OUTPUT};
-use crate::problem::preset::Preset;
-use crate::problem::{Model, Problem};
-use crate::warnings::{self, Checks};
+use crate::models::peridynamics::PdParams;
+use crate::parallel::petsc;
+use crate::stage::{RunError, OUTPUT};
+use crate::scene::problem::preset::Preset;
+use crate::scene::problem::{Model, ModelParams, Problem};
+use crate::quality::warnings::{self, Checks};
 use serde::Serialize;
 use std::ffi::OsStr;
 use std::path::PathBuf;
@@ -44,16 +44,15 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         d.allow_long = req.allow_long;
     }
     if let Some(m) = req.model {
-        p.model = m;
-        if let Some(why) = crate::problem::estimate_mismatch(m, p.case.dynamics.is_some(), p.navier.estimate.method) {
+        p.model = p.model.running(m).ok_or_else(|| {
+            AppError::Usage(format!("{}: the peridynamic model needs a [peridynamics] table", req.scene.display()))
+        })?;
+        if let Some(why) = crate::scene::problem::estimate_mismatch(m, p.case.dynamics.is_some(), p.navier.estimate.method) {
             return Err(AppError::Usage(format!("--model {}: {}: estimate.method: {why}", m.name(), req.scene.display())));
         }
     }
     match p.model {
-        Model::Peridynamics => {
-            let Some(params) = p.peridynamics else {
-                return Err(AppError::Usage(format!("{}: the peridynamic model needs a [peridynamics] table", req.scene.display())));
-            };
+        ModelParams::Peridynamics(params) => {
             if req.spacing.is_some() {
                 return Err(AppError::Usage("--spacing sets the MLSM node spacing; for peridynamics use --horizon (h = delta / m)".into()));
             }
@@ -61,7 +60,7 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
                 p = p.with_peridynamics(PdParams { horizon: d, ..params })?;
             }
         }
-        Model::Navier => {
+        ModelParams::Navier { .. } => {
             if req.horizon.is_some() {
                 return Err(AppError::Usage("--horizon belongs to the peridynamic model (--model peridynamics)".into()));
             }
@@ -71,7 +70,7 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         }
     }
     if req.export_system.is_some() {
-        if p.model != Model::Navier || p.case.dynamics.is_some() {
+        if p.model.kind() != Model::Navier || p.case.dynamics.is_some() {
             return Err(AppError::Usage(
                 "--export-system writes the system of a static Navier run; this run is dynamic or peridynamic".into(),
             ));
@@ -79,7 +78,7 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         p.navier.keep_system = true;
     }
     if let Some(t) = &req.target {
-        if p.model != Model::Navier {
+        if p.model.kind() != Model::Navier {
             return Err(AppError::Usage(
                 "--target-error refines the MLSM nodes of a Navier run; the peridynamic model takes --horizon".into(),
             ));
@@ -89,7 +88,7 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         }
     }
     super::ranks::start_petsc(&mut p, req)?;
-    crate::resources::check(&p)?;
+    crate::models::resources::check(&p)?;
     Ok(p)
 }
 
@@ -125,12 +124,12 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
     let staged = StagedDir::create(&req.out.clone().unwrap_or_else(|| default_out(&p)), run_owns);
     // Over MPI ranks, a rank that cannot write stops them all before the first collective.
     if petsc::any_rank(staged.is_err()) && staged.is_ok() {
-        return Err(AppError::Run(RunError::Solve(crate::linalg::distributed::other_rank_failed())));
+        return Err(AppError::Run(RunError::Solve(crate::parallel::distributed::other_rank_failed())));
     }
     let staged = staged?;
     let dir = staged.path().to_path_buf();
     if !quiet {
-        eprintln!("{}", model::announce(&p));
+        eprintln!("{}", dispatch::announce(&p));
         for n in &p.notes {
             eprintln!("note: {n}");
         }
@@ -156,7 +155,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         trial_report = Some(report);
     }
     let mut series = Series::new(&dir, &p.case.domain);
-    let outcome = model::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
+    let outcome = dispatch::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     // Each branch starts the output stage where its output begins (after the
     // estimate of a peridynamic run, which is timed as its own stage).
     match outcome {
@@ -200,7 +199,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
 /// own stage, before the output stage).
 fn write_pd_static(
     p: &Problem,
-    mut sol: crate::peridynamics::PdSolution,
+    mut sol: crate::models::peridynamics::PdSolution,
     staged: StagedDir,
     t0: Instant,
     req: &RunRequest,
@@ -226,7 +225,7 @@ fn write_pd_static(
 }
 
 /// What a dynamic Navier run reports.
-fn navier_dynamic(sim: &crate::navier::Simulation) -> Dynamic<'_> {
+fn navier_dynamic(sim: &crate::models::navier::Simulation) -> Dynamic<'_> {
     Dynamic {
         nodes: sim.positions.len(),
         report: &sim.report,
@@ -239,7 +238,7 @@ fn navier_dynamic(sim: &crate::navier::Simulation) -> Dynamic<'_> {
 }
 
 /// The extremes of a dynamic run's final state (the time of the last energy row).
-fn final_extremes(positions: &[[f64; 2]], u: &[[f64; 2]], energies: &[crate::dynamics::driver::EnergyRow]) -> Option<Extremes> {
+fn final_extremes(positions: &[[f64; 2]], u: &[[f64; 2]], energies: &[crate::models::dynamics::driver::EnergyRow]) -> Option<Extremes> {
     let t = energies.last().map_or(0.0, |e| e[0]);
     Extremes::of(positions, u, None).map(|e| e.at_time(t))
 }
@@ -260,7 +259,7 @@ impl OutputStage {
     }
 
     /// Record the seconds and the peak so far as the output stage's.
-    fn record(&self, timings: &mut crate::pipeline::StageTimings) {
+    fn record(&self, timings: &mut crate::stage::StageTimings) {
         timings.record(OUTPUT, self.seconds());
         if let Some(bytes) = crate::output::peak_since(self.mark) {
             timings.record_peak(OUTPUT, bytes);
@@ -282,7 +281,7 @@ struct Before<'a> {
 #[allow(clippy::too_many_arguments)]
 fn write_navier_static(
     p: &Problem,
-    mut sol: crate::navier::Solution,
+    mut sol: crate::models::navier::Solution,
     staged: StagedDir,
     t0: Instant,
     req: &RunRequest,
@@ -355,7 +354,10 @@ fn write_dynamic<M: Serialize>(
 ) -> Result<(), AppError> {
     let threshold = p.navier.estimate.threshold;
     // A peridynamic run's horizon (its estimate is a model difference) and node spacing.
-    let peridynamics = p.peridynamics.filter(|_| p.model == Model::Peridynamics);
+    let peridynamics = match p.model {
+        ModelParams::Peridynamics(pd) => Some(pd),
+        ModelParams::Navier { .. } => None,
+    };
     let horizon = peridynamics.map(|pd| pd.horizon);
     let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, horizon);
     if let Some(dynamics) = &p.case.dynamics {
@@ -377,7 +379,7 @@ fn write_dynamic<M: Serialize>(
 }
 
 /// A peridynamic run's fields for its estimate: `((displacement, stress), history)`.
-type PdFields<'a> = ((&'a [[f64; 2]], Option<&'a crate::elasticity::stress::StressField>), &'a [(f64, Vec<[f64; 2]>)]);
+type PdFields<'a> = ((&'a [[f64; 2]], Option<&'a crate::physics::elasticity::stress::StressField>), &'a [(f64, Vec<[f64; 2]>)]);
 
 /// The `local-model` estimate of a peridynamic run whose free nodes `positions` carry
 /// `displacement` (and `stress`; a dynamic run's kept `history`), timed as the
@@ -386,14 +388,14 @@ fn peridynamics_estimate(
     p: &Problem,
     positions: &[crate::domain::Point],
     (fields, history): PdFields,
-    timings: &mut crate::pipeline::StageTimings,
+    timings: &mut crate::stage::StageTimings,
     term: &Terminal,
 ) -> Estimate {
     if !p.navier.estimate.method.peridynamics_estimates() {
         return Estimate::Off;
     }
     let t = Instant::now();
-    let estimate = crate::compare::estimate::local_model(p, positions, fields, history);
+    let estimate = crate::quality::compare::estimate::local_model(p, positions, fields, history);
     let seconds = t.elapsed().as_secs_f64();
     timings.record(ESTIMATE, seconds);
     term.line(ESTIMATE, seconds, &estimate.note());

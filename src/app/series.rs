@@ -7,8 +7,8 @@
 use super::fields::{estimate_fields, vector};
 use super::AppError;
 use crate::domain::{cells::cells_inside, Domain};
-use crate::dynamics::driver::{EnergyRow, Snapshot};
-use crate::navier::Estimate;
+use crate::models::dynamics::driver::{EnergyRow, Snapshot};
+use crate::models::navier::Estimate;
 use crate::output::{self, OutputError, PointField};
 use std::path::{Path, PathBuf};
 

@@ -3,22 +3,22 @@
 //! timings keyed by stage), followed by what each kind of run reports.
 
 use super::extremes::Extremes;
-use crate::case::Outputs;
-use crate::choice::Choice;
-use crate::dynamics::driver::{DynamicReport, EnergyRow};
-use crate::dynamics::DynamicsParams;
-use crate::elasticity::material::{Material, PlaneModel};
+use crate::physics::case::Outputs;
+use crate::scene::choice::Choice;
+use crate::models::dynamics::driver::{DynamicReport, EnergyRow};
+use crate::models::dynamics::DynamicsParams;
+use crate::physics::elasticity::material::{Material, PlaneModel};
 use crate::linalg::SolveReport;
 use crate::mlsm::Approximation;
-use crate::navier;
+use crate::models::navier;
 use crate::output;
-use crate::peridynamics::solve::WeightsSummary;
-use crate::peridynamics::{Micromodulus, PdParams, PdSolution};
-use crate::pipeline::{StagePeaks, StageTimings};
-use crate::post::probe::ProbeValue;
-use crate::post::ErrorNorms;
-use crate::problem::Problem;
-use crate::warnings::Checks;
+use crate::models::peridynamics::solve::WeightsSummary;
+use crate::models::peridynamics::{Micromodulus, PdParams, PdSolution};
+use crate::stage::{StagePeaks, StageTimings};
+use crate::quality::post::probe::ProbeValue;
+use crate::quality::post::ErrorNorms;
+use crate::scene::problem::Problem;
+use crate::quality::warnings::Checks;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -57,7 +57,7 @@ impl<'a> Header<'a> {
             seed: p.navier.fill.seed,
             threads: rayon::current_num_threads(),
             peak_memory_bytes: output::peak_memory_bytes(),
-            estimated_peak_memory_bytes: crate::resources::of(p).peak_bytes.round(),
+            estimated_peak_memory_bytes: crate::models::resources::of(p).peak_bytes.round(),
             peak_memory_by_stage_bytes: timings.peaks(),
             timings_s: Timings { stages: timings, total: t0.elapsed().as_secs_f64() },
         }
@@ -234,14 +234,14 @@ pub(super) struct PdDynamicPart {
 }
 
 impl PdDynamicPart {
-    pub(super) fn of(p: &Problem, sim: &crate::peridynamics::Simulation) -> Self {
+    pub(super) fn of(p: &Problem, sim: &crate::models::peridynamics::Simulation) -> Self {
         let disc = &sim.discretisation;
         PdDynamicPart {
             model: "peridynamics",
             constrained_nodes: disc.nodes.constrained(),
             bonds: disc.bond_count,
             spacing: disc.nodes.spacing,
-            peridynamics: p.peridynamics.expect("peridynamic run"),
+            peridynamics: p.model.peridynamics().copied().expect("peridynamic run"),
             micromodulus: disc.micromodulus,
             bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
         }

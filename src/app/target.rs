@@ -3,12 +3,12 @@
 //! (`target`).
 
 use super::AppError;
-use crate::cli::{RefinementArg, TargetNormArg};
+use crate::app::cli::{RefinementArg, TargetNormArg};
 use crate::output;
-use crate::pipeline::Silent;
-use crate::problem::Problem;
+use crate::stage::Silent;
+use crate::scene::problem::Problem;
 use crate::tradeoff::target::{self, Outcome, Refinement, Step, Stop, Target, TargetNorm, MAX_STEPS};
-use crate::warnings::Warning;
+use crate::quality::warnings::Warning;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Duration;
@@ -159,7 +159,7 @@ pub(super) fn write_csv(dir: &Path, report: &TargetReport) -> Result<(), AppErro
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::post::ErrorNorms;
+    use crate::quality::post::ErrorNorms;
 
     fn step(nodes: usize, estimate: f64) -> Step {
         let norms = ErrorNorms { e_inf_u: estimate, e_inf_sigma: None, rel_l2_u: estimate, rel_l2_sigma: None };

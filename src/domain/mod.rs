@@ -15,7 +15,7 @@ pub mod ghost;
 pub mod neighbors;
 pub mod shape;
 
-use crate::choice::choice;
+use crate::scene::choice::choice;
 pub use boundary::BoundarySample;
 pub use density::{Refinement, SpacingField, SpacingSamples};
 pub use shape::{CsgOp, Domain, Point, Primitive, PrimitiveKind, Region};

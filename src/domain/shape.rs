@@ -8,7 +8,7 @@
 //! boundary part (rectangle: `bottom`, `right`, `top`, `left`; disc: its `name`;
 //! polygon: one name per edge), which boundary conditions refer to.
 
-use crate::choice::choice;
+use crate::scene::choice::choice;
 
 /// A point or vector in the plane.
 pub type Point = [f64; 2];

@@ -29,7 +29,6 @@ pub mod bicgstab;
 pub mod blocks;
 pub mod border;
 pub mod csr;
-pub mod distributed;
 pub mod gmres;
 pub mod ilut;
 pub mod inverse;
@@ -40,7 +39,6 @@ mod methods;
 pub mod near_null;
 pub mod orthogonal;
 pub mod params;
-pub mod partition;
 pub mod precond;
 pub mod report;
 pub mod row_assembly;
@@ -228,11 +226,7 @@ pub(crate) fn solve_with_memory(
     let (unknowns, nonzeros) = (a.nrows() as f64, a.nnz() as f64);
     let SolverChoice { primary: kind, fallback, reason: choice } = params.kind.choose(unknowns, nonzeros, saddle_point.is_some(), available);
     if let SolverKind::Petsc { .. } = kind {
-        let (per_point, owner, points) = match layout {
-            Some(l) => (l.per_node, partition::morton_owners(l.positions, crate::petsc::world().size), l.positions.to_vec()),
-            None => (1, partition::block_owners(a.nrows(), crate::petsc::world().size), Vec::new()),
-        };
-        return distributed::solve_replicated(&a, b, owner, per_point, &points, params);
+        return Err(SolveError::Petsc { detail: "PETSc solves over MPI ranks go through `parallel::solve_nodal`".into() });
     }
     let n = a.nrows();
     if a.ncols() != n {

@@ -1,7 +1,7 @@
 //! What a solve is asked to do: the solver, its preconditioner and settings, and
 //! their names in a scene file.
 
-use crate::choice::choice;
+use crate::scene::choice::choice;
 
 /// Preconditioner `M ≈ A` for BiCGSTAB, applied on the right
 /// (`A M⁻¹ y = b`, `x = M⁻¹ y`).

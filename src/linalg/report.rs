@@ -1,6 +1,5 @@
 //! What a solve reports: [`SolveReport`] on success, [`SolveError`] on failure.
 
-use super::distributed;
 #[cfg(doc)]
 use super::{assemble, solve};
 
@@ -47,7 +46,7 @@ pub struct SolveReport {
     pub solver_error: Option<f64>,
     /// Rows, entries, halo and stage times of each MPI rank (PETSc runs only).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub ranks: Option<distributed::RankReport>,
+    pub ranks: Option<RankReport>,
 }
 
 /// Why [`solve`] or [`assemble`] failed. Messages are plain language and say
@@ -184,4 +183,20 @@ impl SolveError {
             _ => self,
         }
     }
+}
+
+/// What each rank holds and sends, gathered on every rank (in `summary.json`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RankReport {
+    /// Number of ranks.
+    pub ranks: usize,
+    /// Rows owned by each rank.
+    pub rows: Vec<usize>,
+    /// Matrix entries of each rank's rows.
+    pub nonzeros: Vec<usize>,
+    /// Distinct unknowns of other ranks that each rank's rows read: the doubles it
+    /// receives per matrix-vector product.
+    pub halo_unknowns: Vec<usize>,
+    /// Seconds per stage on each rank (filled in by the model at the end of the run).
+    pub stage_seconds: Vec<Vec<(String, f64)>>,
 }

@@ -135,7 +135,7 @@ pub fn assemble(t: &Triplets) -> Result<SparseMatrix, SolveError> {
 /// by index (stable: duplicates summed in the order they were written) and compacted
 /// in place. Returns the segment pointers, indices and values; segments must be
 /// `< segments`.
-pub(super) fn compress<I: Ord + Copy + Default>(
+pub(crate) fn compress<I: Ord + Copy + Default>(
     segments: usize,
     entries: impl Iterator<Item = (usize, I, f64)> + Clone,
 ) -> (Vec<usize>, Vec<I>, Vec<f64>) {

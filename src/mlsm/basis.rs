@@ -18,7 +18,7 @@
 
 use super::ops::Op;
 use super::radial::Radial;
-use crate::choice::choice;
+use crate::scene::choice::choice;
 use serde::Serialize;
 
 /// Basis of the local fit.

@@ -5,7 +5,7 @@
 
 use super::front::dominates;
 use super::variant::Setting;
-pub use crate::problem::preset::significant;
+pub use crate::scene::problem::preset::significant;
 
 /// The ladder starts at this multiple of the scene's spacing (1/16 of its nodes)...
 pub const LADDER_START: f64 = 4.0;

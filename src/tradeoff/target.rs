@@ -3,7 +3,7 @@
 //! (time budget, memory, node count, a stalled estimate, [`MAX_STEPS`]) ends the loop.
 //!
 //! Each step solves the static Navier problem on the current nodes with the
-//! higher-degree estimate ([`crate::navier::estimate`]); its per-node indicator
+//! higher-degree estimate ([`crate::models::navier::estimate`]); its per-node indicator
 //! `eta_i` (relative to the field's largest value, as the e_inf norms) sets the next
 //! spacing ([`crate::domain::adapt`]):
 //!
@@ -29,10 +29,10 @@
 
 use crate::domain::adapt::{self, GROWTH};
 use crate::domain::{FillKind, SpacingSamples};
-use crate::navier::{self, ErrorEstimate, EstimateMethod};
-use crate::pipeline::{Progress, RunError};
-use crate::post::ErrorNorms;
-use crate::problem::Problem;
+use crate::models::navier::{self, ErrorEstimate, EstimateMethod};
+use crate::stage::{Progress, RunError};
+use crate::quality::post::ErrorNorms;
+use crate::scene::problem::Problem;
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -232,7 +232,7 @@ fn aimed(target: &Target, problem: &Problem, solution: &navier::Solution, notes:
     let factor = if target.norm.of_stress() {
         1.0
     } else {
-        crate::warnings::displacement_estimate_factor(&crate::warnings::singular_corners(&problem.case, &solution.nodes))
+        crate::quality::warnings::displacement_estimate_factor(&crate::quality::warnings::singular_corners(&problem.case, &solution.nodes))
     };
     if factor != 1.0 {
         notes.push(format!(
@@ -392,13 +392,13 @@ fn next_problem(
         }
     };
     let next = p.with_fill(fill).map_err(|e| e.reason)?;
-    let memory = crate::resources::check(&next).map_err(|e| e.reason)?;
+    let memory = crate::models::resources::check(&next).map_err(|e| e.reason)?;
     Ok((next, memory.nodes))
 }
 
 /// The nodes within [`PINNED_SPACINGS`] local spacings of a singular corner of `p`.
 fn singular_nodes(p: &Problem, sol: &navier::Solution) -> Vec<usize> {
-    let corners = crate::warnings::singular_corners(&p.case, &sol.nodes);
+    let corners = crate::quality::warnings::singular_corners(&p.case, &sol.nodes);
     let nodes = &sol.nodes;
     (0..nodes.len())
         .filter(|&i| {

@@ -2,8 +2,8 @@
 //! approximation, solver and node spacing replaced, so that every configuration run is
 //! a complete scene a user can run again, and its changes a snippet they can paste.
 
-use crate::problem::preset::significant;
-use crate::problem::{Problem, ProblemError};
+use crate::scene::problem::preset::significant;
+use crate::scene::problem::{Problem, ProblemError};
 use std::path::Path;
 use toml::{Table, Value};
 
@@ -53,7 +53,7 @@ impl Edits {
     /// `text` (a scene) with these changes; a changed basis drops the approximation
     /// keys of the old one (weight, shape, exponent, support).
     pub fn apply(&self, text: &str, path: &Path) -> Result<String, ProblemError> {
-        let bad = |reason: String| ProblemError { file: path.to_path_buf(), field: "(file)".into(), reason, kind: crate::problem::ProblemErrorKind::Invalid };
+        let bad = |reason: String| ProblemError { file: path.to_path_buf(), field: "(file)".into(), reason, kind: crate::scene::problem::ProblemErrorKind::Invalid };
         let mut scene: Table = text.parse().map_err(|e: toml::de::Error| bad(e.message().to_string()))?;
         // The configuration is explicit: a preset of the scene would override it.
         scene.remove("preset");

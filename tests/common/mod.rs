@@ -2,7 +2,7 @@
 //! the same problem definitions as the CLI (problems/*.toml).
 #![allow(dead_code)]
 
-use mlsm::problem::Problem;
+use mlsm::scene::problem::Problem;
 use std::path::Path;
 
 /// Load `problems/<name>.toml`, apply `edits` (dotted key -> TOML value; `None`
@@ -55,8 +55,8 @@ pub fn b(v: bool) -> Option<toml::Value> {
 }
 
 /// Solve a problem silently.
-pub fn solve(p: &Problem) -> mlsm::navier::Solution {
-    mlsm::navier::solve(&p.case, &p.navier, &mlsm::pipeline::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
+pub fn solve(p: &Problem) -> mlsm::models::navier::Solution {
+    mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
 }
 
 /// Errors `(e_inf_u, e_inf_sigma)` of a solved problem with an exact solution.
@@ -75,8 +75,8 @@ pub fn orders(name: &str, spacings: &[f64], extra: &[(&str, Option<toml::Value>)
     let hs: Vec<f64> = rows.iter().map(|r| (1.0 / r.0 as f64).sqrt()).collect();
     let eu: Vec<f64> = rows.iter().map(|r| r.1).collect();
     let es: Vec<f64> = rows.iter().map(|r| r.2).collect();
-    let pu = mlsm::post::observed_order(&hs, &eu).unwrap();
-    let ps = mlsm::post::observed_order(&hs, &es).unwrap();
+    let pu = mlsm::quality::post::observed_order(&hs, &eu).unwrap();
+    let ps = mlsm::quality::post::observed_order(&hs, &es).unwrap();
     eprintln!("{name}: {rows:?} -> order u {pu:.3}, sigma {ps:.3}");
     (pu, ps, rows)
 }

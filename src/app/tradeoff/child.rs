@@ -3,7 +3,7 @@
 
 use super::super::AppError;
 use crate::output::OutputError;
-use crate::warnings::SINGULAR_ESTIMATE_FACTOR;
+use crate::quality::warnings::SINGULAR_ESTIMATE_FACTOR;
 use serde::Serialize;
 use serde_json::Value;
 use std::path::Path;

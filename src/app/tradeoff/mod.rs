@@ -10,11 +10,11 @@ mod report;
 
 use super::AppError;
 use crate::output::{self, StagedDir};
-use crate::problem::{Model, Problem, ProblemError, ProblemErrorKind};
-use crate::resources::{self, MemoryEstimate};
+use crate::scene::problem::{Model, Problem, ProblemError, ProblemErrorKind};
+use crate::models::resources::{self, MemoryEstimate};
 use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
 use crate::tradeoff::variant::{Edits, Setting};
-use crate::warnings::singular_estimate_note;
+use crate::quality::warnings::singular_estimate_note;
 use child::{Ending, Norms};
 use serde::Serialize;
 use std::path::PathBuf;
@@ -168,7 +168,7 @@ fn check_scene(p: &Problem) -> Result<(), AppError> {
     if p.case.dynamics.is_some() {
         return Err(AppError::Usage(format!("{file}: tradeoff sweeps the static solve; remove the [dynamics] table")));
     }
-    if p.model == Model::Peridynamics {
+    if p.model.kind() == Model::Peridynamics {
         return Err(AppError::Usage(format!(
             "{file}: tradeoff sweeps the Navier model; for peridynamics `mlsm compare` prints each horizon's cost next to its error"
         )));
@@ -187,7 +187,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
         file: req.scene.clone(),
         field: "(file)".into(),
         reason: format!("cannot read the scene file: {e}"),
-        kind: crate::problem::ProblemErrorKind::Invalid,
+        kind: crate::scene::problem::ProblemErrorKind::Invalid,
     })?;
     let p = Problem::from_str(&text, &req.scene)?;
     check_scene(&p)?;

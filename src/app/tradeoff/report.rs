@@ -4,7 +4,7 @@
 use super::{Field, Row, Status};
 use crate::app::AppError;
 use crate::output::{self, FrontPanel, OutputError, PointGroup};
-use crate::problem::Problem;
+use crate::scene::problem::Problem;
 use crate::tradeoff::design::Sweep;
 use crate::tradeoff::front::pareto_front;
 use crate::tradeoff::variant::Setting;

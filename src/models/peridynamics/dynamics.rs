@@ -1,0 +1,325 @@
+//! Peridynamic elastodynamics: `rho u_tt = L_h u + b` (linear law) or the nonlinear
+//! bond-stretch law, integrated explicitly from the scene's initial conditions.
+//!
+//! Unknowns are the free nodes' displacements (interleaved x, y); constrained collar
+//! nodes keep their prescribed values. Bond forces, for `eta = u_j - u_i`:
+//!
+//! ```text
+//! linear:        f_ij = c_ij (xi ⊗ xi) eta
+//! bond-stretch:  f_ij = c_ij |xi|^3 s (xi + eta) / |xi + eta|,   s = (|xi + eta| - |xi|) / |xi|
+//! ```
+//!
+//! (the second linearises to the first). Energies (seed 000, definition 4.1.5):
+//! `E_kin = sum_i rho V_i |v_i|^2 / 2`, `E_el = 1/2 sum_i V_i sum_j w_ij` with
+//! `w = c_ij (xi . eta)^2 / 2` (linear) or `c_ij |xi|^4 s^2 / 2`, `E_ext = -sum_i V_i b_i . u_i`.
+//!
+//! Stable step (Silling & Askari 2005, central differences; Gershgorin bound on the
+//! largest eigenvalue of the linear operator):
+//! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
+//! [`crate::models::dynamics::Integrator::stability_factor`].
+
+use super::loads::LoadLayer;
+use super::nodes::PdNodes;
+use super::operator::Bonds;
+use super::solve::Discretisation;
+use super::{BondForce, PdParams};
+use crate::physics::case::Case;
+use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::models::dynamics::history::TimeSamples;
+use crate::models::dynamics::{DynamicsParams, SecondOrderSystem, State};
+use crate::physics::elasticity::conditions::Value;
+use crate::physics::elasticity::dofs::DofMap;
+use crate::physics::exact::{self, ExactSolution};
+use crate::stage::{Progress, RunError, StageTimer, StageTimings};
+use rayon::prelude::*;
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+
+/// The semi-discrete peridynamic system of one discretisation.
+pub struct PdDynamics<'a> {
+    /// Bonds and their coefficients.
+    pub bonds: Bonds<'a>,
+    /// Body force density at the free nodes (tractions included) at t = 0.
+    pub body_force: &'a [[f64; 2]],
+    /// Mass density.
+    pub density: f64,
+    /// Force law.
+    pub force: BondForce,
+    /// The loads at any time, when a load depends on time.
+    pub varying: Option<VaryingLoads<'a>>,
+}
+
+/// Loads that depend on time: the body force densities of the free nodes and the
+/// prescribed displacements of the collar, evaluated at every force evaluation.
+pub struct VaryingLoads<'a> {
+    /// The case (body force, boundary conditions).
+    pub case: &'a Case,
+    /// Where the tractions act.
+    pub layer: &'a LoadLayer,
+    /// The exact solution, for `"exact"` values.
+    pub exact: Option<&'a dyn ExactSolution>,
+}
+
+/// The loads of one instant: body force density of the free nodes, displacement of
+/// the collar nodes (borrowed when the loads are fixed).
+struct Instant<'a> {
+    body_force: Cow<'a, [[f64; 2]]>,
+    prescribed: Cow<'a, [[f64; 2]]>,
+}
+
+impl VaryingLoads<'_> {
+    /// The loads at time `t`, or the first formula that is not finite where it is used.
+    fn at(&self, nodes: &PdNodes, t: f64) -> Result<Instant<'static>, RunError> {
+        let loads = self.case.loads_at(t);
+        // The formula that fails at the node; else (a traction read near the node, an
+        // exact value) the node itself.
+        let bad = |node: usize| {
+            let p = nodes.positions[node];
+            loads.non_finite_at(p, t).unwrap_or(RunError::not_finite_at(node, p))
+        };
+        let body_force = self.layer.forces(&loads.body_force, &loads.conditions, self.exact, nodes).map_err(|e| match e {
+            RunError::NotFinite { node, .. } => bad(node),
+            other => other,
+        })?;
+        let collar = &nodes.positions[nodes.free..];
+        let prescribed: Vec<[f64; 2]> = collar
+            .par_iter()
+            .zip(&nodes.collar_part)
+            .map(|(&p, &part)| exact::value(&loads.conditions[part].value, p, self.exact, |e| e.displacement(p)))
+            .collect();
+        match prescribed.iter().position(|u| !u[0].is_finite() || !u[1].is_finite()) {
+            Some(k) => Err(bad(nodes.free + k)),
+            None => Ok(Instant { body_force: Cow::Owned(body_force), prescribed: Cow::Owned(prescribed) }),
+        }
+    }
+}
+
+impl PdDynamics<'_> {
+    fn nodes(&self) -> &PdNodes {
+        self.bonds.nodes
+    }
+
+    fn dofs(&self) -> DofMap {
+        self.nodes().dofs()
+    }
+
+    /// The loads at time `t`: the fixed ones, or those of [`VaryingLoads`] (NaN where a
+    /// formula is not finite: the driver stops and asks [`SecondOrderSystem::explain`]).
+    fn loads(&self, t: f64) -> Instant<'_> {
+        let nodes = self.nodes();
+        match &self.varying {
+            None => Instant { body_force: Cow::Borrowed(self.body_force), prescribed: Cow::Borrowed(&nodes.prescribed) },
+            Some(v) => v.at(nodes, t).unwrap_or_else(|_| Instant {
+                body_force: Cow::Owned(vec![[f64::NAN; 2]; nodes.free]),
+                prescribed: Cow::Owned(vec![[f64::NAN; 2]; nodes.constrained()]),
+            }),
+        }
+    }
+
+    /// Displacement of node `j` (free: from `u`, constrained: prescribed at the instant
+    /// of `loads`).
+    fn displacement(&self, u: &[f64], loads: &Instant, j: usize) -> [f64; 2] {
+        let free = self.nodes().free;
+        if j < free {
+            self.dofs().displacement(u, j)
+        } else {
+            loads.prescribed[j - free]
+        }
+    }
+
+    /// Bond force density at free node `i` (the linear law is [`Bonds::force_at`]).
+    fn force(&self, u: &[f64], loads: &Instant, i: usize) -> [f64; 2] {
+        match self.force {
+            BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, loads, j)),
+            BondForce::BondStretch => {
+                let mut f = [0.0, 0.0];
+                self.stretches(u, loads, i, |c, r, s, y, ry| {
+                    let k = c * r * r * r * s / ry;
+                    f[0] += k * y[0];
+                    f[1] += k * y[1];
+                });
+                f
+            }
+        }
+    }
+
+    /// Sum of the micropotentials `w_ij` of the bonds of free node `i` (module docs).
+    fn micropotential(&self, u: &[f64], loads: &Instant, i: usize) -> f64 {
+        let mut w = 0.0;
+        match self.force {
+            BondForce::Linear => {
+                let x = &self.nodes().positions;
+                let ui = self.displacement(u, loads, i);
+                for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
+                    let j = j as usize;
+                    let uj = self.displacement(u, loads, j);
+                    let p = (x[j][0] - x[i][0]) * (uj[0] - ui[0]) + (x[j][1] - x[i][1]) * (uj[1] - ui[1]);
+                    w += 0.5 * self.bonds.coefficients[b] * p * p;
+                }
+            }
+            BondForce::BondStretch => self.stretches(u, loads, i, |c, r, s, _, _| w += 0.5 * c * r.powi(4) * s * s),
+        }
+        w
+    }
+
+    /// For every bond of free node `i`: `(c_ij, |xi|, stretch s, xi + eta, |xi + eta|)`.
+    fn stretches(&self, u: &[f64], loads: &Instant, i: usize, mut visit: impl FnMut(f64, f64, f64, [f64; 2], f64)) {
+        let x = &self.nodes().positions;
+        let ui = self.displacement(u, loads, i);
+        for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
+            let j = j as usize;
+            let uj = self.displacement(u, loads, j);
+            let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
+            let r = xi[0].hypot(xi[1]);
+            let y = [xi[0] + uj[0] - ui[0], xi[1] + uj[1] - ui[1]];
+            let ry = y[0].hypot(y[1]);
+            visit(self.bonds.coefficients[b], r, (ry - r) / r, y, ry);
+        }
+    }
+
+    /// Largest stable time step of the central-difference schemes (module docs).
+    pub fn stable_time_step(&self) -> f64 {
+        let x = &self.nodes().positions;
+        let families = self.bonds.families;
+        let worst = (0..self.nodes().free)
+            .into_par_iter()
+            .map(|i| {
+                families
+                    .range(i)
+                    .zip(families.of(i))
+                    .map(|(b, &j)| {
+                        let j = j as usize;
+                        self.bonds.coefficients[b].abs() * ((x[j][0] - x[i][0]).powi(2) + (x[j][1] - x[i][1]).powi(2))
+                    })
+                    .sum::<f64>()
+            })
+            .reduce(|| 0.0, f64::max);
+        (2.0 * self.density / worst).sqrt()
+    }
+
+    /// `(E_kin, E_el, E_ext)` of a state at time `t` (`E_ext` with the loads of `t`).
+    pub fn energies(&self, t: f64, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
+        let (nodes, dofs) = (self.nodes(), self.dofs());
+        let loads = self.loads(t);
+        (0..nodes.free)
+            .into_par_iter()
+            .map(|i| {
+                let vol = nodes.volumes[i];
+                let (ui, vi) = (dofs.displacement(u, i), dofs.displacement(v, i));
+                let kin = 0.5 * self.density * vol * (vi[0].powi(2) + vi[1].powi(2));
+                let w = self.micropotential(u, &loads, i);
+                let b = loads.body_force[i];
+                (kin, 0.5 * vol * w, -vol * (b[0] * ui[0] + b[1] * ui[1]))
+            })
+            .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
+    }
+}
+
+impl SecondOrderSystem for PdDynamics<'_> {
+    fn len(&self) -> usize {
+        self.dofs().len()
+    }
+
+    fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]) {
+        let loads = self.loads(t);
+        a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
+            let f = self.force(u, &loads, i);
+            let b = loads.body_force[i];
+            a[0] = (f[0] + b[0]) / self.density;
+            a[1] = (f[1] + b[1]) / self.density;
+        });
+    }
+
+    fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
+        let v = self.varying.as_ref()?;
+        [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(self.nodes(), t).err())
+    }
+}
+
+/// The result of a time-dependent peridynamic run.
+pub struct Simulation {
+    /// The discretisation (nodes, families, weights).
+    pub discretisation: Discretisation,
+    /// Final displacement of the free nodes.
+    pub u: Vec<[f64; 2]>,
+    /// Final velocity of the free nodes.
+    pub v: Vec<[f64; 2]>,
+    /// Integration report.
+    pub report: DynamicReport,
+    /// Energy history.
+    pub energies: Vec<EnergyRow>,
+    /// Bond updates per second per thread in the time loop.
+    pub bond_updates_per_second_per_thread: f64,
+    /// The states kept for an error estimate, `(t, displacement of the free nodes)`
+    /// ([`crate::models::dynamics::driver::history_steps`]); empty unless asked for.
+    pub history: Vec<(f64, Vec<[f64; 2]>)>,
+    /// Stage timings.
+    pub timings: StageTimings,
+}
+
+/// Run `case` (with `dynamics`) with peridynamics `params`, calling `snapshot` (free
+/// nodes) at the snapshot steps.
+pub fn simulate(
+    case: &Case,
+    params: &PdParams,
+    dynamics: &DynamicsParams,
+    progress: &dyn Progress,
+    snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
+    simulate_sampled(case, params, dynamics, progress, false, snapshot)
+}
+
+/// [`simulate`], keeping the states of its history for an error estimate when
+/// `keep_history`.
+pub fn simulate_sampled(
+    case: &Case,
+    params: &PdParams,
+    dynamics: &DynamicsParams,
+    progress: &dyn Progress,
+    keep_history: bool,
+    mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
+) -> Result<Simulation, RunError> {
+    let mut timer = StageTimer::new(progress);
+    let exact = case.exact_solution();
+    let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
+    let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
+    let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes)?;
+    let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
+    let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force, varying };
+    let free = &disc.nodes.positions[..disc.nodes.free];
+    let dofs = disc.nodes.dofs();
+    let flat = |f: &Value| {
+        dofs.from_displacements(|i| f.explicit_at(free[i]).expect("validated: an initial state is a constant or an expression"))
+    };
+    let grid = time_grid(system.stable_time_step(), dynamics)?;
+    let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
+    let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
+    let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
+    let samples = if keep_history { TimeSamples::own(grid.steps, grid.dt) } else { TimeSamples::none() };
+    let mut kept = BTreeMap::new();
+    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
+        let (u, v) = (nodal(&s.u), nodal(&s.v));
+        if is_snapshot(step, grid.steps, dynamics) {
+            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v })?;
+        }
+        if samples.keeps(step) {
+            kept.insert(step, (s.t, u, v));
+        }
+        Ok(())
+    })?;
+    let history = samples.states(&kept);
+    drop(kept);
+    let throughput =
+        report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
+    let (u, v) = (nodal(&state.u), nodal(&state.v));
+    Ok(Simulation {
+        discretisation: disc,
+        u,
+        v,
+        report,
+        energies,
+        bond_updates_per_second_per_thread: throughput,
+        history,
+        timings: timer.finish(),
+    })
+}

@@ -1,0 +1,75 @@
+//! Linear bond-based peridynamics on the same plate (seed 000, chapter 4 and section 5.3).
+//!
+//! The nonlocal operator of the linear model (seed 000, eq. 4.1.3) is
+//!
+//! ```text
+//! (L u)(x) = int_{|xi| < delta} lambda(|xi|) (xi ⊗ xi) (u(x + xi) - u(x)) dA,     -L u = b,
+//! ```
+//!
+//! discretised with the nodes as quadrature points (seed 000, sec. 5.3):
+//! `(L_h u)_i = sum_j c_ij (xi_ij ⊗ xi_ij)(u_j - u_i)`, one scalar `c_ij` per bond.
+//!
+//! Stages of a run: nodes, families, weights ([`solve::FAMILIES`],
+//! [`solve::WEIGHTS`]), assembly, solve, post. Modules: [`params`] (the validated
+//! `[peridynamics]` table), [`nodes`] (quadrature
+//! points of square cells, plus the Dirichlet collar),
+//! [`family`] (bonds within the horizon, k-d tree radius query), [`kernel`]
+//! (calibrated micromodulus), [`weights`] (bond weights of each quadrature rule, the
+//! volume surface correction and the asymptotically compatible weights of
+//! [`compatible`]), [`loads`] (body force and tractions as a boundary-layer body
+//! force), [`operator`] (internal force and stiffness), [`strain`] (nonlocal strain
+//! for output), [`solve`] (the static run) and [`dynamics`] (bond forces, energies,
+//! stable step and the time-dependent run).
+
+pub mod compatible;
+pub mod dynamics;
+pub mod family;
+pub mod kernel;
+pub mod loads;
+pub mod nodes;
+pub mod operator;
+pub mod params;
+pub mod solve;
+pub mod strain;
+pub mod weights;
+
+pub use dynamics::{simulate, simulate_sampled, Simulation};
+pub use kernel::{Kernel, KernelKind, Micromodulus};
+pub use params::{BondForce, PdParams, Quadrature, SurfaceCorrection};
+pub use solve::{solve, Discretisation, PdSolution};
+
+/// A small plate shared by the stage tests of this model.
+#[cfg(test)]
+pub(crate) mod test_case {
+    use super::nodes::{self, Body, PdNodes};
+    use super::{BondForce, Kernel, PdParams, Quadrature, SurfaceCorrection};
+    use crate::domain::Domain;
+    use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
+    use crate::linalg::SolverParams;
+
+    /// The plate `[0, 1] x [0, 0.5]`: left edge clamped, right edge loaded by the
+    /// traction `t`, top and bottom free (parts bottom, right, top, left).
+    pub(crate) fn plate(t: [f64; 2]) -> (Domain, Vec<BoundaryCondition>) {
+        let clamped = BoundaryCondition { components: [ComponentCondition::Displacement; 2], value: Value::Constant([0.0, 0.0]) };
+        let loaded = BoundaryCondition { components: [ComponentCondition::Traction; 2], value: Value::Constant(t) };
+        (Domain::rectangle([0.0, 0.0], [1.0, 0.5]), vec![BoundaryCondition::FREE, loaded, BoundaryCondition::FREE, clamped])
+    }
+
+    /// Horizon `delta`, `m = 3`, the plain kernel and `quadrature`.
+    pub(crate) fn params(delta: f64, quadrature: Quadrature) -> PdParams {
+        PdParams {
+            horizon: delta,
+            ratio: 3.0,
+            kernel: Kernel::Plain,
+            quadrature,
+            correction: SurfaceCorrection::None,
+            solver: SolverParams::lu(),
+            force: BondForce::Linear,
+        }
+    }
+
+    /// The nodes of the plate of [`plate`] for `params`.
+    pub(crate) fn plate_nodes(domain: &Domain, conditions: &[BoundaryCondition], params: &PdParams) -> PdNodes {
+        nodes::generate(&Body::new(domain, conditions, None, params), params)
+    }
+}

@@ -1,0 +1,251 @@
+//! Peridynamic nodes: the quadrature points of a lattice of square cells of side
+//! `h = delta / m` (seed 000, sec. 5.3: "nodes are quadrature points"), aligned with
+//! the lower-left corner of the solid's bounding box.
+//!
+//! A rule point inside the solid (signed distance <= 0) is a free node with volume
+//! `weight * h^2`. The seven-point triangle rule shares vertices and edge midpoints
+//! between cells: a shared point gets the sum of the shares of the cells that hold
+//! material, and a point on the boundary is free with the shares of the inner cells. A rule point outside, within the collar `delta + 0.75 h` of a
+//! boundary part with a displacement condition, is a constrained node: the
+//! Dirichlet volume constraint gives it the prescribed displacement (the constant of
+//! the part, or the exact solution evaluated at the node itself). The extra `0.75 h`
+//! covers the cells that the partial-area rule counts beyond `delta` (up to
+//! `delta + h/sqrt(2)`). Other outside points are dropped (free edges).
+//!
+//! Cells cut by a curved or unaligned boundary keep their points' full weights.
+
+use super::{PdParams, Quadrature};
+use crate::domain::{boundary::discretise_boundary, Domain, Point};
+use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition};
+use crate::physics::elasticity::dofs::DofMap;
+use crate::physics::exact::{self, ExactSolution};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+
+/// What one cell adds to its points: `(point in [0, 1]^2, share of the cell area,
+/// index of the point in the periodic unit `q.unit_cell()`)`. Only the 7-point triangle rule
+/// puts points on cell edges and corners, shared with the neighbouring cells: there
+/// every triangle gives `|T|/60 (3 at each vertex, 8 at each edge midpoint, 27 at the
+/// centroid)` (seed 000, ch. 1, P3).
+fn contributions(q: Quadrature) -> Vec<(Point, f64, u8)> {
+    match q {
+        Quadrature::TriangleP3 => {
+            let (v, e, c) = (3.0 / 120.0, 8.0 / 120.0, 27.0 / 120.0);
+            vec![
+                ([0.0, 0.0], 2.0 * v, 0),
+                ([1.0, 1.0], 2.0 * v, 0),
+                ([1.0, 0.0], v, 0),
+                ([0.0, 1.0], v, 0),
+                ([0.5, 0.0], e, 1),
+                ([0.5, 1.0], e, 1),
+                ([0.0, 0.5], e, 2),
+                ([1.0, 0.5], e, 2),
+                ([0.5, 0.5], 2.0 * e, 3),
+                ([2.0 / 3.0, 1.0 / 3.0], c, 4),
+                ([1.0 / 3.0, 2.0 / 3.0], c, 5),
+            ]
+        }
+        _ => q.unit_cell().into_iter().enumerate().map(|(k, (p, w))| (p, w, k as u8)).collect(),
+    }
+}
+
+/// Nodes of a peridynamic discretisation: free nodes `0..free`, constrained nodes after.
+#[derive(Debug, Clone)]
+pub struct PdNodes {
+    /// Positions (free first).
+    pub positions: Vec<Point>,
+    /// Quadrature weight (volume per unit thickness) of every node.
+    pub volumes: Vec<f64>,
+    /// Number of free nodes.
+    pub free: usize,
+    /// Prescribed displacement of constrained node `free + k`.
+    pub prescribed: Vec<[f64; 2]>,
+    /// The boundary part whose displacement condition constrains node `free + k`.
+    pub collar_part: Vec<usize>,
+    /// Index of the rule point each node is (its position within its cell).
+    pub rule_point: Vec<u8>,
+    /// Cell size h.
+    pub spacing: f64,
+}
+
+impl PdNodes {
+    /// Number of nodes, constrained ones included.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// True when there are no nodes.
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Layout of the unknowns: the displacements of the free nodes.
+    pub fn dofs(&self) -> DofMap {
+        DofMap::displacement_only(self.free)
+    }
+
+    /// Number of constrained (collar) nodes.
+    pub fn constrained(&self) -> usize {
+        self.len() - self.free
+    }
+}
+
+/// The solid together with its Dirichlet collar: which points carry material and
+/// which of them are constrained.
+pub struct Body<'a> {
+    domain: &'a Domain,
+    conditions: &'a [BoundaryCondition],
+    exact: Option<&'a dyn ExactSolution>,
+    samples: Vec<crate::domain::BoundarySample>,
+    tree: ImmutableKdTree<f64, 2>,
+    /// Collar width `delta + 0.75 h`.
+    pub collar: f64,
+}
+
+impl<'a> Body<'a> {
+    /// The body of `domain` for the horizon and cell size of `params`.
+    pub fn new(domain: &'a Domain, conditions: &'a [BoundaryCondition], exact: Option<&'a dyn ExactSolution>, params: &PdParams) -> Self {
+        let h = params.spacing();
+        // Which boundary part is nearest to an outside point: fine boundary samples.
+        let samples = discretise_boundary(domain, h / 4.0);
+        let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
+        let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&points).expect("finite boundary samples");
+        Body { domain, conditions, exact, samples, tree, collar: params.horizon + 0.75 * h }
+    }
+
+    /// The part and prescribed displacement of an outside point whose nearest
+    /// boundary part has a displacement condition (corner rule as for MLSM: a
+    /// displacement part wins).
+    pub fn constraint(&self, p: Point) -> Option<(usize, [f64; 2])> {
+        let nearest = self.tree.query(&p).nearest_one::<SquaredEuclidean<f64>>().execute();
+        let s = &self.samples[nearest.item as usize];
+        s.touches
+            .iter()
+            .map(|&(part, _)| (part, &self.conditions[part]))
+            .find(|(_, bc)| bc.is_all(ComponentCondition::Displacement))
+            .map(|(part, bc)| (part, exact::value(&bc.value, p, self.exact, |e| e.displacement(p))))
+    }
+
+    /// Whether `p` carries material: inside the solid or in the constrained collar.
+    pub fn contains(&self, p: Point) -> bool {
+        let d = self.domain.signed_distance(p);
+        d <= 0.0 || (d <= self.collar && self.constraint(p).is_some())
+    }
+}
+
+/// A lattice point after merging the cells that share it: position, index in the
+/// unit cell, shares of the cells inside the solid and of the cells outside.
+type Merged = (Point, u8, f64, f64);
+
+/// What a lattice point becomes.
+enum Role {
+    /// A free node.
+    Free,
+    /// A node of the Dirichlet collar with its part and prescribed displacement.
+    Constrained(usize, [f64; 2]),
+    /// Not a node (outside the solid and its collar, or without material).
+    Dropped,
+}
+
+/// Lay out the nodes of `params.quadrature` over the body (solid and collar): free
+/// nodes first, constrained after, each in lattice (row-major) order.
+pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
+    let h = params.spacing();
+    let classified: Vec<(Point, f64, u8, Role)> = merged_points(body, params).into_par_iter().map(|m| classify(body, h, m)).collect();
+    let mut nodes = PdNodes {
+        positions: Vec::new(),
+        volumes: Vec::new(),
+        free: 0,
+        prescribed: Vec::new(),
+        collar_part: Vec::new(),
+        rule_point: Vec::new(),
+        spacing: h,
+    };
+    for (p, w, r, role) in &classified {
+        if let Role::Free = role {
+            nodes.positions.push(*p);
+            nodes.volumes.push(*w);
+            nodes.rule_point.push(*r);
+        }
+    }
+    nodes.free = nodes.positions.len();
+    for (p, w, r, role) in &classified {
+        if let Role::Constrained(part, u) = role {
+            nodes.positions.push(*p);
+            nodes.volumes.push(*w);
+            nodes.rule_point.push(*r);
+            nodes.prescribed.push(*u);
+            nodes.collar_part.push(*part);
+        }
+    }
+    nodes
+}
+
+/// A point on the boundary (shared rules only) is free and carries the shares of the
+/// inner cells; a point in the collar carries every share and the constraint of its
+/// nearest displacement part.
+fn classify(body: &Body, h: f64, (p, r, w_in, w_out): Merged) -> (Point, f64, u8, Role) {
+    let d = body.domain.signed_distance(p);
+    if d <= 1e-9 * h && w_in > 0.0 {
+        (p, w_in, r, Role::Free)
+    } else if d > 1e-9 * h && d <= body.collar {
+        (p, w_in + w_out, r, body.constraint(p).map_or(Role::Dropped, |(part, u)| Role::Constrained(part, u)))
+    } else {
+        (p, 0.0, r, Role::Dropped)
+    }
+}
+
+/// Every rule point of every lattice cell over the body, merged where cells share a
+/// point, in lattice (row-major) order.
+fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
+    let domain = body.domain;
+    let h = params.spacing();
+    let (lo, hi) = domain.bounding_box();
+    let pad = (body.collar / h).ceil() as i64 + 1;
+    let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
+    let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
+    let cell = contributions(params.quadrature);
+    let shared = params.quadrature == Quadrature::TriangleP3;
+    // A point is keyed by its lattice position in units of h/12 (every rule's points are
+    // at distinct keys), so that a point shared by several cells is one node whose weight
+    // is the sum of their shares.
+    let key = |p: Point| (((p[1] - lo[1]) * 12.0 / h).round() as i64, ((p[0] - lo[0]) * 12.0 / h).round() as i64);
+    // Per contribution: key, point, share, unit index, whether the cell is inside the solid.
+    type Share = ((i64, i64), Point, f64, u8, bool);
+    let rows: Vec<Vec<Share>> = (-pad..ny + pad)
+        .into_par_iter()
+        .map(|j| {
+            let mut out = Vec::new();
+            for i in -pad..nx + pad {
+                let corner = [lo[0] + i as f64 * h, lo[1] + j as f64 * h];
+                // With shared points, a cell adds its shares only if it is material (its
+                // centre inside the solid or in the constrained collar), so that points on a
+                // free edge get the weight of the inner cells only.
+                let c = [corner[0] + 0.5 * h, corner[1] + 0.5 * h];
+                let inside = domain.signed_distance(c) <= 0.0;
+                if shared && !inside && !body.contains(c) {
+                    continue;
+                }
+                for (q, w, k) in &cell {
+                    let p = [corner[0] + q[0] * h, corner[1] + q[1] * h];
+                    // Rules with points strictly inside cells keep every point inside the
+                    // solid (a cell cut by a curved edge keeps its inner points).
+                    let inner = if shared { inside } else { domain.signed_distance(p) <= 0.0 };
+                    out.push((key(p), p, w * h * h, *k, inner));
+                }
+            }
+            out
+        })
+        .collect();
+    let mut merged: BTreeMap<(i64, i64), Merged> = BTreeMap::new();
+    for (k, p, w, r, inside) in rows.into_iter().flatten() {
+        let e = merged.entry(k).or_insert((p, r, 0.0, 0.0));
+        if inside {
+            e.2 += w;
+        } else {
+            e.3 += w;
+        }
+    }
+    merged.into_values().collect()
+}

@@ -1,0 +1,166 @@
+//! `[peridynamics]`: horizon, ratio m, kernel, quadrature rule, surface correction,
+//! solver and force law, with the limits shared by `compare` and `--horizon`
+//! ([`check_peridynamics`]).
+
+use super::{Ctx, MAX_NODES};
+use crate::scene::choice::Choice;
+use crate::domain::Domain;
+use crate::physics::elasticity::conditions::ConditionKind;
+use crate::physics::elasticity::material::{Material, PlaneModel};
+use crate::linalg::{SolverKind, SolverParams};
+use crate::models::peridynamics::{BondForce, Kernel, KernelKind, PdParams, Quadrature, SurfaceCorrection};
+use crate::scene::problem::spec::{BoundarySpec, PeridynamicsSpec};
+use crate::scene::problem::ProblemError;
+
+/// Largest ratio `m = delta / h` accepted (bonds per node grow like `pi m^2`).
+pub const MAX_HORIZON_RATIO: f64 = 12.0;
+
+/// Limits on the peridynamic numbers shared by the scene table and `compare`:
+/// `(field, reason)` of the first violated one.
+pub fn check_peridynamics(p: &PdParams, domain: &Domain) -> Result<(), (String, String)> {
+    let fail = |f: &str, r: String| Err((f.to_string(), r));
+    if !(p.horizon.is_finite() && p.horizon > 0.0) {
+        return fail("horizon", format!("must be a positive finite number, got {}", p.horizon));
+    }
+    if !(p.ratio.is_finite() && p.ratio >= 1.0) {
+        return fail(
+            "m",
+            format!(
+                "m = delta / h = {} makes the horizon smaller than the node spacing: no node would have a bond; use m >= 1 (3 is usual)",
+                p.ratio
+            ),
+        );
+    }
+    if p.ratio > MAX_HORIZON_RATIO {
+        return fail(
+            "m",
+            format!(
+                "m = {} gives about {:.0} bonds per node; at most {MAX_HORIZON_RATIO}",
+                p.ratio,
+                std::f64::consts::PI * p.ratio * p.ratio
+            ),
+        );
+    }
+    let (lo, hi) = domain.bounding_box();
+    let extent = (hi[0] - lo[0]).min(hi[1] - lo[1]);
+    if p.horizon > extent / 2.0 {
+        return fail(
+            "horizon",
+            format!(
+                "horizon {} is larger than half the solid's smallest extent ({extent:.4e}): no node would have a complete family; use a smaller horizon",
+                p.horizon
+            ),
+        );
+    }
+    let nodes = domain.area_estimate(400) / p.spacing().powi(2) * p.nodes_per_cell() as f64;
+    if nodes > MAX_NODES {
+        return fail("horizon", format!("horizon {} with m = {} gives about {nodes:.1e} nodes (over {MAX_NODES:e})", p.horizon, p.ratio));
+    }
+    Ok(())
+}
+
+/// Largest `|nu - nu_pd|` that is taken as the value bond-based peridynamics
+/// represents (`nu_pd` = 1/4 in plane strain, 1/3 in plane stress) and snapped to it:
+/// `0.333333` is 1/3 written to six digits (off by 3.3e-7), while a deliberate other
+/// ratio such as 0.33 is 3.3e-3 away and is refused.
+pub const POISSON_SNAP: f64 = 1e-5;
+
+/// Snap a Poisson ratio within [`POISSON_SNAP`] of the peridynamic value to it (for
+/// both models: one solid), with a note saying so.
+pub(super) fn snap_poisson(material: &mut Material) -> Option<String> {
+    let (target, name, plane) = match material.plane {
+        PlaneModel::Strain => (0.25, "1/4", "plane strain"),
+        PlaneModel::Stress => (1.0 / 3.0, "1/3", "plane stress"),
+    };
+    let nu = material.elastic.poisson;
+    if nu == target || (nu - target).abs() > POISSON_SNAP {
+        return None;
+    }
+    material.elastic.poisson = target;
+    Some(format!("material.nu = {nu} taken as {name} (within {POISSON_SNAP:e}), the value bond-based peridynamics represents in {plane}"))
+}
+
+/// nu must be one bond-based peridynamics can represent.
+fn check_material(c: &Ctx, material: &Material) -> Result<(), ProblemError> {
+    if !crate::models::peridynamics::kernel::representable(material) {
+        let (need, plane) = match material.plane {
+            PlaneModel::Strain => ("1/4", "plane strain"),
+            PlaneModel::Stress => ("1/3", "plane stress"),
+        };
+        return c.err(
+            "material.nu",
+            format!(
+                "bond-based peridynamics represents only in-plane lambda = mu, that is nu = {need} in {plane}; got nu = {} \
+                 (remove the [peridynamics] table or set nu = {need})",
+                material.elastic.poisson
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// `kernel` and its `alpha`.
+fn kernel(c: &Ctx, s: &PeridynamicsSpec) -> Result<Kernel, ProblemError> {
+    Ok(match c.choose("peridynamics.kernel", s.kernel.as_deref())? {
+        KernelKind::Plain => {
+            if s.alpha.is_some() {
+                return c.err("peridynamics.alpha", "only the regularised kernel takes alpha");
+            }
+            Kernel::Plain
+        }
+        KernelKind::Regularised => {
+            let alpha = s.alpha.unwrap_or(-3.0);
+            if !(alpha.is_finite() && alpha > -4.0 && alpha <= 10.0) {
+                return c
+                    .err("peridynamics.alpha", format!("must lie in (-4, 10] (the operator is unbounded for alpha <= -4), got {alpha}"));
+            }
+            Kernel::Regularised { alpha }
+        }
+    })
+}
+
+/// `[peridynamics]`.
+pub(super) fn peridynamics(
+    c: &Ctx,
+    s: &PeridynamicsSpec,
+    domain: &Domain,
+    material: &Material,
+    specs: &[BoundarySpec],
+    dynamic: bool,
+) -> Result<PdParams, ProblemError> {
+    check_material(c, material)?;
+    for (k, b) in specs.iter().enumerate() {
+        if b.kind == ConditionKind::Mixed.name() {
+            return c.err(
+                format!("boundary[{k}].kind"),
+                "mixed (per-component) conditions have no peridynamic volume constraint here; use displacement or traction",
+            );
+        }
+    }
+    let horizon = c.need("peridynamics.horizon", s.horizon, "the horizon delta (m)")?;
+    let kernel = kernel(c, s)?;
+    let quadrature: Quadrature = c.choose("peridynamics.quadrature", s.quadrature.as_deref())?;
+    let correction: SurfaceCorrection = c.choose("peridynamics.correction", s.correction.as_deref())?;
+    let solver = match &s.solver {
+        // The PD stiffness is an M-matrix-like, diagonally dominant block Laplacian, on
+        // which the multigrid's iterations stay flat with the size: GMRES + AMG is far
+        // faster than BiCGSTAB + ILU(0), the default before, and than sparse LU
+        // (docs/notebook/2026-11-26-peridynamics-1e6-gmres-amg.md).
+        None => SolverParams { kind: SolverKind::default_gmres(), equilibrate: true },
+        Some(spec) if spec.multigrid.is_some() => {
+            return c
+                .err("peridynamics.solver.multigrid", "the low-order operator is an MLSM discretisation; the peridynamic solve has none");
+        }
+        Some(spec) => super::solver::solver(c, spec).map_err(|mut e| {
+            e.field = e.field.replacen("solver", "peridynamics.solver", 1);
+            e
+        })?,
+    };
+    let force: BondForce = c.choose("peridynamics.force", s.force.as_deref())?;
+    if force == BondForce::BondStretch && !dynamic {
+        return c.err("peridynamics.force", format!("the static solve uses the linear law; \"{}\" needs a [dynamics] table", force.name()));
+    }
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force };
+    check_peridynamics(&params, domain).map_err(|(f, r)| c.error(format!("peridynamics.{f}"), r))?;
+    Ok(params)
+}
