@@ -12,7 +12,7 @@
 //! - [`models`]: the Navier and peridynamic models, time integration, the dispatch;
 //! - [`linalg`]: one solve contract, Krylov methods and preconditioners;
 //! - [`parallel`]: MPI ranks and PETSc, the only place that knows about ranks;
-//! - [`stage`]: what every run shares: named stages, timing, progress, run errors;
+//! - [`stages`]: what every run shares: named stages, timing, progress, run errors;
 //! - [`quality`]: error norms, warnings, the nonlocal-to-local comparison;
 //! - [`tradeoff`]: the speed-accuracy sweep, presets and `--target-error` policy;
 //! - [`output`]: files (VTK, CSV, JSON), written whole or not at all;
@@ -25,7 +25,7 @@
 // Floor 1: scene::choice scene::expression output parallel::petsc
 // Floor 2: domain linalg physics::elasticity
 // Floor 3: mlsm physics::exact parallel::partition parallel::distributed parallel::launch
-// Floor 4: stage quality::post parallel::share
+// Floor 4: stages quality::post parallel::share
 // Floor 5: models::dynamics
 // Floor 6: physics::case
 // Floor 7: models::navier models::peridynamics
@@ -46,5 +46,5 @@ pub mod parallel;
 pub mod physics;
 pub mod quality;
 pub mod scene;
-pub mod stage;
+pub mod stages;
 pub mod tradeoff;

@@ -33,7 +33,7 @@ fn main() -> ExitCode {
     // Ctrl-C: a time loop stops between steps and its staged results are removed
     // (exit 130); anywhere else the process removes its staged results and ends at once.
     let _ = ctrlc::set_handler(|| {
-        if !mlsm::stage::interrupt::request() {
+        if !mlsm::stages::interrupt::request() {
             mlsm::output::remove_uncommitted();
             std::process::exit(130);
         }

@@ -171,7 +171,7 @@ fn body_force_and_initial_state_formulas_match_their_numeric_forms() {
     );
     assert_ne!(a.case.dynamics.as_ref().unwrap().initial_velocity, b.case.dynamics.as_ref().unwrap().initial_velocity);
     let run = |p: &Problem| {
-        let mlsm::models::dispatch::Outcome::PdDynamic(sim) = mlsm::models::dispatch::solve(p, &mlsm::stage::Silent, |_| Ok(())).unwrap() else {
+        let mlsm::models::dispatch::Outcome::PdDynamic(sim) = mlsm::models::dispatch::solve(p, &mlsm::stages::Silent, |_| Ok(())).unwrap() else {
             panic!("a peridynamic dynamic run")
         };
         sim.v

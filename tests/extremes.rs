@@ -12,7 +12,7 @@ mod common;
 use common::{f, i, s, scene};
 use mlsm::linalg::SolveError;
 use mlsm::models::navier::Solution;
-use mlsm::stage::{RunError, Silent};
+use mlsm::stages::{RunError, Silent};
 use mlsm::scene::problem::Problem;
 use mlsm::quality::warnings::{navier_static, peridynamics_static, Checks};
 

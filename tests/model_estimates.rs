@@ -8,7 +8,7 @@ mod common;
 
 use common::{f, s, scene};
 use mlsm::models::navier::Estimate;
-use mlsm::stage::Silent;
+use mlsm::stages::Silent;
 use mlsm::scene::problem::Problem;
 use std::path::Path;
 

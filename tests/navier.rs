@@ -223,8 +223,8 @@ fn degenerate_support_is_reported() {
     let mut edits = published();
     edits.extend([("approximation.support", i(9)), ("nodes.spacing", f(0.5))]);
     let p = scene("cantilever", &edits);
-    match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent) {
-        Err(mlsm::stage::RunError::Shape(e)) => {
+    match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stages::Silent) {
+        Err(mlsm::stages::RunError::Shape(e)) => {
             let msg = e.to_string();
             assert!(msg.contains("node") && msg.contains("degenerate support"), "{msg}");
         }
@@ -249,8 +249,8 @@ fn degenerate_rbf_support_is_reported_after_widening() {
          [material]\nE = 1.0\nnu = 0.3\nplane = \"stress\"\n{boundary}"
     );
     let p = mlsm::scene::problem::Problem::from_str(&text, std::path::Path::new("strip.toml")).unwrap();
-    match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent) {
-        Err(mlsm::stage::RunError::Shape(e)) => {
+    match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stages::Silent) {
+        Err(mlsm::stages::RunError::Shape(e)) => {
             let msg = e.to_string();
             assert!(msg.contains("degenerate support at node") && msg.contains("rank < 15"), "{msg}");
             assert!(e.support > 37 && e.ratio < 1e-10, "{e:?}");
@@ -440,7 +440,7 @@ fn iterative_and_direct_solutions_agree_on_every_shipped_scene() {
         };
         for (kind, method) in [("bicgstab", "BiCGSTAB+ILUT"), ("gmres", "GMRES+AMG")] {
             let p = scene(name, &[("solver.kind", s(kind))]);
-            match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent) {
+            match mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stages::Silent) {
                 Ok(it) => agree(&it, method),
                 Err(e) => {
                     let m = e.to_string();

@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use mlsm::models::dynamics::Integrator;
 use mlsm::models::peridynamics::simulate;
-use mlsm::stage::{RunError, Silent};
+use mlsm::stages::{RunError, Silent};
 use mlsm::scene::problem::Problem;
 
 /// Final time, displacement (flat) and energy history of a run.

@@ -13,7 +13,7 @@ use mlsm::physics::exact::{ExactSolution, Polynomial};
 use mlsm::models::peridynamics::solve::Discretisation;
 use mlsm::models::peridynamics::{Kernel, Micromodulus};
 use mlsm::parallel::petsc::World;
-use mlsm::stage::{Silent, StageTimer};
+use mlsm::stages::{Silent, StageTimer};
 use mlsm::scene::problem::Problem;
 
 const RULES: [&str; 7] = ["full-area", "partial-area", "gauss2x2", "triangle-p1", "triangle-p2", "triangle-p3", "ac"];

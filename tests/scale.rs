@@ -5,7 +5,7 @@
 //! discrete problem.
 
 use mlsm::models::navier::Discretisation;
-use mlsm::stage::{Silent, StageTimer};
+use mlsm::stages::{Silent, StageTimer};
 use mlsm::scene::problem::Problem;
 use std::path::Path;
 

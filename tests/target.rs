@@ -7,7 +7,7 @@
 mod common;
 
 use common::f;
-use mlsm::stage::Silent;
+use mlsm::stages::Silent;
 use mlsm::tradeoff::target::{pursue, Outcome, Refinement, Stop, Target, TargetNorm, MAX_STEPS};
 use serde_json::Value;
 use std::path::Path;

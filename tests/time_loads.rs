@@ -12,7 +12,7 @@
 //! symmetric family, which the Dirichlet collar completes), so the semi-discrete
 //! systems reduce to `u'' = f / rho` and the error left is the time integration's.
 
-use mlsm::stage::{RunError, Silent};
+use mlsm::stages::{RunError, Silent};
 use mlsm::scene::problem::Problem;
 use std::path::Path;
 

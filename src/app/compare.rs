@@ -12,7 +12,7 @@ use crate::models::dispatch;
 use crate::output::{self, Series, StagedDir};
 use crate::models::peridynamics::solve::interior_flags;
 use crate::models::peridynamics::{PdParams, Quadrature};
-use crate::stage::{Stage, StageTimings, OUTPUT};
+use crate::stages::{Stage, StageTimings, OUTPUT};
 use crate::quality::post::{masked_errors, observed_order};
 use crate::scene::problem::{ModelParams, Problem};
 use serde::Serialize;

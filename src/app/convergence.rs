@@ -24,7 +24,7 @@ use crate::domain::Point;
 use crate::mlsm::interpolate::mls_values;
 use crate::models::navier::{self, EstimateMethod};
 use crate::output;
-use crate::stage::{RunError, Stage, StageTimings, OUTPUT};
+use crate::stages::{RunError, Stage, StageTimings, OUTPUT};
 use crate::quality::post::observed_order;
 use crate::quality::post::probe::ProbeQuantity;
 use crate::quality::post::relative_errors;

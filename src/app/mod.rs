@@ -26,7 +26,7 @@ mod tradeoff;
 
 use crate::app::cli::{Cli, Command, ModelArg};
 use crate::output::OutputError;
-use crate::stage::RunError;
+use crate::stages::RunError;
 use crate::scene::problem::{Model, Problem, ProblemError};
 use std::path::{Path, PathBuf};
 use terminal::Terminal;

@@ -14,7 +14,7 @@ use super::request::RunRequest;
 use super::AppError;
 use crate::scene::choice::Choice;
 use crate::models::navier::{self, EstimateMethod};
-use crate::stage::Progress;
+use crate::stages::Progress;
 use crate::scene::problem::preset::Preset;
 use crate::scene::problem::{Model, Problem};
 use serde::Serialize;

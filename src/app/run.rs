@@ -18,7 +18,7 @@ use crate::models::navier::Estimate;
 use crate::output::{self, StagedDir};
 use crate::models::peridynamics::PdParams;
 use crate::parallel::petsc;
-use crate::stage::{RunError, OUTPUT};
+use crate::stages::{RunError, OUTPUT};
 use crate::scene::problem::preset::Preset;
 use crate::scene::problem::{Model, ModelParams, Problem};
 use crate::quality::warnings::{self, Checks};
@@ -259,7 +259,7 @@ impl OutputStage {
     }
 
     /// Record the seconds and the peak so far as the output stage's.
-    fn record(&self, timings: &mut crate::stage::StageTimings) {
+    fn record(&self, timings: &mut crate::stages::StageTimings) {
         timings.record(OUTPUT, self.seconds());
         if let Some(bytes) = crate::output::peak_since(self.mark) {
             timings.record_peak(OUTPUT, bytes);
@@ -388,7 +388,7 @@ fn peridynamics_estimate(
     p: &Problem,
     positions: &[crate::domain::Point],
     (fields, history): PdFields,
-    timings: &mut crate::stage::StageTimings,
+    timings: &mut crate::stages::StageTimings,
     term: &Terminal,
 ) -> Estimate {
     if !p.navier.estimate.method.peridynamics_estimates() {

@@ -14,7 +14,7 @@ use crate::models::navier;
 use crate::output;
 use crate::models::peridynamics::solve::WeightsSummary;
 use crate::models::peridynamics::{Micromodulus, PdParams, PdSolution};
-use crate::stage::{StagePeaks, StageTimings};
+use crate::stages::{StagePeaks, StageTimings};
 use crate::quality::post::probe::ProbeValue;
 use crate::quality::post::ErrorNorms;
 use crate::scene::problem::Problem;

@@ -5,7 +5,7 @@
 use super::AppError;
 use crate::app::cli::{RefinementArg, TargetNormArg};
 use crate::output;
-use crate::stage::Silent;
+use crate::stages::Silent;
 use crate::scene::problem::Problem;
 use crate::tradeoff::target::{self, Outcome, Refinement, Step, Stop, Target, TargetNorm, MAX_STEPS};
 use crate::quality::warnings::Warning;

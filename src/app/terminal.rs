@@ -7,7 +7,7 @@
 //! elapsed time and the estimated time to finish. `MLSM_PROGRESS_INTERVAL` (seconds)
 //! overrides the interval. `--quiet` silences both.
 
-use crate::stage::{Progress, Stage};
+use crate::stages::{Progress, Stage};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::sync::mpsc::{self, RecvTimeoutError, Sender};

@@ -108,55 +108,64 @@ pub fn strength_graph(a: &Csr, blocks: Blocks, theta: f64) -> NodeGraph {
             },
         )
         .collect();
-    // The strong couplings out of each node, and into each node (by a counting sort,
-    // sources in increasing order).
     let mut out_offsets = Vec::with_capacity(nodes + 1);
     out_offsets.push(0usize);
     for len in parts.iter().flat_map(|p| &p.0) {
         out_offsets.push(out_offsets[out_offsets.len() - 1] + len);
     }
     let out: Vec<u32> = parts.into_iter().flat_map(|p| p.1).collect();
+    symmetrised(nodes, &out_offsets, &out)
+}
+
+/// The graph whose neighbours of each node are the union of its strong couplings out
+/// (`out[out_offsets[i]..out_offsets[i + 1]]`, sorted) and into it (by a counting
+/// sort, sources in increasing order), merged node by node.
+fn symmetrised(nodes: usize, out_offsets: &[usize], out: &[u32]) -> NodeGraph {
     let mut into = vec![0u32; out.len()];
-    let in_offsets = super::csr::transposed(nodes, &out_offsets, &out, |node, _, slot| into[slot] = node as u32);
-    // Their union, node by node (both lists sorted).
+    let in_offsets = super::csr::transposed(nodes, out_offsets, out, |node, _, slot| into[slot] = node as u32);
     let mut offsets = Vec::with_capacity(nodes + 1);
     offsets.push(0usize);
     let mut neighbours = Vec::with_capacity(out.len() + into.len());
     for node in 0..nodes {
-        let (mut x, mut y) = (
-            out[out_offsets[node]..out_offsets[node + 1]].iter().peekable(),
-            into[in_offsets[node]..in_offsets[node + 1]].iter().peekable(),
-        );
-        loop {
-            let take = match (x.peek(), y.peek()) {
-                (Some(&&p), Some(&&q)) => {
-                    if p <= q {
-                        x.next();
-                        if p == q {
-                            y.next();
-                        }
-                        p
-                    } else {
-                        y.next();
-                        q
-                    }
-                }
-                (Some(&&p), None) => {
-                    x.next();
-                    p
-                }
-                (None, Some(&&q)) => {
-                    y.next();
-                    q
-                }
-                (None, None) => break,
-            };
-            neighbours.push(take);
-        }
+        let from = &out[out_offsets[node]..out_offsets[node + 1]];
+        let to = &into[in_offsets[node]..in_offsets[node + 1]];
+        union_of_sorted(from, to, &mut neighbours);
         offsets.push(neighbours.len());
     }
     neighbours.shrink_to_fit();
     NodeGraph { offsets, neighbours }
+}
+
+/// Appends the union of the sorted lists `a` and `b` to `out` (each value once when in
+/// both), in increasing order.
+fn union_of_sorted(a: &[u32], b: &[u32], out: &mut Vec<u32>) {
+    let (mut x, mut y) = (a.iter().peekable(), b.iter().peekable());
+    loop {
+        let take = match (x.peek(), y.peek()) {
+            (Some(&&p), Some(&&q)) => {
+                if p <= q {
+                    x.next();
+                    if p == q {
+                        y.next();
+                    }
+                    p
+                } else {
+                    y.next();
+                    q
+                }
+            }
+            (Some(&&p), None) => {
+                x.next();
+                p
+            }
+            (None, Some(&&q)) => {
+                y.next();
+                q
+            }
+            (None, None) => break,
+        };
+        out.push(take);
+    }
 }
 
 /// Aggregate of every node (`0..count`), from the node graph:

@@ -94,14 +94,11 @@ pub fn solve_gmres_with(
     let mut out =
         GmresOutcome { x: Vec::new(), status: Status::Converged, iterations: 0, restarts: 0, relative_residual: 1.0, history: vec![1.0] };
     if b_norm == 0.0 {
-        out.x = x;
-        out.relative_residual = 0.0;
-        return out;
+        return GmresOutcome { x, relative_residual: 0.0, ..out };
     }
-    // `w` holds the residual between cycles and `A M⁻¹ v` within one.
-    let (mut w, mut z) = (vec![0.0; n], vec![0.0; n]);
-    // From x₀ = 0 the residual is b itself: no product needed.
-    w.copy_from_slice(b);
+    // `w` holds the residual between cycles (from x₀ = 0 it is b itself: no product
+    // needed) and `A M⁻¹ v` within one.
+    let (mut w, mut z) = (b.to_vec(), vec![0.0; n]);
     let mut beta = b_norm;
     let mut basis: Vec<Vec<f64>> = Vec::with_capacity(m + 1);
     loop {
@@ -118,10 +115,7 @@ pub fn solve_gmres_with(
         // One cycle: Arnoldi on A M⁻¹ from r / β.
         basis.clear();
         basis.push(w.iter().map(|v| v / beta).collect());
-        let mut h = vec![vec![0.0f64; m]; m + 1];
-        let (mut cs, mut sn) = (vec![0.0f64; m], vec![0.0f64; m]);
-        let mut g = vec![0.0f64; m + 1];
-        g[0] = beta;
+        let mut hessenberg = Hessenberg::new(m, beta);
         let mut steps = 0;
         for j in 0..m {
             if out.iterations >= max_iterations {
@@ -130,43 +124,16 @@ pub fn solve_gmres_with(
             precondition(&basis[j], &mut z);
             apply(&z, &mut w);
             let (projections, wn) = orthogonalise(&basis, &mut w);
-            for (i, d) in projections.into_iter().enumerate() {
-                h[i][j] = d;
-            }
-            h[j + 1][j] = wn;
-            for i in 0..j {
-                let t = cs[i] * h[i][j] + sn[i] * h[i + 1][j];
-                h[i + 1][j] = -sn[i] * h[i][j] + cs[i] * h[i + 1][j];
-                h[i][j] = t;
-            }
-            let d = h[j][j].hypot(h[j + 1][j]);
-            (cs[j], sn[j]) = if d == 0.0 { (1.0, 0.0) } else { (h[j][j] / d, h[j + 1][j] / d) };
-            h[j][j] = d;
-            h[j + 1][j] = 0.0;
-            g[j + 1] = -sn[j] * g[j];
-            g[j] *= cs[j];
+            let residual = hessenberg.add_column(j, projections, wn);
             out.iterations += 1;
             steps = j + 1;
-            let estimate = g[j + 1].abs() / b_norm;
+            let estimate = residual / b_norm;
             if wn == 0.0 || estimate <= 0.5 * tolerance {
                 break;
             }
             basis.push(w.iter().map(|v| v / wn).collect());
         }
-        // y = H⁻¹ g (upper triangular), x += M⁻¹ V y.
-        let mut y = vec![0.0f64; steps];
-        for i in (0..steps).rev() {
-            let s: f64 = (i + 1..steps).map(|k| h[i][k] * y[k]).sum();
-            y[i] = if h[i][i] != 0.0 { (g[i] - s) / h[i][i] } else { 0.0 };
-        }
-        // The update `M⁻¹ V y`, `V y` in `w` (free until the next cycle): no vector more
-        // at the peak.
-        w.fill(0.0);
-        for (yi, v) in y.iter().zip(&basis) {
-            w.par_iter_mut().zip(v).with_min_len(4096).for_each(|(u, v)| *u += yi * v);
-        }
-        precondition(&w, &mut z);
-        x.par_iter_mut().zip(&z).with_min_len(4096).for_each(|(x, u)| *x += u);
+        add_correction(&mut x, &basis, &hessenberg.solve(steps), &precondition, (&mut w, &mut z));
         out.restarts += 1;
         if x.iter().any(|v| !v.is_finite()) {
             out.status = Status::Breakdown;
@@ -187,6 +154,78 @@ pub fn solve_gmres_with(
     }
     out.x = x;
     out
+}
+
+/// `x += M⁻¹ V y` at the end of a cycle (`V` the Krylov basis, `y = H⁻¹ g`), with
+/// `V y` formed in `w` and `M⁻¹ V y` in `z` (both free until the next cycle: no vector
+/// more at the peak).
+fn add_correction(
+    x: &mut [f64],
+    basis: &[Vec<f64>],
+    y: &[f64],
+    precondition: &impl Fn(&[f64], &mut [f64]),
+    (w, z): (&mut [f64], &mut [f64]),
+) {
+    w.fill(0.0);
+    for (yi, v) in y.iter().zip(basis) {
+        w.par_iter_mut().zip(v).with_min_len(4096).for_each(|(u, v)| *u += yi * v);
+    }
+    precondition(w, z);
+    x.par_iter_mut().zip(&*z).with_min_len(4096).for_each(|(x, u)| *x += u);
+}
+
+/// The least-squares problem of one GMRES cycle, `min ‖β e₁ − H y‖`, kept upper
+/// triangular by Givens rotations as the Arnoldi columns arrive: `h` the rotated
+/// Hessenberg matrix (`(m + 1) x m`), `cs`, `sn` the rotations, `g` the rotated `β e₁`.
+struct Hessenberg {
+    h: Vec<Vec<f64>>,
+    cs: Vec<f64>,
+    sn: Vec<f64>,
+    g: Vec<f64>,
+}
+
+impl Hessenberg {
+    /// For `m` Arnoldi steps from a residual of norm `beta`.
+    fn new(m: usize, beta: f64) -> Self {
+        let mut g = vec![0.0f64; m + 1];
+        g[0] = beta;
+        Hessenberg { h: vec![vec![0.0f64; m]; m + 1], cs: vec![0.0f64; m], sn: vec![0.0f64; m], g }
+    }
+
+    /// Column `j`: the projections `h_ij` on the basis and the norm `h_(j+1)j` of what
+    /// is left, rotated by the previous rotations and a new one that zeroes
+    /// `h_(j+1)j`. Returns `|g_(j+1)|`, the residual norm of the cycle so far.
+    fn add_column(&mut self, j: usize, projections: Vec<f64>, rest: f64) -> f64 {
+        let (h, cs, sn, g) = (&mut self.h, &mut self.cs, &mut self.sn, &mut self.g);
+        for (i, d) in projections.into_iter().enumerate() {
+            h[i][j] = d;
+        }
+        h[j + 1][j] = rest;
+        for i in 0..j {
+            let t = cs[i] * h[i][j] + sn[i] * h[i + 1][j];
+            h[i + 1][j] = -sn[i] * h[i][j] + cs[i] * h[i + 1][j];
+            h[i][j] = t;
+        }
+        let d = h[j][j].hypot(h[j + 1][j]);
+        (cs[j], sn[j]) = if d == 0.0 { (1.0, 0.0) } else { (h[j][j] / d, h[j + 1][j] / d) };
+        h[j][j] = d;
+        h[j + 1][j] = 0.0;
+        g[j + 1] = -sn[j] * g[j];
+        g[j] *= cs[j];
+        g[j + 1].abs()
+    }
+
+    /// `y = H⁻¹ g` over the first `steps` columns (back substitution; a zero pivot
+    /// gives a zero component).
+    fn solve(&self, steps: usize) -> Vec<f64> {
+        let (h, g) = (&self.h, &self.g);
+        let mut y = vec![0.0f64; steps];
+        for i in (0..steps).rev() {
+            let s: f64 = (i + 1..steps).map(|k| h[i][k] * y[k]).sum();
+            y[i] = if h[i][i] != 0.0 { (g[i] - s) / h[i][i] } else { 0.0 };
+        }
+        y
+    }
 }
 
 #[cfg(test)]

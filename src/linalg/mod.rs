@@ -226,7 +226,7 @@ pub(crate) fn solve_with_memory(
     let (unknowns, nonzeros) = (a.nrows() as f64, a.nnz() as f64);
     let SolverChoice { primary: kind, fallback, reason: choice } = params.kind.choose(unknowns, nonzeros, saddle_point.is_some(), available);
     if let SolverKind::Petsc { .. } = kind {
-        return Err(SolveError::Petsc { detail: "PETSc solves over MPI ranks go through `parallel::solve_nodal`".into() });
+        return Err(SolveError::Petsc { detail: "PETSc solves the rows each MPI rank owns (`parallel::share::Share::solve`)".into() });
     }
     let n = a.nrows();
     if a.ncols() != n {

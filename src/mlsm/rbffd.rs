@@ -67,41 +67,11 @@ pub fn shape_functions(
         if sys.nrows() != size {
             *sys = faer::Mat::zeros(size, size);
         }
-        for i in 0..n {
-            // A is symmetric: evaluate each pair once. The local coordinates are within
-            // the unit disc, so `sqrt` needs none of `hypot`'s guards against overflow
-            // (which made it 11 % of a Kirsch run with its estimate).
-            for j in 0..i {
-                let (dx, dy) = (z[i][0] - z[j][0], z[i][1] - z[j][1]);
-                let v = radial.profile((dx * dx + dy * dy).sqrt(), c).0;
-                sys[(i, j)] = v;
-                sys[(j, i)] = v;
-            }
-            sys[(i, i)] = radial.profile(0.0, c).0;
-            for k in 0..m {
-                sys[(i, n + k)] = p[k * n + i];
-                sys[(n + k, i)] = p[k * n + i];
-            }
-        }
-        // The block of the polynomial part is zero (the buffer holds the last factors).
-        for j in n..size {
-            for i in n..size {
-                sys[(i, j)] = 0.0;
-            }
-        }
-        let fact = |k: u32| (1..=k).product::<u32>() as f64;
+        saddle_matrix(sys, radial, &z, c, &p, m);
         if (rhs.nrows(), rhs.ncols()) != (size, ops.len()) {
             *rhs = faer::Mat::zeros(size, ops.len());
         }
-        for (col, &op) in ops.iter().enumerate() {
-            for j in 0..n {
-                rhs[(j, col)] = radial.operator_at_centre(op, z[j], c);
-            }
-            let target = op.multi_index();
-            for (k, &(a, b)) in exps.iter().enumerate() {
-                rhs[(n + k, col)] = if (a, b) == target { fact(a) * fact(b) } else { 0.0 };
-            }
-        }
+        right_hand_sides(rhs, radial, ops, &z, c, exps);
         let (norm_sys, norm_rhs) = (max_abs(sys), max_abs(rhs));
         solve_in_place(sys, rhs, (perm, perm_inv), buffer);
         crate::linalg::vector_state::clear_upper_halves();
@@ -122,6 +92,52 @@ pub fn shape_functions(
         }
         Ok(())
     })
+}
+
+/// The saddle-point matrix `[[A, P], [Pᵀ, 0]]` of the stencil in local coordinates
+/// `z` (`A_ij = φ(|z_i − z_j|)` with shape `c`, `P` the `n x m` monomials `p`, stored
+/// monomial by monomial) in the top-left `(n + m)`-square of `sys`.
+fn saddle_matrix(sys: &mut faer::Mat<f64>, radial: &Radial, z: &[[f64; 2]], c: f64, p: &[f64], m: usize) {
+    let n = z.len();
+    for i in 0..n {
+        // A is symmetric: evaluate each pair once. The local coordinates are within
+        // the unit disc, so `sqrt` needs none of `hypot`'s guards against overflow
+        // (which made it 11 % of a Kirsch run with its estimate).
+        for j in 0..i {
+            let (dx, dy) = (z[i][0] - z[j][0], z[i][1] - z[j][1]);
+            let v = radial.profile((dx * dx + dy * dy).sqrt(), c).0;
+            sys[(i, j)] = v;
+            sys[(j, i)] = v;
+        }
+        sys[(i, i)] = radial.profile(0.0, c).0;
+        for k in 0..m {
+            sys[(i, n + k)] = p[k * n + i];
+            sys[(n + k, i)] = p[k * n + i];
+        }
+    }
+    // The block of the polynomial part is zero (the buffer holds the last factors).
+    for j in n..n + m {
+        for i in n..n + m {
+            sys[(i, j)] = 0.0;
+        }
+    }
+}
+
+/// One right-hand side per operator `L`: `L φ(|· − z_j|)` at the centre for the
+/// radial part, and `L` of each monomial `x^a y^b` at the centre (`a! b!` for the
+/// operator's own multi-index, 0 for the others).
+fn right_hand_sides(rhs: &mut faer::Mat<f64>, radial: &Radial, ops: &[Op], z: &[[f64; 2]], c: f64, exps: &[(u32, u32)]) {
+    let n = z.len();
+    let fact = |k: u32| (1..=k).product::<u32>() as f64;
+    for (col, &op) in ops.iter().enumerate() {
+        for j in 0..n {
+            rhs[(j, col)] = radial.operator_at_centre(op, z[j], c);
+        }
+        let target = op.multi_index();
+        for (k, &(a, b)) in exps.iter().enumerate() {
+            rhs[(n + k, col)] = if (a, b) == target { fact(a) * fact(b) } else { 0.0 };
+        }
+    }
 }
 
 /// The buffers of one thread's stencil solves, kept from node to node: faer's

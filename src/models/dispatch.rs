@@ -8,7 +8,7 @@ use crate::domain::Point;
 use crate::models::dynamics::driver::Snapshot;
 use crate::models::navier;
 use crate::models::peridynamics;
-use crate::stage::{Progress, RunError, StageTimings};
+use crate::stages::{Progress, RunError, StageTimings};
 use crate::scene::problem::{ModelParams, Problem};
 
 /// What a run of one problem produced.
@@ -136,7 +136,7 @@ impl Outcome {
 mod tests {
     use super::*;
     use crate::scene::problem::Model;
-    use crate::stage::Silent;
+    use crate::stages::Silent;
     use std::path::Path;
 
     fn shipped(name: &str) -> Problem {
@@ -170,7 +170,7 @@ mod tests {
                 assert_eq!(kind, model);
                 assert_eq!(snapshots > 0, dynamic, "{model:?}: {snapshots} snapshots");
                 assert_eq!(outcome.positions().len(), outcome.displacement().len());
-                assert!(outcome.timings().get(crate::stage::stage::NODES) > 0.0);
+                assert!(outcome.timings().get(crate::stages::stage::NODES) > 0.0);
                 assert!(!outcome.describe(&p).is_empty());
             }
         }

@@ -18,13 +18,11 @@
 //! Every rank learns of every failure before the next collective call, so one rank's
 //! error never leaves the others waiting.
 
-use std::borrow::Cow;
-use super::partition::{block_owners, morton_owners};
 use super::petsc::{self, KspDefaults, LocalRows, World};
 use crate::linalg::report::RankReport;
 use crate::linalg::scaling::row_scale;
 use crate::linalg::triplets::{compress, Entry};
-use crate::linalg::{Auxiliary, Csr, Krylov, NodeLayout, SolveError, SolveReport, SolverKind, SolverParams};
+use crate::linalg::{Krylov, SolveError, SolveReport, SolverKind, SolverParams};
 
 /// Owner rank and PETSc index of every point.
 #[derive(Debug, Clone)]
@@ -195,34 +193,25 @@ pub fn solve(
     let first = dist.first_row();
     let local_n = dist.counts[dist.world.rank] * k;
     let (owned, checked) = own_rows(dist, entries, params.equilibrate);
-    let OwnedRows { original, row_ptr, cols, vals, scales } = owned;
-    let checked = match (0..local_n).map(|l| original[l]).find(|&u| !b[u].is_finite()) {
+    let checked = match (0..local_n).map(|l| owned.original[l]).find(|&u| !b[u].is_finite()) {
         Some(u) => checked.and(Err(SolveError::Dimension { detail: format!("right-hand side entry {u} is not finite ({})", b[u]) })),
         None => checked,
     };
     agree(checked)?;
 
-    // Loads scaled by a power of two into [1, 2) (exact), as in `linalg::solve`.
-    let b_max = max_over_ranks((0..local_n).fold(0.0f64, |m, l| m.max(b[original[l]].abs())))?;
-    let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
-    let power = |e: i32| 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
-    let rhs: Vec<f64> = (0..local_n).map(|l| b[original[l]] * power(-exponent) * scales[l]).collect();
-    let halo = {
-        let own = first as i64..(first + local_n) as i64;
-        let mut outside: Vec<i64> = cols.iter().copied().filter(|c| !own.contains(c)).collect();
-        outside.sort_unstable();
-        outside.dedup();
-        outside.len()
+    let (rhs, exponent) = scaled_loads(&owned, b)?;
+    let halo = halo_unknowns(&owned.cols, first as i64..(first + local_n) as i64);
+    // GAMG's rigid-body modes need the positions of this rank's points.
+    let coords = (preconditioner == crate::linalg::Preconditioner::Amg && !direct && k == 2).then(|| owned_positions(dist, points));
+    let local = LocalRows {
+        global_rows: n,
+        row_ptr: &owned.row_ptr,
+        cols: &owned.cols,
+        vals: &owned.vals,
+        rhs: &rhs,
+        block_size: k,
+        coords: coords.as_deref(),
     };
-    let coords: Option<Vec<[f64; 2]>> = (preconditioner == crate::linalg::Preconditioner::Amg && !direct && k == 2).then(|| {
-        let mut c = vec![[0.0; 2]; local_n / k];
-        for (p, point) in points.iter().enumerate().filter(|(p, _)| dist.owns_point(*p)) {
-            c[dist.index[p] - first / k] = *point;
-        }
-        c
-    });
-    let local =
-        LocalRows { global_rows: n, row_ptr: &row_ptr, cols: &cols, vals: &vals, rhs: &rhs, block_size: k, coords: coords.as_deref() };
     let defaults = KspDefaults {
         ksp_type: "gmres",
         pc_type: if direct { "lu" } else { preconditioner.petsc_name().unwrap_or("gamg") },
@@ -236,48 +225,19 @@ pub fn solve(
     // The whole solution on every rank, in PETSc order, then in the original one.
     let counts: Vec<usize> = dist.counts.iter().map(|c| c * k).collect();
     let x_petsc = petsc::gather_all(&out.x, &counts).map_err(petsc_error)?;
-    let mut sums = [0.0; 4]; // |r|^2, |b|^2 of the solved system; the same unscaled
-    for l in 0..local_n {
-        let range = row_ptr[l] as usize..row_ptr[l + 1] as usize;
-        let ax: f64 = cols[range.clone()].iter().zip(&vals[range]).map(|(&c, v)| v * x_petsc[c as usize]).sum();
-        let r = rhs[l] - ax;
-        sums[0] += r * r;
-        sums[1] += rhs[l] * rhs[l];
-        sums[2] += (r / scales[l]).powi(2);
-        sums[3] += (rhs[l] / scales[l]).powi(2);
-    }
-    petsc::sum_over_ranks(&mut sums).map_err(petsc_error)?;
+    let sums = residual_sums(&owned, &rhs, &x_petsc)?;
     let relative = |r2: f64, b2: f64| if b2 > 0.0 { (r2 / b2).sqrt() } else { r2.sqrt() };
     let relative_residual = relative(sums[0], sums[1]);
     let method = format!("petsc:{}+{}", out.ksp_type, out.pc_type);
-    let within = relative_residual <= 10.0 * out.rtol; // false for NaN
-    if out.reason < 0 || !within {
-        let limit = if out.reason < 0 {
-            format!("PETSc's converged reason {} ({})", out.reason_name, out.reason)
-        } else {
-            format!("PETSc reported {} but the true residual is above 10 x its rtol {:e}", out.reason_name, out.rtol)
-        };
-        let hint = "try PETSc's distributed LU (-pc_type lu -pc_factor_mat_solver_type mumps), another -pc_type or a larger -ksp_max_it";
-        return Err(SolveError::NoConvergence {
-            hint,
-            iterations: out.iterations,
-            restarts: 0,
-            limit,
-            relative_residual,
-            method,
-            tolerance: out.rtol,
-        });
-    }
+    check_converged(&out, relative_residual, &method)?;
     let mut x = vec![0.0; n];
     for (u, xu) in x.iter_mut().enumerate() {
-        *xu = x_petsc[dist.petsc(u)] * power(exponent);
+        *xu = x_petsc[dist.petsc(u)] * power_of_two(exponent);
     }
     if let Some(u) = x.iter().position(|v| !v.is_finite()) {
         return Err(SolveError::Overflow { detail: format!("unknown {u} is beyond the double range: rescale the loads") });
     }
     let largest = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let per_rank = gather_counts(&[local_n as f64, cols.len() as f64, halo as f64])?;
-    let column = |j: usize| per_rank.iter().map(|r| r[j] as usize).collect();
     let report = SolveReport {
         method,
         choice: None,
@@ -293,39 +253,92 @@ pub fn solve(
         condition_estimate: None,
         // PETSc's KSP holds the preconditioner; its error is not estimated here.
         solver_error: None,
-        ranks: Some(RankReport {
-            ranks: dist.world.size,
-            rows: column(0),
-            nonzeros: column(1),
-            halo_unknowns: column(2),
-            stage_seconds: Vec::new(),
-        }),
+        ranks: Some(rank_report(dist.world.size, local_n, owned.cols.len(), halo)?),
     };
     Ok((x, report))
 }
 
-/// [`linalg::solve_nodal`](crate::linalg::solve_nodal) for every solver, PETSc's
-/// included: a PETSc solve of a matrix every rank holds whole (the peridynamic
-/// stiffness, and any caller that assembled in one piece) hands PETSc on each rank the
-/// rows of the points [`morton_owners`] gives it (of the layout's positions; without a
-/// layout, contiguous blocks of rows).
-pub fn solve_nodal(
-    a: Cow<'_, Csr>,
-    b: &[f64],
-    params: &SolverParams,
-    layout: Option<NodeLayout>,
-    auxiliary: Auxiliary<'_>,
-) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    if !matches!(params.kind, SolverKind::Petsc { .. }) {
-        return crate::linalg::solve_nodal(a, b, params, layout, auxiliary);
-    }
-    let world = petsc::world();
-    let (per_point, owner, points) = match layout {
-        Some(l) => (l.per_node, morton_owners(l.positions, world.size), l.positions.to_vec()),
-        None => (1, block_owners(a.nrows(), world.size), Vec::new()),
-    };
-    solve(&Distribution::new(owner, per_point, world), a.entries(), b, &points, params)
+/// Every rank's rows, entries and halo unknowns, gathered on every rank (the stage
+/// seconds are filled in by the model at the end of the run).
+fn rank_report(ranks: usize, rows: usize, nonzeros: usize, halo: usize) -> Result<RankReport, SolveError> {
+    let per_rank = gather_counts(&[rows as f64, nonzeros as f64, halo as f64])?;
+    let column = |j: usize| per_rank.iter().map(|r| r[j] as usize).collect();
+    Ok(RankReport { ranks, rows: column(0), nonzeros: column(1), halo_unknowns: column(2), stage_seconds: Vec::new() })
 }
+
+/// `2^e` without overflow in the intermediate (two factors).
+fn power_of_two(e: i32) -> f64 {
+    2f64.powi(e / 2) * 2f64.powi(e - e / 2)
+}
+
+/// This rank's loads scaled by a power of two `2^-e` that brings the largest over the
+/// ranks into `[1, 2)` (exact), as in `linalg::solve`, and by the row scales; with `e`.
+fn scaled_loads(owned: &OwnedRows, b: &[f64]) -> Result<(Vec<f64>, i32), SolveError> {
+    let b_max = max_over_ranks(owned.original.iter().fold(0.0f64, |m, &u| m.max(b[u].abs())))?;
+    let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
+    let rhs = owned.original.iter().zip(&owned.scales).map(|(&u, s)| b[u] * power_of_two(-exponent) * s).collect();
+    Ok((rhs, exponent))
+}
+
+/// The positions of this rank's points, in PETSc order.
+fn owned_positions(dist: &Distribution, points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let first = dist.first_row() / dist.per_point;
+    let mut c = vec![[0.0; 2]; dist.counts[dist.world.rank]];
+    for (p, point) in points.iter().enumerate().filter(|(p, _)| dist.owns_point(*p)) {
+        c[dist.index[p] - first] = *point;
+    }
+    c
+}
+
+/// The distinct unknowns outside `own` (this rank's rows) that the columns `cols` read.
+fn halo_unknowns(cols: &[i64], own: std::ops::Range<i64>) -> usize {
+    let mut outside: Vec<i64> = cols.iter().copied().filter(|c| !own.contains(c)).collect();
+    outside.sort_unstable();
+    outside.dedup();
+    outside.len()
+}
+
+/// `[‖r‖², ‖b‖²]` of the solved (row-scaled) system and the same of the original
+/// rows, `r = b - A x` over this rank's rows, summed over the ranks.
+fn residual_sums(owned: &OwnedRows, rhs: &[f64], x: &[f64]) -> Result<[f64; 4], SolveError> {
+    let mut sums = [0.0; 4];
+    for (l, (&b, &scale)) in rhs.iter().zip(&owned.scales).enumerate() {
+        let range = owned.row_ptr[l] as usize..owned.row_ptr[l + 1] as usize;
+        let ax: f64 = owned.cols[range.clone()].iter().zip(&owned.vals[range]).map(|(&c, v)| v * x[c as usize]).sum();
+        let r = b - ax;
+        sums[0] += r * r;
+        sums[1] += b * b;
+        sums[2] += (r / scale).powi(2);
+        sums[3] += (b / scale).powi(2);
+    }
+    petsc::sum_over_ranks(&mut sums).map_err(petsc_error)?;
+    Ok(sums)
+}
+
+/// Refuses a KSP that diverged, or whose true relative residual is above 10 x the
+/// rtol it reported reaching (NaN included).
+fn check_converged(out: &petsc::KspOutcome, relative_residual: f64, method: &str) -> Result<(), SolveError> {
+    let within = relative_residual <= 10.0 * out.rtol; // false for NaN
+    if out.reason >= 0 && within {
+        return Ok(());
+    }
+    let limit = if out.reason < 0 {
+        format!("PETSc's converged reason {} ({})", out.reason_name, out.reason)
+    } else {
+        format!("PETSc reported {} but the true residual is above 10 x its rtol {:e}", out.reason_name, out.rtol)
+    };
+    let hint = "try PETSc's distributed LU (-pc_type lu -pc_factor_mat_solver_type mumps), another -pc_type or a larger -ksp_max_it";
+    Err(SolveError::NoConvergence {
+        hint,
+        iterations: out.iterations,
+        restarts: 0,
+        limit,
+        relative_residual,
+        method: method.to_string(),
+        tolerance: out.rtol,
+    })
+}
+
 
 /// Every rank's `(stage, seconds)`, in rank order (collective; each rank ran the same
 /// stages, a stage another rank lacks reads 0).

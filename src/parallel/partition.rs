@@ -52,12 +52,6 @@ pub fn morton_owners(points: &[Point], ranks: usize) -> Vec<u32> {
     owner
 }
 
-/// Owner rank of each of `n` unknowns without positions: `ranks` consecutive blocks
-/// whose lengths differ by at most one.
-pub fn block_owners(n: usize, ranks: usize) -> Vec<u32> {
-    (0..n).map(|i| (i * ranks.max(1) / n.max(1)) as u32).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

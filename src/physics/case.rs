@@ -12,7 +12,7 @@ use crate::physics::elasticity::conditions::{BoundaryCondition, Value};
 use crate::physics::elasticity::material::Material;
 use crate::physics::exact::{ExactKind, ExactSolution, ExpressionSolution, NamedSolution};
 use crate::scene::expression::VectorExpression;
-use crate::stage::RunError;
+use crate::stages::RunError;
 use crate::quality::post::probe::Probe;
 use rayon::prelude::*;
 use serde::Serialize;

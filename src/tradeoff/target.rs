@@ -30,7 +30,7 @@
 use crate::domain::adapt::{self, GROWTH};
 use crate::domain::{FillKind, SpacingSamples};
 use crate::models::navier::{self, ErrorEstimate, EstimateMethod};
-use crate::stage::{Progress, RunError};
+use crate::stages::{Progress, RunError};
 use crate::quality::post::ErrorNorms;
 use crate::scene::problem::Problem;
 use serde::Serialize;

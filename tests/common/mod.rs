@@ -56,7 +56,7 @@ pub fn b(v: bool) -> Option<toml::Value> {
 
 /// Solve a problem silently.
 pub fn solve(p: &Problem) -> mlsm::models::navier::Solution {
-    mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stage::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
+    mlsm::models::navier::solve(&p.case, &p.navier, &mlsm::stages::Silent).unwrap_or_else(|e| panic!("{}: {e}", p.name))
 }
 
 /// Errors `(e_inf_u, e_inf_sigma)` of a solved problem with an exact solution.

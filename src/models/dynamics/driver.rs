@@ -3,7 +3,7 @@
 
 use super::{DynamicsParams, Integrator, SecondOrderSystem, State};
 use crate::scene::choice::Choice;
-use crate::stage::{interrupt, RunError, Stage, StageTimer};
+use crate::stages::{interrupt, RunError, Stage, StageTimer};
 use serde::Serialize;
 
 /// The stage of the time loop (shown with a progress bar).

@@ -31,7 +31,7 @@ pub trait SecondOrderSystem: Sync {
     /// Why the step from `t0` to `t1` became non-finite, when the system knows (a load
     /// formula that is not finite at some time in the step); `None`: the integration
     /// itself diverged.
-    fn explain(&self, _t0: f64, _t1: f64) -> Option<crate::stage::RunError> {
+    fn explain(&self, _t0: f64, _t1: f64) -> Option<crate::stages::RunError> {
         None
     }
 }

@@ -10,7 +10,7 @@ use crate::physics::elasticity::dofs::Unknowns;
 use crate::parallel::distributed::agree;
 use crate::parallel::share::Share;
 use crate::mlsm::{degenerate_supports, Basis, OpSet, ShapeError};
-use crate::stage::RunError;
+use crate::stages::RunError;
 
 /// Whether a static run makes the gradient's shapes together with the rows' and keeps
 /// them through the solve, instead of making them again after it: yes for RBF-FD,

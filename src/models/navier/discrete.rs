@@ -27,7 +27,7 @@ use crate::physics::exact::ExactSolution;
 use crate::parallel::distributed::agree;
 use crate::parallel::share::Share;
 use crate::mlsm::{compute_shapes, Approximation, Op, OpSet, Shapes};
-use crate::stage::{stage, RunError, Stage, StageTimer};
+use crate::stages::{stage, RunError, Stage, StageTimer};
 
 /// Ghost placement and support search.
 pub const SUPPORTS: Stage = Stage::new("supports");

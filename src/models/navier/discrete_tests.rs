@@ -4,7 +4,7 @@ use super::*;
 use crate::domain::FillKind;
 use crate::mlsm::Basis;
 use crate::models::navier::test_case::quadratic_plate;
-use crate::stage::{Silent, StageTimer};
+use crate::stages::{Silent, StageTimer};
 
 /// The operators of each node are those of the table in the module docs: before
 /// the solve those of its rows; after it ([`Discretisation::restore_gradient_shapes`])

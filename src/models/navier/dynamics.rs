@@ -36,7 +36,7 @@ use crate::physics::elasticity::material::Lame;
 use crate::physics::elasticity::stress::strain;
 use crate::physics::exact::{self, ExactSolution};
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
-use crate::stage::{stage, RunError, StageTimer, StageTimings};
+use crate::stages::{stage, RunError, StageTimer, StageTimings};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 

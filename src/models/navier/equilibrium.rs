@@ -111,7 +111,7 @@ mod tests {
     use crate::physics::case::OutputField;
     use crate::domain::{self, FillKind};
     use crate::models::navier::test_case::quadratic_plate;
-    use crate::stage::Silent;
+    use crate::stages::Silent;
 
     /// The quadratic plate has a linear stress and a constant body force: the traction
     /// is linear along every straight edge, where the trapezoid rule is exact, and the

@@ -29,7 +29,7 @@ use crate::scene::choice::{choice, Choice};
 use crate::domain::{FillKind, Point};
 use crate::physics::elasticity::stress::StressField;
 use crate::mlsm::{default_rbf_fd_support, Approximation, Basis, Radial, Weight};
-use crate::stage::{RunError, Stage, StageTimer};
+use crate::stages::{RunError, Stage, StageTimer};
 use crate::quality::post::{ErrorNorms, ExactFields};
 use serde::Serialize;
 use std::time::Instant;

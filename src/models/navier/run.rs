@@ -19,7 +19,7 @@ use crate::physics::exact::ExactSolution;
 use crate::parallel::distributed;
 use crate::linalg::SolverParams;
 use crate::mlsm::interpolate::mls_values;
-use crate::stage::{Progress, RunError, Silent, StageTimer};
+use crate::stages::{Progress, RunError, Silent, StageTimer};
 use crate::quality::post::ExactFields;
 use std::time::Instant;
 

@@ -19,7 +19,7 @@ use crate::physics::elasticity::stress::{Gradient, StressField};
 use crate::physics::exact::ExactSolution;
 use crate::parallel::distributed::{self, agree};
 use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
-use crate::stage::{stage, RunError, StageTimer, StageTimings};
+use crate::stages::{stage, RunError, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
 use crate::quality::post::{ErrorNorms, ExactFields};
 
@@ -238,9 +238,9 @@ pub(super) fn assemble_and_solve(
         });
         // Handed over unless kept: the solver frees it once it holds its own form.
         let ((mut x, report), kept) = if keep {
-            (distributed::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary)?, Some(matrix))
+            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary)?, Some(matrix))
         } else {
-            (distributed::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary)?, None)
+            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary)?, None)
         };
         // The multipliers of the balances are not unknowns of the field.
         let lambda = x.split_off(x.len() - multipliers);

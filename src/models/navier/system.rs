@@ -18,7 +18,7 @@ use crate::physics::elasticity::dofs::{Unknowns, PRESSURE};
 use crate::physics::exact::{self, ExactSolution};
 use crate::linalg::row_assembly::{RowAssembler, RowFragment};
 use crate::linalg::Csr;
-use crate::stage::RunError;
+use crate::stages::RunError;
 use rayon::prelude::*;
 
 /// Nodes whose rows are written into one block of entries.
@@ -220,7 +220,7 @@ mod tests {
     use crate::mlsm::{Basis, Radial, Weight};
     use crate::models::navier::test_case::quadratic_plate;
     use crate::models::navier::NavierParams;
-    use crate::stage::{Silent, StageTimer};
+    use crate::stages::{Silent, StageTimer};
 
     /// The quadratic plate on scattered nodes with RBF-FD of degree 2 and a symmetry-like
     /// bottom edge (traction in x, displacement in y), whose mixed nodes get a ghost.

@@ -30,7 +30,7 @@ use crate::models::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::physics::elasticity::conditions::Value;
 use crate::physics::elasticity::dofs::DofMap;
 use crate::physics::exact::{self, ExactSolution};
-use crate::stage::{Progress, RunError, StageTimer, StageTimings};
+use crate::stages::{Progress, RunError, StageTimer, StageTimings};
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::collections::BTreeMap;

@@ -19,7 +19,7 @@ use super::nodes::PdNodes;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
 use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
 use crate::physics::exact::{self, ExactSolution};
-use crate::stage::RunError;
+use crate::stages::RunError;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 

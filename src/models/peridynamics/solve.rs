@@ -16,7 +16,7 @@ use crate::linalg::{self, SolveReport};
 use crate::parallel::petsc::World;
 use crate::parallel::distributed;
 use crate::parallel::share::Share;
-use crate::stage::{stage, Progress, RunError, Stage, StageTimer, StageTimings};
+use crate::stages::{stage, Progress, RunError, Stage, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
 use std::borrow::Cow;
 
@@ -255,7 +255,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         } else {
             // The unknowns are the free nodes' displacements, free nodes first.
             let layout = linalg::NodeLayout { per_node: 2, positions: free_positions, multipliers: 0 };
-            distributed::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?
+            linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?
         };
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))

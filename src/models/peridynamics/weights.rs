@@ -148,17 +148,7 @@ pub fn bond_coefficients(
             .map(|&j| kernel.value(norm(offset(i, j))) * nodes.volumes[j as usize] * area_fraction(params, offset(i, j)))
             .collect()
     };
-    // Relative family volume r_i of free nodes (constrained nodes count as complete).
-    let ratio: Vec<f64> = match params.correction {
-        SurfaceCorrection::None => Vec::new(),
-        SurfaceCorrection::Volume => (0..nodes.free)
-            .into_par_iter()
-            .map(|i| {
-                let v: f64 = families.of(i).iter().map(|&j| nodes.volumes[j as usize] * area_fraction(params, offset(i, j))).sum();
-                v / full[nodes.rule_point[i] as usize].0
-            })
-            .collect(),
-    };
+    let ratio = relative_family_volumes(nodes, families, params, &full);
     let r_of = |j: usize| if j < nodes.free { ratio[j] } else { 1.0 };
     let rows: Vec<(Vec<f64>, bool, Option<bool>)> = (0..nodes.free)
         .into_par_iter()
@@ -203,6 +193,25 @@ pub fn bond_coefficients(
         coefficients = symmetrised(nodes, families, &coefficients, &complete, counted);
     }
     BondWeights { coefficients, complete_families, compatible_rows, compatible_failures }
+}
+
+/// The relative family volume `r_i` of every free node (its family's volume over a
+/// complete family's at its quadrature point) for the volume correction; empty without
+/// it (constrained nodes count as complete).
+fn relative_family_volumes(nodes: &PdNodes, families: &Families, params: &PdParams, full: &[(f64, usize)]) -> Vec<f64> {
+    match params.correction {
+        SurfaceCorrection::None => return Vec::new(),
+        SurfaceCorrection::Volume => {}
+    }
+    let x = &nodes.positions;
+    (0..nodes.free)
+        .into_par_iter()
+        .map(|i| {
+            let offset = |j: u32| [x[j as usize][0] - x[i][0], x[j as usize][1] - x[i][1]];
+            let v: f64 = families.of(i).iter().map(|&j| nodes.volumes[j as usize] * area_fraction(params, offset(j))).sum();
+            v / full[nodes.rule_point[i] as usize].0
+        })
+        .collect()
 }
 
 /// `c_ij <- (V_i c_ij + V_j c_ji) / (2 V_i)` for bonds between free nodes of which at

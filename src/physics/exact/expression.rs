@@ -97,10 +97,6 @@ impl ExactSolution for ExpressionSolution {
         self.gradient.each_ref().map(|g| g.each_ref().map(|e| e.eval(p)))
     }
 
-    fn stress(&self, p: [f64; 2]) -> [f64; 3] {
-        self.material.lame().stress(self.gradient(p))
-    }
-
     fn body_force(&self, p: [f64; 2]) -> [f64; 2] {
         let h = |k: usize| {
             let [xx, xy, yy] = self.hessians[k].each_ref().map(|e| e.eval(p));

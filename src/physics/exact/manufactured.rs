@@ -62,10 +62,6 @@ impl ExactSolution for Manufactured {
         [[PI * cx * cy, -PI * sx * sy], [2.0 * x * y.powi(3), 3.0 * x * x * y * y]]
     }
 
-    fn stress(&self, p: [f64; 2]) -> [f64; 3] {
-        self.material.lame().stress(self.gradient(p))
-    }
-
     fn body_force(&self, p: [f64; 2]) -> [f64; 2] {
         let (hu, hv) = self.hessians(p);
         navier_body_force(self.material.lame(), hu, hv)

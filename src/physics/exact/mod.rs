@@ -63,8 +63,11 @@ pub trait ExactSolution: Send + Sync {
     fn displacement(&self, p: [f64; 2]) -> [f64; 2];
     /// `[[u_x, u_y], [v_x, v_y]]`.
     fn gradient(&self, p: [f64; 2]) -> [[f64; 2]; 2];
-    /// `[sigma_xx, sigma_yy, sigma_xy]`; equals `Lame::stress(gradient)`.
-    fn stress(&self, p: [f64; 2]) -> [f64; 3];
+    /// `[sigma_xx, sigma_yy, sigma_xy]`; equals `Lame::stress(gradient)`, which is the
+    /// default (the closed-form solutions give their own stress formulas).
+    fn stress(&self, p: [f64; 2]) -> [f64; 3] {
+        self.material().lame().stress(self.gradient(p))
+    }
     /// `f` in `(lambda + mu) grad div u + mu lap u + f = 0`; zero for the closed-form cases.
     fn body_force(&self, p: [f64; 2]) -> [f64; 2];
     /// Traction `sigma n` for the unit outward normal `n` of the body.

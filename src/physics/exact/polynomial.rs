@@ -124,10 +124,6 @@ impl ExactSolution for Polynomial {
         [d(&self.ux), d(&self.uy)]
     }
 
-    fn stress(&self, p: [f64; 2]) -> [f64; 3] {
-        self.material.lame().stress(self.gradient(p))
-    }
-
     fn body_force(&self, p: [f64; 2]) -> [f64; 2] {
         let (hu, hv) = self.hessians(p);
         navier_body_force(self.material.lame(), hu, hv)

@@ -22,7 +22,7 @@ use crate::physics::elasticity::stress::StressField;
 use crate::mlsm::interpolate::mls_values_of_degree;
 use crate::models::dispatch::{self, Outcome};
 use crate::models::navier::{self, ErrorEstimate, Estimate, EstimateMethod, Sampling};
-use crate::stage::{Silent, StageTimer};
+use crate::stages::{Silent, StageTimer};
 use crate::quality::post::ExactFields;
 use crate::scene::problem::Problem;
 use crate::quality::warnings::LOCAL_REFERENCE_MARGIN;

@@ -9,7 +9,7 @@ pub mod estimate;
 use crate::domain::Point;
 use crate::physics::exact::ExactSolution;
 use crate::models::dispatch::{self, Outcome};
-use crate::stage::{Progress, RunError};
+use crate::stages::{Progress, RunError};
 use crate::scene::problem::{Model, Problem};
 
 /// The local solution the peridynamic runs are compared with.
