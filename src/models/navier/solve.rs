@@ -17,7 +17,7 @@ use crate::domain::{NodeSet, Point};
 use crate::physics::elasticity::dofs::{DofMap, Unknowns};
 use crate::physics::elasticity::stress::{Gradient, StressField};
 use crate::physics::exact::ExactSolution;
-use crate::parallel::distributed::{self, agree};
+use crate::parallel::distributed::agree;
 use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
 use crate::stages::{stage, RunError, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
