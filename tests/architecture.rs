@@ -3,7 +3,9 @@
 //! modules on the floors below its own (`// Floor k` groups in `src/lib.rs`), no two
 //! files import each other in a loop, and the architecture page matches `lib.rs`.
 //! Imports are read as text (`crate::`, `super::`, `self::` paths), test modules
-//! (after `#[cfg(test)]`) excluded.
+//! (after `#[cfg(test)]`) excluded. Also the layout of the tests themselves: every file
+//! of `tests/` is in the quick suite (`cargo fast`) or named as a long study (`cargo
+//! studies`), and the docs pages the tests cite exist.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -298,4 +300,63 @@ fn no_files_import_each_other_in_a_circle() {
     for f in graph.keys() {
         visit(f, &graph, &mut Vec::new(), &mut done);
     }
+}
+
+/// The files of `tests/` by name (`cli` for `tests/cli.rs`), sorted.
+fn test_files() -> Vec<String> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// The aliases of `.cargo/config.toml`, `fast` (the unit tests and the quick files of
+/// `tests/`) and `studies` (the long verification studies), name every file of `tests/`
+/// once between them, and nothing else: a new test file goes into one list or the
+/// other, and cannot fall out of both (docs/maintainers/README.md, "Build and test").
+#[test]
+fn the_fast_and_studies_aliases_name_every_test_file_once() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(".cargo/config.toml");
+    let config: toml::Table = std::fs::read_to_string(&path).unwrap().parse().unwrap();
+    let args = |alias: &str| -> Vec<String> {
+        let list = config["alias"][alias].as_array().unwrap_or_else(|| panic!("{}: no alias {alias}", path.display()));
+        list.iter().map(|v| v.as_str().unwrap().to_string()).collect()
+    };
+    let named = |alias: &str| -> Vec<String> { args(alias).windows(2).filter(|w| w[0] == "--test").map(|w| w[1].clone()).collect() };
+    let (fast, studies) = (named("fast"), named("studies"));
+    assert_eq!(args("fast")[..4], ["test", "--release", "--lib", "--bins"], "fast runs the unit tests too");
+    let files = test_files();
+    let mut listed: Vec<String> = fast.iter().chain(&studies).cloned().collect();
+    listed.sort();
+    let missing: Vec<&String> = files.iter().filter(|f| !listed.contains(f)).collect();
+    assert!(
+        missing.is_empty(),
+        "tests/{{{}}}.rs: in neither `fast` nor `studies` of .cargo/config.toml",
+        missing.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(",")
+    );
+    assert_eq!(listed, files, "each file of tests/ once in `fast` ({fast:?}) or `studies` ({studies:?})");
+}
+
+/// Every page under `docs/` that a comment in `tests/` cites exists (the README's
+/// sections moved to docs/ in issue 50).
+#[test]
+fn the_docs_pages_tests_cite_exist() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut missing = Vec::new();
+    for name in test_files() {
+        let text = std::fs::read_to_string(root.join("tests").join(format!("{name}.rs"))).unwrap();
+        for (i, _) in text.match_indices("docs/") {
+            let path: String = text[i..].chars().take_while(|c| c.is_alphanumeric() || "_/.-".contains(*c)).collect();
+            let path = path.trim_end_matches('.');
+            if path.ends_with(".md") && !root.join(path).exists() {
+                missing.push(format!("tests/{name}.rs: {path}"));
+            }
+        }
+    }
+    assert!(missing.is_empty(), "cited but missing: {missing:?}");
 }

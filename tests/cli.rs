@@ -89,7 +89,7 @@ fn bracket_under_its_weight() -> String {
 
 /// The shipped bracket without ghost nodes (`approximation.ghost_nodes = false`) and
 /// without its error estimate: every node of its free edges carries only its traction
-/// rows, where the multigrid's block Gauss-Seidel diverges (README, Known limits).
+/// rows, where the multigrid's block Gauss-Seidel diverges (docs/limits.md).
 fn bracket_without_ghosts() -> String {
     let text = edit(&shipped("bracket"), &[("[material]", "[approximation]\nghost_nodes = false\n\n[material]")]);
     format!("{text}\n[estimate]\nmethod = \"none\"\n")
@@ -360,7 +360,8 @@ fn convergence_without_exact_reports_estimates_differences_and_probes() {
         }
     }
     // Degree-2 least squares on the 9-node grid stencils is second order (the
-    // manufactured scene measures 2.02 in the README); the differences between
+    // manufactured scene measures 2.02: docs/verification.md, "Convergence on the
+    // shipped scenes"); the differences between
     // levels follow the same order, within [1.5, 2.5].
     let p = num(&t, "fitted_order_difference_u");
     assert!((1.5..=2.5).contains(&p), "order of the differences {p}: {t}");
@@ -1084,10 +1085,9 @@ fn an_interrupted_dynamic_run_leaves_no_partial_series() {
         .spawn()
         .unwrap();
     let staging = tmp.path().join(format!(".res.tmp-{}", child.id())).join("snapshots");
-    let t0 = std::time::Instant::now();
+    // Until two snapshots are staged or the run ends, however long that takes: no clock.
     while std::fs::read_dir(&staging).map(|d| d.count()).unwrap_or(0) < 2 {
-        assert!(t0.elapsed().as_secs() < 120, "no snapshots staged after 120 s");
-        assert!(child.try_wait().unwrap().is_none(), "the long run ended early");
+        assert!(child.try_wait().unwrap().is_none(), "the long run ended before two snapshots were staged");
         std::thread::sleep(std::time::Duration::from_millis(50));
     }
     // SAFETY: sending a signal to our own child process.
@@ -1412,22 +1412,25 @@ fn a_failed_fallback_reports_both_failures_and_the_multigrids_instability() {
 }
 
 /// `--target-error` on a scene with singular corners aims at half the target in u
-/// (the estimate there is low by about 2x, README): the bracket's first step at 2 mm
-/// estimates 9.4e-3, under a target of 1.5e-2 but not under 7.5e-3, so the loop does
-/// not stop as reached; it says why in a note. (The budget of 1 s ends it after the
-/// first step.)
+/// (the estimate there is low by about 2x: docs/guide/estimate-and-warnings.md,
+/// "Warnings"): the bracket's first step at 2 mm estimates 9.4e-3, under a target of
+/// 1.5e-2 but not under 7.5e-3, so the loop does not stop as reached; it says why in a
+/// note. (The smallest budget, 1 ns, has run out after the first step on any machine:
+/// the loop ends there, by the budget.)
 #[test]
 fn a_target_on_a_scene_with_singular_corners_counts_the_estimate_double() {
     let tmp = TempDir::new().unwrap();
     write(tmp.path(), "bracket.toml", &shipped("bracket"));
     let res = tmp.path().join("res");
-    let args = ["--quiet", "run", "bracket.toml", "--target-error", "1.5e-2", "--budget", "1s", "--out", res.to_str().unwrap()];
+    let args = ["--quiet", "run", "bracket.toml", "--target-error", "1.5e-2", "--budget", "1ns", "--out", res.to_str().unwrap()];
     let o = mlsm(tmp.path(), &args);
     assert!(o.status.success(), "{}", describe(&o));
     let s = read_json(&res.join("summary.json"));
     let first = s["target"]["steps"][0]["estimate"].as_f64().unwrap();
     assert!((7.5e-3..1.5e-2).contains(&first), "the bracket's estimate moved: {first:e}");
     assert_eq!(s["target"]["reached"], false, "{}", s["target"]);
+    assert_eq!(s["target"]["stop"], "budget", "{}", s["target"]);
+    assert_eq!(s["target"]["steps"].as_array().unwrap().len(), 1, "{}", s["target"]);
     let notes = s["target"]["notes"].as_array().unwrap();
     assert!(notes.iter().any(|n| n.as_str().unwrap().contains("the displacement estimate counts x2")), "{notes:?}");
 }

@@ -4,7 +4,8 @@
 //! Bands (issue 11): effectivity = estimate / true error in [0.5, 2] for e_inf(u) and
 //! [0.33, 3] for e_inf(sigma) wherever the true error is above 1e-8. They are the
 //! acceptance bands of the estimator, not fitted to it: measured effectivities on
-//! these cases lie in 0.78..1.67 (README, "Error estimate").
+//! these cases lie in 0.78..1.67 (docs/verification.md, "The error estimate: measured
+//! effectivities").
 
 mod common;
 
@@ -163,7 +164,7 @@ fn a_handful_of_nodes_is_warned() {
 /// elements): it was 1.4e-2 while least squares had no ghosts near the corner, 0.17,
 /// and 0.98 before that, while the estimate's reference, PHS
 /// of degree 4, carried a spurious load of 0.24 F on a hole, and earlier had no ghosts
-/// near the corner (README, known limits). Its reactions, 31 % off the applied load
+/// near the corner (docs/limits.md). Its reactions, 31 % off the applied load
 /// before the balances of the corner's sector and of the holes (`navier::sector`),
 /// then 8.4 %, are now 2.9 % off: the note of singular reactions, not a warning.
 #[test]
@@ -194,9 +195,10 @@ fn singular_corners_get_a_note_and_a_broken_run_a_warning() {
 /// With singular corners the displacement estimate counts double against the
 /// threshold (`warnings::SINGULAR_ESTIMATE_FACTOR`): there the degree-4 reference is
 /// about as wrong as the run, and against finite elements the estimate was 0.45-0.55
-/// of the true e_inf(u) (README, "Error estimate"). The bracket at 2 mm estimates
-/// 9.4e-3 where the tip is 2.9 % off: with the threshold at 1.5e-2 the displacement is
-/// warned, counted as 1.9e-2; the steel plate (two clamped corners, 2.2e-3) is not.
+/// of the true e_inf(u) (docs/guide/estimate-and-warnings.md, "Warnings"). The bracket
+/// at 2 mm estimates 9.4e-3 where the tip is 2.9 % off: with the threshold at 1.5e-2 the
+/// displacement is warned, counted as 1.9e-2; the steel plate (two clamped corners,
+/// 2.2e-3) is not.
 #[test]
 fn with_singular_corners_the_displacement_estimate_counts_double() {
     let (sol, checks) = run(&estimated("bracket", &[("estimate.threshold", f(1.5e-2))]));

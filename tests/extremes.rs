@@ -1,4 +1,5 @@
-//! The round-2 extremes (issue 11), one test per row of the README table "Extremes":
+//! The round-2 extremes (issue 11), one test per row of the table "Outcomes at the
+//! extremes" (docs/guide/estimate-and-warnings.md):
 //! every outcome is **accurate** (error below a stated bound, no warning), **warned**
 //! (a warning, with the estimate inside the effectivity bands where there is one) or
 //! **refused** (an error naming the field or the cause), never silent.
@@ -104,8 +105,8 @@ fn the_displacement_pressure_form_is_solved_iteratively() {
 /// e_inf(u) = 18 at h = 0.025): **accurate or warned**, with a faithful estimate.
 /// This field is not divergence-free, so its pressure ~ lambda div u grows without
 /// bound and the tractions it prescribes amplify the displacement error by
-/// ~ lambda / mu: the u-p form measures e_inf(u) 3.5e-3 here (README; 5.6e-3 before the
-/// pressure stabilisation).
+/// ~ lambda / mu: the u-p form measures e_inf(u) 3.5e-3 here (docs/guide/estimate-and-warnings.md,
+/// "Outcomes at the extremes"; 5.6e-3 before the pressure stabilisation).
 #[test]
 fn manufactured_traction_at_nu_0_49999_is_accurate_or_warned() {
     let p = estimated("manufactured_traction", &[("material.nu", f(0.49999)), ("nodes.spacing", f(0.025)), ("nodes.fill", s("grid"))]);

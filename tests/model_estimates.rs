@@ -138,7 +138,8 @@ const WAVE_FREQUENCY: f64 = std::f64::consts::PI * 1.095_445_115_010_332_2;
 /// (`Simulation::history`, eight evenly spaced times up to the end); for a
 /// second-order error it is 0.75 of it in the asymptotic range. The error at the end
 /// time alone (what the estimate covered before) is printed beside it. Measured: see
-/// the printed lines (README table).
+/// the printed lines (the table in docs/verification.md, "The error estimate: measured
+/// effectivities").
 #[test]
 fn refined_tracks_the_dynamic_error() {
     for (spacing, integrator) in [(0.1, "rk4"), (0.05, "rk4"), (0.05, "verlet")] {

@@ -264,7 +264,7 @@ fn degenerate_rbf_support_is_reported_after_widening() {
 /// everywhere but the clamped base: at the concave corner the ghosts of the two
 /// edges coincided and made the matrix singular before ghosts were deduplicated.
 /// Only solvability is asserted: the deflection is not yet converged at these
-/// resolutions (README, known limits).
+/// resolutions (docs/limits.md).
 #[test]
 fn bracket_with_concave_corner_and_holes_solves() {
     let p = scene("bracket", &[("nodes.spacing", f(0.004))]);
@@ -308,7 +308,7 @@ fn tip_deflections(path: &str, extra: &str, hs: &[f64]) -> Vec<(f64, usize)> {
         .collect()
 }
 
-/// Re-entrant corners on scattered nodes (README, known limits): the sector balance
+/// Re-entrant corners on scattered nodes (docs/limits.md): the sector balance
 /// at the corner (`navier::sector`) removes the spurious corner load that made the
 /// tip deflection wrong. The L without holes (benches/bracket_variants/L.toml,
 /// scattered, seed 3; P2 finite elements -4.894e-4 m) was +1.64e-3, -2.38e-4,

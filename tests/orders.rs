@@ -1,5 +1,5 @@
 //! Observed orders of RBF-FD (PHS r^3 plus monomials of degree p) on scattered nodes,
-//! the claims of the README's high-order table: over five levels (four halvings of
+//! the claims of the table in docs/methods/rbf-fd.md: over five levels (four halvings of
 //! the spacing), the least-squares slope of e_inf against sqrt(1/N) is at least
 //! p - 0.5 for u and p - 1.5 for sigma, and no single halving increases either error
 //! by more than 2x. `bash benches/orders.sh` prints the same series with timings
@@ -97,7 +97,7 @@ fn kirsch_p2() {
 /// 10 nodes on the quarter hole; fits 3.43 / 3.18 and 4.62 / 4.56 over 559..132786
 /// nodes). One halving finer (H = 0.08, 2144..530021 nodes, a benchmark: the finest
 /// level takes 77 and 142 s) p = 4 meets the claim (3.77 / 3.47) and p = 6 does not
-/// in u (5.10 / 5.41; README, high order). GMRES + AMG
+/// in u (5.10 / 5.41; docs/methods/rbf-fd.md). GMRES + AMG
 /// keeps the finest level at 0.1 GB where LU needs 7 GB.
 #[test]
 fn kirsch_p4() {

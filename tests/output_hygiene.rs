@@ -1,7 +1,8 @@
-//! The result folder of a command is replaced as a whole (README, "Output"): a re-run
-//! leaves no file of the earlier run that the new one does not write, a failure or an
-//! interrupt leaves the earlier results byte for byte and no temporary folder, I/O
-//! errors give the operating system's reason and the path; `[dynamics] snapshots = N`
+//! The result folder of a command is replaced as a whole
+//! (docs/methods/what-a-run-computes.md, step 9, "Output"): a re-run leaves no file of
+//! the earlier run that the new one does not write, a failure or an interrupt leaves
+//! the earlier results byte for byte and no temporary folder, I/O errors give the
+//! operating system's reason and the path; `[dynamics] snapshots = N`
 //! writes N + 1 states (the final one only for N = 0); progress goes to stderr as
 //! plain lines when stderr is not a terminal, and `--quiet` silences it.
 //!
@@ -15,7 +16,7 @@ use common::describe;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tempfile::TempDir;
 
 /// The `mlsm` binary, run in `dir`.
@@ -155,10 +156,10 @@ fn an_interrupted_run_leaves_the_earlier_result_and_no_temporary_folder() {
     for (args, inside, entries) in cases {
         let mut child = mlsm(tmp.path()).args(&args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
         let staged = tmp.path().join(format!(".res.tmp-{}", child.id())).join(inside);
-        let t0 = Instant::now();
+        // Until the staged folder holds its entries or the run ends, however long that
+        // takes: no clock.
         while !std::fs::read_dir(&staged).is_ok_and(|d| d.count() >= entries) {
-            assert!(t0.elapsed() < Duration::from_secs(120), "nothing staged after 120 s");
-            assert!(child.try_wait().unwrap().is_none(), "{args:?} ended early");
+            assert!(child.try_wait().unwrap().is_none(), "{args:?} ended before anything was staged");
             std::thread::sleep(Duration::from_millis(5));
         }
         // SAFETY: sending a signal to our own child process.
@@ -224,22 +225,33 @@ fn compare_re_run_replaces_its_files_and_keeps_foreign_ones() {
 
 /// With stderr captured (not a terminal) the time loop prints plain progress lines
 /// with a percent at the interval of `MLSM_PROGRESS_INTERVAL`; `--quiet` prints none.
+/// How many lines a run prints depends on the machine's speed, so the test asks for
+/// one only of a time loop that lasted ten intervals or more (`timings_s.integrate`
+/// of its own summary.json): 665 steps took about 1 s on 2 cores, 100 intervals of
+/// 0.01 s.
 #[test]
 fn progress_lines_when_stderr_is_not_a_terminal() {
     let tmp = TempDir::new().unwrap();
-    // 665 steps: about 1 s alone, longer beside other tests; lines every 0.05 s.
     let scene = edited(tmp.path(), "dyn.toml", "steel_plate_dynamic", &[("end_time = 1e-3", "end_time = 5e-3")]);
-    let lines = |quiet: bool| -> Vec<String> {
+    let interval = 0.01;
+    let res = tmp.path().join("res");
+    let lines = |quiet: bool| -> (Vec<String>, f64) {
         let mut c = mlsm(tmp.path());
-        c.env("MLSM_PROGRESS_INTERVAL", "0.05");
+        c.env("MLSM_PROGRESS_INTERVAL", interval.to_string());
         if quiet {
             c.arg("--quiet");
         }
-        let o = c.args(["run", s(&scene), "--out", s(&tmp.path().join("res"))]).output().unwrap();
+        let o = c.args(["run", s(&scene), "--out", s(&res)]).output().unwrap();
         assert!(o.status.success(), "{}", describe(&o));
-        String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.contains("[integrate]")).map(String::from).collect()
+        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(res.join("summary.json")).unwrap()).unwrap();
+        let integrate = summary["timings_s"]["integrate"].as_f64().expect("the time loop's seconds");
+        (String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.contains("[integrate]")).map(String::from).collect(), integrate)
     };
-    let shown = lines(false);
-    assert!(shown.iter().any(|l| l.contains(" % (") && l.contains("steps") && l.contains("elapsed") && l.contains("ETA")), "{shown:?}");
-    assert_eq!(lines(true), Vec::<String>::new());
+    let (shown, seconds) = lines(false);
+    let progress = |l: &String| l.contains(" % (") && l.contains("steps") && l.contains("elapsed") && l.contains("ETA");
+    if seconds >= 10.0 * interval {
+        assert!(shown.iter().any(progress), "{seconds} s of time loop: {shown:?}");
+    }
+    assert!(shown.iter().all(|l| progress(l) || !l.contains('%')), "{shown:?}");
+    assert_eq!(lines(true).0, Vec::<String>::new());
 }

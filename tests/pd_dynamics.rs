@@ -108,7 +108,7 @@ fn unstable_time_step_is_refused() {
 /// initial value over t_end (largest deviation measured: Verlet 2.1e-3, RK4 3.3e-3 at
 /// h = 0.02; at t_end -5.7e-4 and -7.2e-4 at h = 0.01; an unstable run reaches 1e15).
 /// With ghost nodes the condensed operator has growing modes: Verlet diverges at
-/// h = 0.02, 0.01 and 0.005 (README, known limits); that is asserted too.
+/// h = 0.02, 0.01 and 0.005 (docs/limits.md); that is asserted too.
 #[test]
 fn mlsm_elastodynamics_is_stable_and_conserves_energy() {
     let navier = |p: &Problem| mlsm::models::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()));

@@ -143,7 +143,7 @@ fn bad_probes_are_refused_naming_the_field() {
 }
 
 /// The bracket's estimate stays above the threshold at these spacings (the singular
-/// corners; README, "Known limits"). The
+/// corners; docs/limits.md). The
 /// study says so: the finest level's estimate is above the threshold, so a warning
 /// (also under --quiet) and `warnings` in convergence.json say that the extrapolations
 /// are not to be trusted.

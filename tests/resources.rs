@@ -39,7 +39,8 @@ fn peaks(args: &[&str]) -> (f64, f64) {
 /// manufactured_traction, on a peridynamic run (with the local-model estimate's Navier
 /// run) and on a dynamic Navier run (with the refined estimate's run on four times
 /// the nodes). Measured ratios (estimate / peak)
-/// 1.01-1.95 (README, "Resources up front"); the smallest Kirsch (57 MB measured) is
+/// 1.01-1.95 (docs/verification.md, "The memory estimate against measured peaks"); the
+/// smallest Kirsch (57 MB measured) is
 /// the closest to the bar.
 #[test]
 fn memory_estimate_tracks_the_measured_peak() {

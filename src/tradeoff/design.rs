@@ -27,6 +27,47 @@ pub const DOMINATED_RUNS: usize = 3;
 /// the estimated nonzeros (sparse LU in 2D grows a little faster than linearly).
 pub const DEFAULT_EXPONENT: f64 = 1.3;
 
+/// Share of the budget given to runs; the rest is kept for writing the results.
+pub const RUN_SHARE: f64 = 0.97;
+
+/// Seconds between two looks at a running configuration: a run still going at the
+/// deadline is stopped at most this late.
+pub const POLL_S: f64 = 0.02;
+
+/// The time budget of a sweep, in seconds. Its decisions take the seconds elapsed since
+/// the sweep started as an argument (the caller reads the clock), so that they are
+/// tested with the seconds a test sets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Budget {
+    /// The whole budget (seconds).
+    pub seconds: f64,
+}
+
+impl Budget {
+    /// Seconds after the start by which every run has ended: [`RUN_SHARE`] of the budget.
+    pub fn deadline(&self) -> f64 {
+        RUN_SHARE * self.seconds
+    }
+
+    /// Seconds left for runs `elapsed` seconds into the sweep (none past the deadline).
+    pub fn left(&self, elapsed: f64) -> f64 {
+        (self.deadline() - elapsed).max(0.0)
+    }
+
+    /// Why a run predicted to take `predicted` seconds is not started `elapsed` seconds
+    /// into the sweep, or `None` to start it. The sweep's first run has no prediction
+    /// and is started: if it outlasts the budget it is stopped at the deadline.
+    pub fn skip(&self, predicted: Option<f64>, elapsed: f64) -> Option<String> {
+        let left = self.left(elapsed);
+        predicted.filter(|&t| t > left).map(|t| format!("predicted {t:.1} s, {left:.1} s of the budget left"))
+    }
+
+    /// Whether a run still going `elapsed` seconds into the sweep is stopped.
+    pub fn ended(&self, elapsed: f64) -> bool {
+        elapsed >= self.deadline()
+    }
+}
+
 /// The far-field spacing of `level` for a scene of spacing `h`, to four significant
 /// digits (so that the configuration files and snippets read well).
 pub fn spacing(h: f64, level: usize) -> f64 {
@@ -182,6 +223,47 @@ mod tests {
 
     fn m(work: f64, seconds: f64, error: f64) -> Measured {
         Measured { work, seconds, error: Some(error) }
+    }
+
+    /// The budget's decisions with the seconds the test sets: a family whose last run
+    /// (work 1e4) took 3 s prices its next (work 4e4) at 3 x 4^2 = 48 s with its own
+    /// growth exponent (2, clamped: 0.75 s -> 3 s for twice the work); with a 60 s budget,
+    /// 40 s into the sweep, 18.2 s are left for runs (0.97 x 60 - 40), and the run is
+    /// skipped with both numbers; 5 s in it starts.
+    #[test]
+    fn a_run_predicted_past_the_budget_is_skipped() {
+        let mut s = Sweep::new(vec!["a".into()]);
+        s.record(0, m(5e3, 0.75, 1e-2));
+        s.record(0, m(1e4, 3.0, 1e-3));
+        let predicted = s.predict(0, 4e4);
+        assert!((predicted.unwrap() - 48.0).abs() < 1e-9, "{predicted:?}");
+        let budget = Budget { seconds: 60.0 };
+        assert!((budget.left(40.0) - 18.2).abs() < 1e-12);
+        assert_eq!(budget.skip(predicted, 40.0).as_deref(), Some("predicted 48.0 s, 18.2 s of the budget left"));
+        assert_eq!(budget.skip(predicted, 5.0), None);
+        // Past the deadline nothing is left; a first run (no prediction) still starts,
+        // and is stopped at once.
+        assert_eq!(budget.left(59.0), 0.0);
+        assert_eq!(budget.skip(Some(1e-3), 59.0).as_deref(), Some("predicted 0.0 s, 0.0 s of the budget left"));
+        assert_eq!(budget.skip(None, 59.0), None);
+        assert!(budget.ended(59.0) && !budget.ended(58.0));
+    }
+
+    /// The bound: a sweep ends within 10 % past its budget. Every run ends by
+    /// the deadline plus one look ([`POLL_S`]); what is left below 1.1 x the budget is
+    /// the time to stop the last run and write the results: at least a tenth of the
+    /// budget for budgets from 1 s (0.76 s of a 6 s budget).
+    #[test]
+    fn runs_end_early_enough_to_write_the_results_within_the_bound() {
+        for seconds in [1.0, 6.0, 120.0, 3.2e7] {
+            let budget = Budget { seconds };
+            let runs_end = budget.deadline() + POLL_S;
+            assert!(runs_end <= seconds, "{seconds} s: runs end at {runs_end}");
+            let writing = 1.1 * seconds - runs_end;
+            assert!(writing >= 0.1 * seconds, "{seconds} s: {writing} s to write");
+            assert!(budget.ended(budget.deadline()) && !budget.ended(budget.deadline() - 1e-9 * seconds));
+        }
+        assert!((1.1 * 6.0 - (Budget { seconds: 6.0 }.deadline() + POLL_S) - 0.76).abs() < 1e-12);
     }
 
     #[test]

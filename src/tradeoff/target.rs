@@ -309,7 +309,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         } else {
             next_problem(&problem, &solution, estimate, target, refinement, order)
                 .map_err(|reason| Stop::Memory { reason })
-                .and_then(|(next, nodes)| within_budget(target, t0, &history[k], nodes).map(|()| next))
+                .and_then(|(next, nodes)| within_budget(target.budget, t0.elapsed().as_secs_f64(), &history[k], nodes).map(|()| next))
         };
         if best.as_ref().is_none_or(|(b, _, _)| value < history[*b].estimate) {
             best = Some((k, problem, solution));
@@ -340,13 +340,15 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
 }
 
 /// `Err(Stop::Budget)` when the next step, of about `nodes` nodes, is predicted to take
-/// longer than what is left of the budget (the last step's seconds times the node ratio
-/// to the power [`TIME_EXPONENT`]).
-fn within_budget(target: &Target, t0: Instant, last: &Step, nodes: f64) -> Result<(), Stop> {
-    let Some(budget) = target.budget else { return Ok(()) };
+/// longer than what is left of `budget` after `elapsed` seconds (the last step's seconds
+/// times the node ratio, at least 1, to the power [`TIME_EXPONENT`]), or when nothing is
+/// left. The caller reads the clock: the decision itself is tested with the seconds a
+/// test sets (module `tests`).
+fn within_budget(budget: Option<Duration>, elapsed: f64, last: &Step, nodes: f64) -> Result<(), Stop> {
+    let Some(budget) = budget else { return Ok(()) };
     let predicted_s = last.seconds * (nodes / last.nodes as f64).max(1.0).powf(TIME_EXPONENT);
-    let left_s = budget.as_secs_f64() - t0.elapsed().as_secs_f64();
-    if predicted_s > left_s {
+    let left_s = (budget.as_secs_f64() - elapsed).max(0.0);
+    if left_s <= 0.0 || predicted_s > left_s {
         Err(Stop::Budget { predicted_s, left_s })
     } else {
         Ok(())
@@ -406,4 +408,59 @@ fn singular_nodes(p: &Problem, sol: &navier::Solution) -> Vec<usize> {
             corners.iter().any(|c| (x[0] - c.at[0]).hypot(x[1] - c.at[1]) <= PINNED_SPACINGS * nodes.local_spacing[i])
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step of `nodes` nodes that took `seconds`.
+    fn step(nodes: usize, seconds: f64) -> Step {
+        let norms = ErrorNorms { e_inf_u: 1e-2, e_inf_sigma: None, rel_l2_u: 1e-2, rel_l2_sigma: None };
+        Step { nodes, spacing_min: 1.0, spacing_max: 1.0, seconds, estimate: 1e-2, error: None, estimated: norms, errors: None }
+    }
+
+    fn budget(seconds: f64) -> Option<Duration> {
+        Some(Duration::from_secs_f64(seconds))
+    }
+
+    /// The budget's decision with the seconds the test sets: a step of 3 s on 1 000
+    /// nodes, a next step of 4 000 nodes, predicted at 3 x 4^1.2 = 15.8 s.
+    #[test]
+    fn the_budget_stops_a_step_predicted_past_what_is_left() {
+        let predicted = 3.0 * 4f64.powf(TIME_EXPONENT);
+        assert!((predicted - 15.834).abs() < 1e-3, "{predicted}");
+        // 20 s budget, 15 s spent: 5 s left, too few.
+        match within_budget(budget(20.0), 15.0, &step(1000, 3.0), 4000.0) {
+            Err(Stop::Budget { predicted_s, left_s }) => {
+                assert!((predicted_s - predicted).abs() < 1e-12 && (left_s - 5.0).abs() < 1e-12, "{predicted_s} {left_s}");
+                let said = Stop::Budget { predicted_s, left_s }.describe();
+                assert_eq!(said, "the budget ends: the next step would take about 15.8 s, 5.0 s are left");
+            }
+            other => panic!("{other:?}"),
+        }
+        // 20 s left: the step fits; so does one just within (15.84 s left).
+        assert!(within_budget(budget(30.0), 10.0, &step(1000, 3.0), 4000.0).is_ok());
+        assert!(within_budget(budget(20.0), 20.0 - predicted - 1e-9, &step(1000, 3.0), 4000.0).is_ok());
+        // No budget: never stopped by time.
+        assert!(within_budget(None, 1e9, &step(1000, 3.0), 4000.0).is_ok());
+    }
+
+    /// A next step with fewer nodes is priced as the last one (the ratio is at least
+    /// 1), and a budget already spent stops the loop whatever the prediction, with
+    /// nothing (not a negative time) left: the smallest `--budget` (1 ns) ends every
+    /// loop after its first step, on any machine.
+    #[test]
+    fn a_spent_budget_stops_with_nothing_left() {
+        match within_budget(budget(10.0), 8.0, &step(1000, 3.0), 500.0) {
+            Err(Stop::Budget { predicted_s, left_s }) => assert_eq!((predicted_s, left_s), (3.0, 2.0)),
+            other => panic!("{other:?}"),
+        }
+        for elapsed in [1e-9, 0.5, 1e3] {
+            match within_budget(budget(1e-9), elapsed, &step(10, 0.0), 10.0) {
+                Err(Stop::Budget { predicted_s, left_s }) => assert_eq!((predicted_s, left_s), (0.0, 0.0)),
+                other => panic!("{other:?}"),
+            }
+        }
+    }
 }

@@ -4,11 +4,12 @@
 use super::super::AppError;
 use crate::output::OutputError;
 use crate::quality::warnings::SINGULAR_ESTIMATE_FACTOR;
+use crate::tradeoff::design::POLL_S;
 use serde::Serialize;
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Error norms of one solution (`summary.json`'s `errors` or `estimated_errors`).
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -73,9 +74,10 @@ pub(super) enum Ending {
     Stopped,
 }
 
-/// Run `mlsm --quiet run <config> --out <dir>` and wait for it until `deadline`; its
-/// error output goes to `<dir>.log`.
-pub(super) fn run(config: &Path, dir: &Path, deadline: Instant) -> Result<Ending, AppError> {
+/// Run `mlsm --quiet run <config> --out <dir>` and wait for it, looking every
+/// [`POLL_S`] whether the budget `ended` (then it is stopped); its error output goes to
+/// `<dir>.log`.
+pub(super) fn run(config: &Path, dir: &Path, ended: impl Fn() -> bool) -> Result<Ending, AppError> {
     let log_path = dir.with_extension("log");
     let io = |path: &Path, e: std::io::Error| AppError::Output(OutputError::io(path, e));
     let log = std::fs::File::create(&log_path).map_err(|e| io(&log_path, e))?;
@@ -95,12 +97,12 @@ pub(super) fn run(config: &Path, dir: &Path, deadline: Instant) -> Result<Ending
         if let Some(status) = child.try_wait().map_err(|e| io(config, e))? {
             break status;
         }
-        if Instant::now() >= deadline {
+        if ended() {
             let _ = child.kill();
             let _ = child.wait();
             return Ok(Ending::Stopped);
         }
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_secs_f64(POLL_S));
     };
     if !status.success() {
         let text = std::fs::read_to_string(&log_path).unwrap_or_default();

@@ -4,6 +4,9 @@
 //! `tradeoff.csv`, `tradeoff.json`, the front plot (`tradeoff.svg`, `tradeoff.png`),
 //! the configuration files (`configs/`) and each run's `summary.json` (`runs/`), and
 //! prints the table and the cheapest configuration per accuracy decade.
+//!
+//! For tests only, `MLSM_TRADEOFF_MAX_RUNS=N` ends the sweep once N runs were started:
+//! a count a test sets where a budget would make it depend on the machine's speed.
 
 mod child;
 mod report;
@@ -12,7 +15,7 @@ use super::AppError;
 use crate::output::{self, StagedDir};
 use crate::scene::problem::{Model, Problem, ProblemError, ProblemErrorKind};
 use crate::models::resources::{self, MemoryEstimate};
-use crate::tradeoff::design::{self, Measured, Sweep, LADDER_LEVELS};
+use crate::tradeoff::design::{self, Budget, Measured, Sweep, LADDER_LEVELS};
 use crate::tradeoff::variant::{Edits, Setting};
 use crate::quality::warnings::singular_estimate_note;
 use child::{Ending, Norms};
@@ -27,8 +30,17 @@ pub(super) struct TradeoffRequest {
     pub out: Option<PathBuf>,
 }
 
-/// Share of the budget given to runs; the rest is kept for writing the results.
-const RUN_SHARE: f64 = 0.97;
+/// For tests only (module docs): the number of runs after which the sweep ends.
+const MAX_RUNS_VARIABLE: &str = "MLSM_TRADEOFF_MAX_RUNS";
+
+/// `MLSM_TRADEOFF_MAX_RUNS`, when set: a positive whole number.
+fn max_runs() -> Result<Option<usize>, AppError> {
+    let Ok(text) = std::env::var(MAX_RUNS_VARIABLE) else { return Ok(None) };
+    match text.trim().parse::<usize>() {
+        Ok(n) if n > 0 => Ok(Some(n)),
+        _ => Err(AppError::Usage(format!("{MAX_RUNS_VARIABLE}={text:?} must be a positive whole number (runs; for tests)"))),
+    }
+}
 
 /// Warnings that make a run's errors untrustworthy (the solve itself is in doubt).
 /// `solver-error` is not one of them: a converged solve whose own error is above a
@@ -196,8 +208,10 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
         Err(e) if e.field == "MLSM_MEMORY_LIMIT" => return Err(e.into()),
         _ => {}
     }
+    let max_runs = max_runs()?;
     let start = Instant::now();
-    let deadline = start + req.budget.mul_f64(RUN_SHARE);
+    let budget = Budget { seconds: req.budget.as_secs_f64() };
+    let elapsed = || start.elapsed().as_secs_f64();
     let target = req.out.clone().unwrap_or_else(|| super::default_out(&p).join("tradeoff"));
     let staged = StagedDir::create(&target, |_| true)?;
     let dir = staged.path().to_path_buf();
@@ -221,6 +235,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
     let mut sweep = Sweep::new(families.iter().map(|f| f.0.clone()).collect());
     let mut plans: Vec<Option<Plan>> = families.iter().map(|_| None).collect();
     let mut rows: Vec<Row> = Vec::new();
+    let mut started = 0;
     loop {
         // A configuration for every running family: levels too coarse for its stencil
         // are passed over; any other refusal stops the family.
@@ -236,6 +251,12 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
         }
         let work = |f: usize, _level: usize| plans[f].as_ref().map_or(f64::INFINITY, |pl| pl.estimate.nonzeros);
         let Some((f, predicted)) = sweep.next(work) else { break };
+        if max_runs == Some(started) {
+            for g in 0..families.len() {
+                sweep.stop(g, format!("{started} runs were made ({MAX_RUNS_VARIABLE}, for tests)"));
+            }
+            break;
+        }
         let pl = plans[f].take().expect("planned above");
         let mut row = Row {
             id: format!("r{:02}", rows.len() + 1),
@@ -247,19 +268,18 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             snippet: pl.edits.snippet(),
             ..Row::default()
         };
-        let left = deadline.saturating_duration_since(Instant::now()).as_secs_f64();
         if let Some(why) = pl.refused {
             sweep.stop(f, format!("its next run was refused ({why})"));
             (row.status, row.reason) = (Status::Refused, Some(why));
-        } else if let Some(t) = predicted.filter(|t| *t > left) {
-            let why = format!("predicted {t:.1} s, {left:.1} s of the budget left");
+        } else if let Some(why) = budget.skip(predicted, elapsed()) {
             sweep.stop(f, format!("its next run is {why}"));
             (row.status, row.reason) = (Status::Skipped, Some(why));
         } else {
             let config = dir.join("configs").join(format!("{}.toml", row.id));
             output::write_atomic(&config, pl.text.as_bytes())?;
+            started += 1;
             let launched = Instant::now();
-            let ending = child::run(&config, &dir.join("runs").join(&row.id), deadline)?;
+            let ending = child::run(&config, &dir.join("runs").join(&row.id), || budget.ended(elapsed()))?;
             let wall = launched.elapsed().as_secs_f64();
             match ending {
                 Ending::Finished(r) => {
@@ -286,7 +306,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             }
         }
         if !quiet {
-            eprintln!("{}", report::progress_line(&row, start.elapsed().as_secs_f64()));
+            eprintln!("{}", report::progress_line(&row, elapsed()));
         }
         rows.push(row);
     }

@@ -262,7 +262,10 @@ impl Summary {
         for n in &self.notes {
             println!("note: {n}");
         }
-        println!("written: {} (tradeoff.csv, tradeoff.json, tradeoff.svg, tradeoff.png)", dir.display());
+        // The plot only when a run finished (a budget that ended the first run has none).
+        let written: Vec<&str> =
+            ["tradeoff.csv", "tradeoff.json", "tradeoff.svg", "tradeoff.png"].into_iter().filter(|f| dir.join(f).exists()).collect();
+        println!("written: {} ({})", dir.display(), written.join(", "));
     }
 }
 
