@@ -184,11 +184,17 @@ pub fn compute_shapes(positions: &[Point], supports: &Supports, approx: &Approxi
     Ok(Shapes { offsets, stored, slot, computed: needs.to_vec(), data })
 }
 
+/// The least-squares approximation the unit tests use: monomials of degree 2, a
+/// Gaussian weight of width 1 (in support radii), `support` nodes, no ghosts.
+#[cfg(test)]
+pub(crate) fn test_least_squares(support: usize) -> Approximation {
+    Approximation { basis: Basis::Monomials { degree: 2 }, weight: super::Weight::Gaussian { sigma: 1.0 }, support, ghost_nodes: false }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::domain::neighbors::Supports;
-    use crate::mlsm::{Basis, Weight};
 
     /// Retaining the first derivatives keeps them bit for bit at every node (whatever
     /// else each node had), drops the second derivatives, and shrinks the storage to
@@ -197,12 +203,7 @@ mod tests {
     fn retain_keeps_the_kept_operators_exactly() {
         let positions: Vec<[f64; 2]> = (0..64).map(|k| [0.1 * (k % 8) as f64 + 0.01 * (k / 8) as f64, 0.1 * (k / 8) as f64]).collect();
         let supports = Supports::nearest(&positions, 9);
-        let approx = Approximation {
-            basis: Basis::Monomials { degree: 2 },
-            weight: Weight::Gaussian { sigma: 1.0 },
-            support: 9,
-            ghost_nodes: false,
-        };
+        let approx = test_least_squares(9);
         let needs: Vec<OpSet> = (0..64).map(|i| [OpSet::D1 | OpSet::D2, OpSet::D1, OpSet::D2, OpSet::EMPTY][i % 4]).collect();
         let all = compute_shapes(&positions, &supports, &approx, &needs).unwrap();
         let mut kept = all.clone();

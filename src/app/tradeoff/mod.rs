@@ -193,21 +193,71 @@ fn check_scene(p: &Problem) -> Result<(), AppError> {
     Ok(())
 }
 
-/// Run the sweep of `req` (module docs).
-pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
+/// The scene of `req`, as text (the sweep edits it) and validated; refused when the
+/// sweep cannot study it or the memory limit is malformed (an error of the command,
+/// not of every configuration).
+fn read_scene(req: &TradeoffRequest) -> Result<(String, Problem), AppError> {
     let text = std::fs::read_to_string(&req.scene).map_err(|e| ProblemError {
         file: req.scene.clone(),
         field: "(file)".into(),
         reason: format!("cannot read the scene file: {e}"),
-        kind: crate::scene::problem::ProblemErrorKind::Invalid,
+        kind: ProblemErrorKind::Invalid,
     })?;
     let p = Problem::from_str(&text, &req.scene)?;
     check_scene(&p)?;
-    // A malformed memory limit is an error of the command, not of every configuration.
     match resources::check(&p) {
-        Err(e) if e.field == "MLSM_MEMORY_LIMIT" => return Err(e.into()),
-        _ => {}
+        Err(e) if e.field == "MLSM_MEMORY_LIMIT" => Err(e.into()),
+        _ => Ok((text, p)),
     }
+}
+
+/// A configuration for every running family that has none: levels too coarse for its
+/// stencil are passed over; any other refusal stops the family.
+fn plan_next_runs((p, text): (&Problem, &str), families: &[(String, Option<Setting>)], sweep: &mut Sweep, plans: &mut [Option<Plan>]) {
+    for (f, (_, setting)) in families.iter().enumerate() {
+        while sweep.families[f].stopped.is_none() && plans[f].is_none() {
+            let level = sweep.families[f].next_level;
+            match plan(p, text, setting.as_ref(), level) {
+                Ok(pl) => plans[f] = Some(pl),
+                Err(e) if e.kind == ProblemErrorKind::TooFewNodes && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
+                Err(e) => sweep.stop(f, format!("{}: {}", e.field, e.reason)),
+            }
+        }
+    }
+}
+
+/// What a run of family `f` (its planned work, `wall` seconds) ended with, in its row
+/// and in the sweep: measured, failed (the family stops), or stopped by the budget
+/// (every family stops). Returns whether the run met singular corners.
+fn record(row: &mut Row, ending: Ending, (f, work, wall): (usize, f64, f64), sweep: &mut Sweep) -> bool {
+    row.wall_seconds = Some(wall);
+    match ending {
+        Ending::Finished(r) => {
+            (row.nodes, row.seconds, row.estimate_seconds) = (Some(r.nodes), Some(r.seconds), Some(r.estimate_seconds));
+            (row.peak_memory_bytes, row.warnings) = (r.peak_memory_bytes, r.warnings);
+            (row.exact, row.estimated) = (r.exact, r.estimated);
+            let error = if row.trusted() { row.measure() } else { None };
+            sweep.record(f, Measured { work, seconds: wall, error });
+            r.singular_corners
+        }
+        Ending::Failed(why) => {
+            sweep.stop(f, format!("a run failed ({why})"));
+            (row.status, row.reason) = (Status::Failed, Some(why));
+            false
+        }
+        Ending::Stopped => {
+            (row.status, row.reason) = (Status::Stopped, Some("the budget ended during the run".into()));
+            for g in 0..sweep.families.len() {
+                sweep.stop(g, "the budget ended".into());
+            }
+            false
+        }
+    }
+}
+
+/// Run the sweep of `req` (module docs).
+pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
+    let (text, p) = read_scene(&req)?;
     let max_runs = max_runs()?;
     let start = Instant::now();
     let budget = Budget { seconds: req.budget.as_secs_f64() };
@@ -220,16 +270,9 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
     }
     let (families, mut notes) = families(&p, &text);
     if !quiet {
-        eprintln!(
-            "tradeoff of {} within {:.0} s: {} families ({})",
-            p.name,
-            req.budget.as_secs_f64(),
-            families.len(),
-            families.iter().map(|f| f.0.as_str()).collect::<Vec<_>>().join("; ")
-        );
-        for n in &notes {
-            eprintln!("note: {n}");
-        }
+        let names: Vec<&str> = families.iter().map(|f| f.0.as_str()).collect();
+        eprintln!("tradeoff of {} within {:.0} s: {} families ({})", p.name, req.budget.as_secs_f64(), names.len(), names.join("; "));
+        notes.iter().for_each(|n| eprintln!("note: {n}"));
     }
     let singular_note = singular_estimate_note("the estimated e_inf(u) and rel_l2(u) count");
     let mut sweep = Sweep::new(families.iter().map(|f| f.0.clone()).collect());
@@ -237,18 +280,7 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
     let mut rows: Vec<Row> = Vec::new();
     let mut started = 0;
     loop {
-        // A configuration for every running family: levels too coarse for its stencil
-        // are passed over; any other refusal stops the family.
-        for (f, (_, setting)) in families.iter().enumerate() {
-            while sweep.families[f].stopped.is_none() && plans[f].is_none() {
-                let level = sweep.families[f].next_level;
-                match plan(&p, &text, setting.as_ref(), level) {
-                    Ok(pl) => plans[f] = Some(pl),
-                    Err(e) if e.kind == ProblemErrorKind::TooFewNodes && level + 1 < LADDER_LEVELS => sweep.families[f].next_level += 1,
-                    Err(e) => sweep.stop(f, format!("{}: {}", e.field, e.reason)),
-                }
-            }
-        }
+        plan_next_runs((&p, &text), &families, &mut sweep, &mut plans);
         let work = |f: usize, _level: usize| plans[f].as_ref().map_or(f64::INFINITY, |pl| pl.estimate.nonzeros);
         let Some((f, predicted)) = sweep.next(work) else { break };
         if max_runs == Some(started) {
@@ -281,28 +313,9 @@ pub(super) fn run(req: TradeoffRequest, quiet: bool) -> Result<(), AppError> {
             let launched = Instant::now();
             let ending = child::run(&config, &dir.join("runs").join(&row.id), || budget.ended(elapsed()))?;
             let wall = launched.elapsed().as_secs_f64();
-            match ending {
-                Ending::Finished(r) => {
-                    (row.nodes, row.seconds, row.estimate_seconds) = (Some(r.nodes), Some(r.seconds), Some(r.estimate_seconds));
-                    (row.wall_seconds, row.peak_memory_bytes, row.warnings) = (Some(wall), r.peak_memory_bytes, r.warnings);
-                    (row.exact, row.estimated) = (r.exact, r.estimated);
-                    if r.singular_corners && !notes.contains(&singular_note) {
-                        notes.push(singular_note.clone());
-                    }
-                    let error = if row.trusted() { row.measure() } else { None };
-                    sweep.record(f, Measured { work: pl.estimate.nonzeros, seconds: wall, error });
-                }
-                Ending::Failed(why) => {
-                    sweep.stop(f, format!("a run failed ({why})"));
-                    (row.status, row.reason, row.wall_seconds) = (Status::Failed, Some(why), Some(wall));
-                }
-                Ending::Stopped => {
-                    (row.status, row.reason, row.wall_seconds) =
-                        (Status::Stopped, Some("the budget ended during the run".into()), Some(wall));
-                    for g in 0..families.len() {
-                        sweep.stop(g, "the budget ended".into());
-                    }
-                }
+            let singular = record(&mut row, ending, (f, pl.estimate.nonzeros, wall), &mut sweep);
+            if singular && !notes.contains(&singular_note) {
+                notes.push(singular_note.clone());
             }
         }
         if !quiet {

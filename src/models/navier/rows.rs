@@ -181,19 +181,14 @@ impl RowWriter<'_> {
 mod tests {
     use super::*;
     use crate::physics::elasticity::dofs::Unknowns;
-    use crate::mlsm::{compute_shapes, Approximation, Basis, OpSet, Weight};
+    use crate::mlsm::{compute_shapes, OpSet};
 
     /// A 7 x 7 lattice of spacing 0.1 (node 24 at the centre), supports of 13 nodes and
     /// degree-2 shapes of every derivative at every node.
     fn lattice() -> (Vec<[f64; 2]>, Supports, Shapes) {
         let positions: Vec<[f64; 2]> = (0..49).map(|k| [0.1 * (k % 7) as f64 - 0.3, 0.1 * (k / 7) as f64 - 0.3]).collect();
         let supports = Supports::nearest(&positions, 13);
-        let approximation = Approximation {
-            basis: Basis::Monomials { degree: 2 },
-            weight: Weight::Gaussian { sigma: 1.0 },
-            support: 13,
-            ghost_nodes: false,
-        };
+        let approximation = crate::mlsm::shapes::test_least_squares(13);
         let shapes = compute_shapes(&positions, &supports, &approximation, &[OpSet::D1 | OpSet::D2; 49]).unwrap();
         (positions, supports, shapes)
     }
