@@ -996,7 +996,9 @@ fn dynamic_run_writes_series_energies_and_summary() {
     assert_eq!(files.len() as u64, 1 + steps / 10 + u64::from(!steps.is_multiple_of(10)), "{pvd}");
     for f in &files {
         let vtu = mlsm::output::read_vtu(&res.join(f)).unwrap();
-        assert!(vtu.fields.contains_key("displacement") && vtu.fields.contains_key("velocity"), "{f}");
+        for field in ["displacement", "velocity", "sigma_xx", "sigma_yy", "sigma_xy", "von_mises"] {
+            assert!(vtu.fields.contains_key(field), "{f}: no {field}");
+        }
     }
     // The last snapshot is the final state: its velocity at t_end differs from the initial one.
     let first = mlsm::output::read_vtu(&res.join(files[0])).unwrap();
@@ -1010,6 +1012,8 @@ fn dynamic_run_writes_series_energies_and_summary() {
     assert!(num(est, "largest_u_time") > 0.0, "{est}");
     let solution = mlsm::output::read_vtu(&res.join("solution.vtu")).unwrap();
     assert!(solution.fields.contains_key("estimated_error") && !last.fields.contains_key("estimated_error"));
+    // The final solution is the last snapshot's state, its stress included.
+    assert_eq!(solution.fields["von_mises"].1, last.fields["von_mises"].1);
     let csv = std::fs::read_to_string(res.join("energies.csv")).unwrap();
     assert!(csv.starts_with("t,kinetic,elastic,external,total\n"));
     assert_eq!(csv.lines().count() as u64, steps + 2, "one row per step plus the initial state and the header");

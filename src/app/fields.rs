@@ -36,7 +36,7 @@ pub(super) fn write_points_vtu(path: &Path, points: &[[f64; 2]], domain: &Domain
 }
 
 /// Strain, stress and von Mises arrays, as far as the scene asks for them.
-fn stress_fields(case: &Case, gradient: &Option<Vec<Gradient>>, stress: &Option<StressField>) -> Vec<PointField> {
+pub(super) fn stress_fields(case: &Case, gradient: &Option<Vec<Gradient>>, stress: &Option<StressField>) -> Vec<PointField> {
     let mut f = Vec::new();
     if let (Some(g), true) = (gradient, case.outputs.strain) {
         let e: Vec<[f64; 3]> = g.iter().map(|g| strain(*g)).collect();

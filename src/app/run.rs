@@ -154,7 +154,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         }
         trial_report = Some(report);
     }
-    let mut series = Series::new(&dir, &p.case.domain);
+    let mut series = Series::new(&dir, &p.case);
     let outcome = dispatch::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     // Each branch starts the output stage where its output begins (after the
     // estimate of a peridynamic run, which is timed as its own stage).

@@ -1,12 +1,14 @@
 //! The files of a time-dependent run: snapshots (`snapshots/step_<k>.vtu` with
-//! displacement and velocity), `series.pvd`, `energies.csv` and the final
+//! displacement, velocity and, as the scene's outputs ask, stress and von Mises),
+//! `series.pvd`, `energies.csv` and the final
 //! `solution.vtu`, written into the run's staged directory (`output::StagedDir`),
 //! which replaces the earlier results only when the run finishes: a run that fails or
 //! is interrupted leaves no partial series and the earlier results intact.
 
-use super::fields::{estimate_fields, vector};
+use super::fields::{estimate_fields, stress_fields, vector};
 use super::AppError;
-use crate::domain::{cells::cells_inside, Domain};
+use crate::domain::cells::cells_inside;
+use crate::physics::case::Case;
 use crate::models::dynamics::driver::{EnergyRow, Snapshot};
 use crate::models::navier::Estimate;
 use crate::output::{self, OutputError, PointField};
@@ -18,15 +20,17 @@ const SNAPSHOTS: &str = "snapshots";
 /// Snapshot writer of one run (the Delaunay cells are built at the first snapshot).
 pub(super) struct Series<'a> {
     dir: PathBuf,
-    domain: &'a Domain,
+    case: &'a Case,
     triangles: Option<Vec<[usize; 3]>>,
     entries: Vec<(f64, String)>,
+    /// The stress arrays of the last snapshot (the final state's, for `solution.vtu`).
+    last_stress: Vec<PointField>,
 }
 
 impl<'a> Series<'a> {
     /// A writer into `dir` (the staged directory); nothing is created yet.
-    pub(super) fn new(dir: &Path, domain: &'a Domain) -> Self {
-        Series { dir: dir.to_path_buf(), domain, triangles: None, entries: Vec::new() }
+    pub(super) fn new(dir: &Path, case: &'a Case) -> Self {
+        Series { dir: dir.to_path_buf(), case, triangles: None, entries: Vec::new(), last_stress: Vec::new() }
     }
 
     fn write(
@@ -36,7 +40,7 @@ impl<'a> Series<'a> {
         (u, v): (&[[f64; 2]], &[[f64; 2]]),
         more: Vec<PointField>,
     ) -> Result<(), OutputError> {
-        let domain = self.domain;
+        let domain = &self.case.domain;
         let tris = self.triangles.get_or_insert_with(|| cells_inside(domain, points));
         let mut fields = vec![vector("displacement", u.iter().copied()), vector("velocity", v.iter().copied())];
         fields.extend(more);
@@ -50,7 +54,8 @@ impl<'a> Series<'a> {
             std::fs::create_dir(&folder).map_err(|e| OutputError::io(&folder, e))?;
         }
         let file = format!("step_{:06}.vtu", s.step);
-        self.write(&folder.join(&file), s.positions, (s.u, s.v), Vec::new())?;
+        self.last_stress = stress_fields(self.case, &None, &s.stress.cloned());
+        self.write(&folder.join(&file), s.positions, (s.u, s.v), self.last_stress.clone())?;
         self.entries.push((s.t, format!("{SNAPSHOTS}/{file}")));
         Ok(())
     }
@@ -67,6 +72,8 @@ impl<'a> Series<'a> {
         output::write_pvd(&self.dir.join("series.pvd"), &self.entries)?;
         let rows: Vec<Vec<f64>> = energies.iter().map(|e| vec![e[0], e[1], e[2], e[3], e[1] + e[2] + e[3]]).collect();
         output::write_csv(&self.dir.join("energies.csv"), &["t", "kinetic", "elastic", "external", "total"], &rows)?;
-        Ok(self.write(&self.dir.join("solution.vtu"), points, (u, v), estimate_fields(estimate))?)
+        let mut more = std::mem::take(&mut self.last_stress);
+        more.extend(estimate_fields(estimate));
+        Ok(self.write(&self.dir.join("solution.vtu"), points, (u, v), more)?)
     }
 }

@@ -274,7 +274,7 @@ impl Precond<f64> for BuiltPreconditioner {
 /// ` [levels 2013888/199833/..., operator complexity 1.27]` of a multigrid.
 fn levels(p: &Amg) -> String {
     let sizes: Vec<String> = p.sizes().iter().map(|s| s.to_string()).collect();
-    format!(" [levels {}, operator complexity {:.2}]", sizes.join("/"), p.operator_complexity())
+    format!(" [multigrid levels of {} unknowns, all levels storing {:.2}x the finest's entries]", sizes.join("/"), p.operator_complexity())
 }
 
 #[cfg(test)]

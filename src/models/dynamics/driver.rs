@@ -1,6 +1,7 @@
 //! The time loop shared by every model: step size from the stability limit,
 //! snapshots, the energy history and a throughput report.
 
+use crate::physics::elasticity::stress::StressField;
 use super::{DynamicsParams, Integrator, SecondOrderSystem, State};
 use crate::scene::choice::Choice;
 use crate::stages::{interrupt, RunError, Stage, StageTimer};
@@ -40,6 +41,8 @@ pub struct Snapshot<'a> {
     pub u: &'a [[f64; 2]],
     /// Velocity of each node.
     pub v: &'a [[f64; 2]],
+    /// Stress at each node, when the scene's outputs ask for stress or von Mises.
+    pub stress: Option<&'a StressField>,
 }
 
 /// One line of the energy history: `(t, E_kin, E_el, E_ext)`.

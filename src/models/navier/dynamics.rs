@@ -33,7 +33,7 @@ use crate::models::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::physics::elasticity::conditions::Value;
 use crate::physics::elasticity::dofs::DofMap;
 use crate::physics::elasticity::material::Lame;
-use crate::physics::elasticity::stress::strain;
+use crate::physics::elasticity::stress::{strain, StressField};
 use crate::physics::exact::{self, ExactSolution};
 use crate::linalg::{lu::SparseLu, mul_add, row_matrix, RowMatrix, SolveError, SparseMatrix};
 use crate::stages::{stage, RunError, StageTimer, StageTimings};
@@ -339,6 +339,7 @@ pub fn simulate_sampled(
     mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
     // Energies need the displacement gradient at every node.
+    let snapshot_stress = case.outputs.stress || case.outputs.von_mises;
     let mut case = case.clone();
     case.outputs.stress = true;
     let case = &case;
@@ -377,10 +378,12 @@ pub fn simulate_sampled(
     let mut kept = BTreeMap::new();
     let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, timer, |step, s| {
         let (keep, write) = (samples.keeps(step), is_snapshot(step, grid.steps, dynamics));
-        let u = nodal(&system.expand(s.t, &s.u, false));
+        let x = system.expand(s.t, &s.u, false);
+        let u = nodal(&x);
         let v = if keep || write { nodal(&system.expand(s.t, &s.v, true)) } else { Vec::new() };
         if write {
-            snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v })?;
+            let stress = snapshot_stress.then(|| StressField::from_gradients(&case.material, &disc.gradients(&x)));
+            snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v, stress: stress.as_ref() })?;
         }
         if keep {
             kept.insert(step, (s.t, u, v));

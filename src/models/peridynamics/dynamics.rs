@@ -18,17 +18,20 @@
 //! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
 //! [`crate::models::dynamics::Integrator::stability_factor`].
 
+use super::family::Families;
 use super::loads::LoadLayer;
 use super::nodes::PdNodes;
 use super::operator::Bonds;
 use super::solve::Discretisation;
-use super::{BondForce, PdParams};
+use super::{strain, BondForce, PdParams};
 use crate::physics::case::Case;
 use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
 use crate::models::dynamics::history::TimeSamples;
 use crate::models::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::physics::elasticity::conditions::Value;
 use crate::physics::elasticity::dofs::DofMap;
+use crate::physics::elasticity::material::Material;
+use crate::physics::elasticity::stress::StressField;
 use crate::physics::exact::{self, ExactSolution};
 use crate::stages::{Progress, RunError, StageTimer, StageTimings};
 use rayon::prelude::*;
@@ -197,6 +200,14 @@ impl PdDynamics<'_> {
         (2.0 * self.density / worst).sqrt()
     }
 
+    /// The nonlocal stress at every free node ([`strain::gradients`] over `families`)
+    /// of the free nodes' displacements `u` at time `t`, the collar at its prescribed
+    /// values of `t`.
+    pub fn stress(&self, material: &Material, families: &Families, t: f64, u: &[[f64; 2]]) -> StressField {
+        let all: Vec<[f64; 2]> = u.iter().chain(self.loads(t).prescribed.iter()).copied().collect();
+        StressField::from_gradients(material, &strain::gradients(self.nodes(), families, &all, |_| true))
+    }
+
     /// `(E_kin, E_el, E_ext)` of a state at time `t` (`E_ext` with the loads of `t`).
     pub fn energies(&self, t: f64, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
         let (nodes, dofs) = (self.nodes(), self.dofs());
@@ -300,7 +311,8 @@ pub fn simulate_sampled(
     let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
         let (u, v) = (nodal(&s.u), nodal(&s.v));
         if is_snapshot(step, grid.steps, dynamics) {
-            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v })?;
+            let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
+            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref() })?;
         }
         if samples.keeps(step) {
             kept.insert(step, (s.t, u, v));

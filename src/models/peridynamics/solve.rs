@@ -158,7 +158,10 @@ impl Discretisation {
         let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
         let weights = timer.run(WEIGHTS, || {
             let w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment, layer.as_deref());
-            let note = format!("{} complete families, {} compatible rows", w.complete_families, w.compatible_rows);
+            let note = format!(
+                "{} nodes with their whole horizon in the body, {} with weights fitted to reproduce the local operator",
+                w.complete_families, w.compatible_rows
+            );
             Ok((w, note))
         })?;
         let mut disc = Discretisation { bond_count: families.bonds(), nodes, families, weights, micromodulus, share: Share::whole() };
