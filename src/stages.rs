@@ -96,8 +96,33 @@ pub trait Progress: Sync {
     fn start(&self, stage: Stage);
     /// A stage ended after `seconds`, with a short note (sizes).
     fn finish(&self, stage: Stage, seconds: f64, note: &str);
-    /// `done` of `total` steps of the current stage are complete (stepping stages only).
-    fn advance(&self, _done: u64, _total: u64) {}
+    /// `done` of `total` `unit`s of the current stage are complete (the steps of time
+    /// integration, the residual digits of an iterative solve).
+    fn advance(&self, _done: u64, _total: u64, _unit: &'static str) {}
+}
+
+/// The progress of a run made inside a stage (the estimate's reference run): its own
+/// stages are not shown, its steps and residual digits are the outer stage's.
+pub struct Within<'a>(pub &'a dyn Progress);
+
+impl Progress for Within<'_> {
+    fn start(&self, _: Stage) {}
+    fn finish(&self, _: Stage, _: f64, _: &str) {}
+    fn advance(&self, done: u64, total: u64, unit: &'static str) {
+        self.0.advance(done, total, unit);
+    }
+}
+
+/// What an iterative solve tells the solve stage's progress ([`crate::linalg::watch`]):
+/// the digits of the residual gained of those the tolerance asks for.
+pub struct SolveProgress<'a>(pub &'a dyn Progress);
+
+impl crate::linalg::watch::Watch for SolveProgress<'_> {
+    fn residual(&self, reached: f64, target: f64) {
+        if let Some((done, total)) = crate::linalg::watch::digits_gained(reached, target) {
+            self.0.advance(done, total, "residual digits");
+        }
+    }
 }
 
 /// A progress observer that does nothing.
@@ -301,6 +326,28 @@ mod tests {
         assert_eq!(t.get(A), 2.0);
         assert_eq!(t.get(Stage::new("c")), 0.0);
         assert_eq!(serde_json::to_string(&t).unwrap(), r#"{"b":1.5,"a":2.0}"#);
+    }
+
+    /// A solve's residual reaches the stage's progress as whole digits gained of
+    /// those the tolerance asks for.
+    #[test]
+    fn a_solve_advances_by_residual_digits() {
+        use crate::linalg::watch::Watch;
+        struct Log(std::sync::Mutex<Vec<(u64, u64, &'static str)>>);
+        impl Progress for Log {
+            fn start(&self, _: Stage) {}
+            fn finish(&self, _: Stage, _: f64, _: &str) {}
+            fn advance(&self, done: u64, total: u64, unit: &'static str) {
+                self.0.lock().unwrap().push((done, total, unit));
+            }
+        }
+        let log = Log(Default::default());
+        let watch = SolveProgress(&log);
+        for r in [0.5, 2e-4, 1e-11] {
+            watch.residual(r, 1e-10);
+        }
+        let unit = "residual digits";
+        assert_eq!(log.0.into_inner().unwrap(), vec![(0, 10, unit), (3, 10, unit), (10, 10, unit)]);
     }
 
     #[test]

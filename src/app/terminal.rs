@@ -79,15 +79,14 @@ impl Progress for Terminal {
         *self.bar.lock().unwrap() = Some(bar);
     }
 
-    fn advance(&self, done: u64, total: u64) {
+    fn advance(&self, done: u64, total: u64, unit: &'static str) {
         if let Some(t) = self.ticker.lock().unwrap().as_ref() {
-            *t.steps.lock().unwrap() = Some((done, total));
+            *t.steps.lock().unwrap() = Some((done, total, unit));
         }
         if let Some(bar) = self.bar.lock().unwrap().as_ref() {
             if bar.length().is_none() {
-                bar.set_style(
-                    ProgressStyle::with_template("  {msg} [{bar:30}] {pos}/{len} steps ({elapsed}, ETA {eta})").expect("valid template"),
-                );
+                let template = format!("  {{msg}} [{{bar:30}}] {{pos}}/{{len}} {unit} ({{elapsed}}, ETA {{eta}})");
+                bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
             }
             bar.set_length(total);
             bar.set_position(done);
@@ -104,11 +103,14 @@ impl Progress for Terminal {
     }
 }
 
+/// Units done, their total and their name (the last `Progress::advance`).
+type Advance = (u64, u64, &'static str);
+
 /// A thread printing a plain progress line of one stage at a fixed interval; stops
 /// when dropped.
 struct Ticker {
     /// Steps done and total, once the stage reports them.
-    steps: Arc<Mutex<Option<(u64, u64)>>>,
+    steps: Arc<Mutex<Option<Advance>>>,
     stop: Option<Sender<()>>,
     thread: Option<JoinHandle<()>>,
 }
@@ -141,13 +143,13 @@ impl Drop for Ticker {
 
 /// `  [integrate] 42.0 % (4200/10000 steps), elapsed 12.3 s, ETA 17.0 s`, or without
 /// steps `  [solve] running, elapsed 12.3 s`.
-fn plain_line(stage: &str, elapsed: Duration, steps: Option<(u64, u64)>) -> String {
+fn plain_line(stage: &str, elapsed: Duration, steps: Option<(u64, u64, &str)>) -> String {
     let e = elapsed.as_secs_f64();
     match steps {
-        Some((done, total)) if total > 0 => {
+        Some((done, total, unit)) if total > 0 => {
             let fraction = done as f64 / total as f64;
             let eta = if done > 0 { format!("{:.1} s", e * (total - done.min(total)) as f64 / done as f64) } else { "-".into() };
-            format!("  [{stage}] {:.1} % ({done}/{total} steps), elapsed {e:.1} s, ETA {eta}", 100.0 * fraction)
+            format!("  [{stage}] {:.1} % ({done}/{total} {unit}), elapsed {e:.1} s, ETA {eta}", 100.0 * fraction)
         }
         _ => format!("  [{stage}] running, elapsed {e:.1} s"),
     }
@@ -159,9 +161,11 @@ mod tests {
 
     #[test]
     fn plain_lines_give_percent_elapsed_and_eta() {
-        let l = plain_line("integrate", Duration::from_secs(10), Some((250, 1000)));
+        let l = plain_line("integrate", Duration::from_secs(10), Some((250, 1000, "steps")));
         assert_eq!(l, "  [integrate] 25.0 % (250/1000 steps), elapsed 10.0 s, ETA 30.0 s");
-        let l = plain_line("integrate", Duration::from_secs(1), Some((0, 1000)));
+        let l = plain_line("solve", Duration::from_secs(6), Some((3, 10, "residual digits")));
+        assert_eq!(l, "  [solve] 30.0 % (3/10 residual digits), elapsed 6.0 s, ETA 14.0 s");
+        let l = plain_line("integrate", Duration::from_secs(1), Some((0, 1000, "steps")));
         assert!(l.contains("0.0 %") && l.contains("ETA -"), "{l}");
         assert_eq!(plain_line("solve", Duration::from_millis(1500), None), "  [solve] running, elapsed 1.5 s");
     }

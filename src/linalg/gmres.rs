@@ -15,6 +15,7 @@
 
 use super::csr::{product, Csr};
 use super::orthogonal::{norm, orthogonalise};
+use super::watch::Watch;
 use rayon::prelude::*;
 
 /// How a GMRES run ended.
@@ -69,22 +70,19 @@ pub fn solve_gmres(
     max_iterations: usize,
     restart: usize,
 ) -> GmresOutcome {
-    solve_gmres_with(|x, y| product(a, x, y), b, precondition, tolerance, max_iterations, restart, STAGNATION)
+    solve_gmres_with(|x, y| product(a, x, y), b, precondition, (tolerance, max_iterations, restart, STAGNATION), &())
 }
 
 /// [`solve_gmres`] with the matrix given by its product `apply(x, y)`: `y ← A x`, and
 /// a stall declared when a whole restart cycle leaves more than `stall` (in `(0, 1]`)
 /// of the true residual it started from (a cycle cut short by convergence, more than
-/// [`STAGNATION`]).
-#[allow(clippy::too_many_arguments)]
+/// [`STAGNATION`]); `watch` is told the residual estimate after every iteration.
 pub fn solve_gmres_with(
     apply: impl Fn(&[f64], &mut [f64]),
     b: &[f64],
     precondition: impl Fn(&[f64], &mut [f64]),
-    tolerance: f64,
-    max_iterations: usize,
-    restart: usize,
-    stall: f64,
+    (tolerance, max_iterations, restart, stall): (f64, usize, usize, f64),
+    watch: &dyn Watch,
 ) -> GmresOutcome {
     let n = b.len();
     // More Krylov vectors than iterations or unknowns would only allocate.
@@ -128,6 +126,7 @@ pub fn solve_gmres_with(
             out.iterations += 1;
             steps = j + 1;
             let estimate = residual / b_norm;
+            watch.residual(estimate, tolerance);
             if wn == 0.0 || estimate <= 0.5 * tolerance {
                 break;
             }
@@ -245,6 +244,29 @@ mod tests {
             }
         }
         Csr::from_triplets(n, n, &entries)
+    }
+
+    /// The watch hears of every iteration, with the tolerance, and its last residual
+    /// is the estimate that ended the solve (at most half the tolerance, the stopping
+    /// rule of a cycle); the estimates never grow within a cycle (GMRES minimises it).
+    #[test]
+    fn the_watch_hears_every_iteration() {
+        struct Heard(std::cell::RefCell<Vec<(f64, f64)>>);
+        impl Watch for Heard {
+            fn residual(&self, reached: f64, target: f64) {
+                self.0.borrow_mut().push((reached, target));
+            }
+        }
+        let a = convection(200);
+        let b: Vec<f64> = (0..200).map(|i| (i as f64 * 0.1).sin()).collect();
+        let heard = Heard(Default::default());
+        let out = solve_gmres_with(|x, y| product(&a, x, y), &b, |v, z| z.copy_from_slice(v), (1e-10, 1000, 500, STAGNATION), &heard);
+        let heard = heard.0.into_inner();
+        assert_eq!(out.status, Status::Converged);
+        assert_eq!(heard.len(), out.iterations, "one report per iteration");
+        assert!(heard.iter().all(|h| h.1 == 1e-10));
+        assert!(heard.last().unwrap().0 <= 0.5e-10, "{:?}", heard.last());
+        assert!(heard.windows(2).all(|w| w[1].0 <= w[0].0 * (1.0 + 1e-12)), "one cycle: the estimates never grow");
     }
 
     #[test]

@@ -41,14 +41,16 @@ impl Rhs<'_> {
 
 /// What every report of one solve shares: the method's label, `auto`'s reason, and
 /// when the setup started.
-pub(super) struct Start {
+pub(super) struct Start<'w> {
     pub(super) method: String,
     pub(super) choice: Option<String>,
     pub(super) setup: Instant,
     pub(super) equilibrated: bool,
+    /// Told the residual after each iteration.
+    pub(super) watch: &'w dyn super::watch::Watch,
 }
 
-impl Start {
+impl Start<'_> {
     /// The report of a finished solve, before its iteration counts are filled in;
     /// the method's name carries what the preconditioner says of itself (AMG: its
     /// levels).
@@ -189,7 +191,9 @@ pub(super) fn solve_krylov_bicgstab(
     let mut last_residual = Vec::new();
     let out = bicgstab::solve_bicgstab(a, &rhs.solved, &pc, tolerance, max_iterations, |x| {
         last_residual = residual(a, x, &rhs.solved);
-        relative(norm2(&last_residual), norm2(&rhs.solved))
+        let reached = relative(norm2(&last_residual), norm2(&rhs.solved));
+        start.watch.residual(reached, tolerance);
+        reached
     });
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("BiCGSTAB+{}", preconditioner.display_name());
@@ -348,7 +352,7 @@ pub(super) fn run_gmres(
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
     let apply = |x: &[f64], y: &mut [f64]| csr::product(rows, x, y);
-    let out = gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), tolerance, max_iterations, restart, stall);
+    let out = gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), (tolerance, max_iterations, restart, stall), start.watch);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
     let r = row_residual(rows, &out.x, &rhs.solved);

@@ -50,6 +50,7 @@ pub mod solver_error;
 pub mod spgemm;
 pub mod triplets;
 pub mod vector_state;
+pub mod watch;
 
 #[cfg(test)]
 mod tests;
@@ -138,7 +139,7 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
 /// 1e300 then give the same digits (no overflow or underflow in the residual norms),
 /// and a solution beyond the double range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    solve_nodal(Cow::Owned(csr::to_csr(a)), b, params, None, None)
+    solve_nodal(Cow::Owned(csr::to_csr(a)), b, params, None, None, &())
 }
 
 /// A second operator on the same unknowns and rows for the multigrid preconditioner
@@ -161,6 +162,7 @@ pub fn solve_nodal(
     params: &SolverParams,
     layout: Option<NodeLayout>,
     auxiliary: Auxiliary<'_>,
+    watch: &dyn watch::Watch,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
@@ -169,7 +171,7 @@ pub fn solve_nodal(
     let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
     let scale = |x: f64, e: i32| x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
     let scaled: Vec<f64> = b.iter().map(|v| scale(*v, -exponent)).collect();
-    let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, crate::output::available_memory_bytes())?;
+    let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch))?;
     if let Some(i) = x.iter().position(|v| !scale(*v, exponent).is_finite()) {
         return Err(SolveError::Overflow {
             detail: format!(
@@ -220,7 +222,7 @@ pub(crate) fn solve_with_memory(
     params: &SolverParams,
     layout: Option<NodeLayout>,
     auxiliary: Auxiliary<'_>,
-    available: Option<f64>,
+    (available, watch): (Option<f64>, &dyn watch::Watch),
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let saddle_point = layout.filter(|l| l.has_pressure());
     let (unknowns, nonzeros) = (a.nrows() as f64, a.nnz() as f64);
@@ -244,7 +246,7 @@ pub(crate) fn solve_with_memory(
         }
     }
 
-    let start = Start { method: kind.label(), choice, setup: Instant::now(), equilibrated: params.equilibrate };
+    let start = Start { method: kind.label(), choice, setup: Instant::now(), equilibrated: params.equilibrate, watch };
     if n == 0 {
         let report =
             SolveReport { iterations: 0, relative_residual: 0.0, original_relative_residual: 0.0, ..start.report(None, (0.0, 0.0)) };

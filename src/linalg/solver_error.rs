@@ -22,7 +22,7 @@ pub const REDUCTION: f64 = 0.3;
 /// falls by [`REDUCTION`] or [`STEPS`] steps, `A` given by its product `apply(x, y)`:
 /// `y ← A x`.
 pub fn correction(apply: impl Fn(&[f64], &mut [f64]), r: &[f64], precondition: impl Fn(&[f64], &mut [f64])) -> Vec<f64> {
-    gmres::solve_gmres_with(apply, r, precondition, REDUCTION, STEPS, STEPS, gmres::STAGNATION).x
+    gmres::solve_gmres_with(apply, r, precondition, (REDUCTION, STEPS, STEPS, gmres::STAGNATION), &()).x
 }
 
 /// `max |δ_k| / max |x_k|` over the displacement unknowns `k` (the first two of each

@@ -456,13 +456,13 @@ fn auto_retries_with_ilu0_when_the_iteration_stops() {
         kind: SolverKind::Auto(Krylov { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 }),
         equilibrate: true,
     };
-    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, Some(1.0)).unwrap();
+    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, (Some(1.0), &())).unwrap();
     assert_eq!(rep.method, "bicgstab+ilu0");
     let why = rep.choice.unwrap();
     assert!(why.contains("did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
     let (x_lu, _) = solve(&a, &b, &SolverParams::lu()).unwrap();
     assert!(max_rel_diff(&x, &x_lu) < 1e-7);
-    let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, Some(1e12)).unwrap();
+    let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, (Some(1e12), &())).unwrap();
     assert_eq!(rep.method, "lu");
 }
 
@@ -475,11 +475,11 @@ fn a_failed_low_order_operator_is_reported() {
     let a = assemble(&t).unwrap();
     let params = SolverParams { kind: SolverKind::default_gmres(), equilibrate: true };
     let failing: Auxiliary = Some(Box::new(|| Err("a stencil without enough nodes".to_string())));
-    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, failing, None).unwrap();
+    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, failing, (None, &())).unwrap();
     assert!(!rep.method.contains("low-order"), "{}", rep.method);
     let why = rep.choice.unwrap_or_default();
     assert!(why.contains("could not be made (a stencil without enough nodes): built on the system"), "{why}");
-    let (plain, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, None, None).unwrap();
+    let (plain, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, None, (None, &())).unwrap();
     assert_eq!(rep.choice, None);
     // The same method on the same operator (rayon's reductions may order sums
     // differently between runs: round-off only).

@@ -168,7 +168,7 @@ pub fn integrate(
             if visited(step) {
                 visit(step, state)?;
             }
-            progress.advance(step as u64, steps as u64);
+            progress.advance(step as u64, steps as u64, "steps");
         }
         Ok((looped, format!("{steps} steps")))
     })?;

@@ -19,7 +19,7 @@ use crate::physics::exact::ExactSolution;
 use crate::parallel::distributed;
 use crate::linalg::SolverParams;
 use crate::mlsm::interpolate::mls_values;
-use crate::stages::{Progress, RunError, Silent, StageTimer};
+use crate::stages::{Progress, RunError, StageTimer, Within};
 use crate::quality::post::ExactFields;
 use std::time::Instant;
 
@@ -32,7 +32,7 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let mut solution = stages(case, params, exact, &mut timer)?;
     let method = params.estimate.method;
     solution.estimate = stage(method, method.static_navier_estimates(), &mut timer, || {
-        higher_degree(case, params, &solution.nodes, &solution.displacement, solution.stress.as_ref(), exact)
+        higher_degree(case, params, &solution.nodes, &solution.displacement, solution.stress.as_ref(), exact, progress)
     })?;
     solution.timings = timer.finish();
     if let Some(ranks) = solution.solver.ranks.as_mut() {
@@ -56,13 +56,15 @@ pub fn simulate(
     let mut sim = simulate_sampled(case, params, dynamics, &mut timer, Sampling::Estimate, snapshot)?;
     let method = params.estimate.method;
     sim.estimate = stage(method, method.dynamic_navier_estimates(), &mut timer, || {
-        refined_dynamic(case, params, dynamics, sim.report.time_step, &sim.positions, &sim.history)
+        refined_dynamic(case, params, dynamics, sim.report.time_step, &sim.positions, &sim.history, progress)
     })?;
     sim.timings = timer.finish();
     Ok(sim)
 }
 
-/// The higher-degree estimate of the run `(displacement, stress)` on `nodes`.
+/// The higher-degree estimate of the run `(displacement, stress)` on `nodes`; the
+/// reference's iterative solve reports its progress to the estimate stage of
+/// `progress` ([`Within`]).
 pub fn higher_degree(
     case: &Case,
     params: &NavierParams,
@@ -70,6 +72,7 @@ pub fn higher_degree(
     displacement: &[[f64; 2]],
     stress: Option<&StressField>,
     exact: Option<&dyn ExactSolution>,
+    progress: &dyn Progress,
 ) -> Estimate {
     let t0 = Instant::now();
     let approximation = match reference_approximation(&params.approximation, params.fill.kind, nodes.len()) {
@@ -78,7 +81,8 @@ pub fn higher_degree(
     };
     let solver = SolverParams { kind: params.solver.kind.for_reference(), ..params.solver };
     let reference_params = NavierParams { approximation, keep_system: false, solver, ..params.clone() };
-    let mut timer = StageTimer::new(&Silent);
+    let within = Within(progress);
+    let mut timer = StageTimer::new(&within);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)
         .and_then(|mut disc| assemble_and_solve(case, &mut disc, exact, &reference_params, &mut timer).map(|s| (disc, s)));
     let solved = solved.and_then(|(mut disc, solved)| {
@@ -148,6 +152,7 @@ pub fn refined_dynamic(
     time_step: f64,
     positions: &[Point],
     history: &[(f64, Vec<[f64; 2]>)],
+    progress: &dyn Progress,
 ) -> Estimate {
     let t0 = Instant::now();
     let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::Refined.name(), why);
@@ -160,7 +165,7 @@ pub fn refined_dynamic(
     let fine = DynamicsParams { time_step: Some(time_step / divisor), ..dynamics.clone() };
     let times: Vec<f64> = history.iter().map(|h| h.0).collect();
     let run = |d: &DynamicsParams| {
-        simulate_sampled(case, &reference_params, d, &mut StageTimer::new(&Silent), Sampling::Times(&times), |_| Ok(()))
+        simulate_sampled(case, &reference_params, d, &mut StageTimer::new(&Within(progress)), Sampling::Times(&times), |_| Ok(()))
     };
     let simulated = match run(&fine) {
         Err(RunError::UnstableTimeStep { .. }) => run(&DynamicsParams { time_step: None, ..fine.clone() }),

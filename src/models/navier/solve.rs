@@ -19,7 +19,7 @@ use crate::physics::elasticity::stress::{Gradient, StressField};
 use crate::physics::exact::ExactSolution;
 use crate::parallel::distributed::agree;
 use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
-use crate::stages::{stage, RunError, StageTimer, StageTimings};
+use crate::stages::{stage, RunError, SolveProgress, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
 use crate::quality::post::{ErrorNorms, ExactFields};
 
@@ -230,6 +230,7 @@ pub(super) fn assemble_and_solve(
     })?;
     disc.release_row_shapes();
     let nonzeros = matrix.nnz();
+    let watch = SolveProgress(timer.progress());
     let (x, multipliers, report, kept) = timer.run(stage::SOLVE, || {
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions, multipliers });
         let auxiliary: linalg::Auxiliary = params.multigrid.low_order(disc.supports.requested()).then(|| {
@@ -238,9 +239,9 @@ pub(super) fn assemble_and_solve(
         });
         // Handed over unless kept: the solver frees it once it holds its own form.
         let ((mut x, report), kept) = if keep {
-            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary)?, Some(matrix))
+            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary, &watch)?, Some(matrix))
         } else {
-            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary)?, None)
+            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary, &watch)?, None)
         };
         // The multipliers of the balances are not unknowns of the field.
         let lambda = x.split_off(x.len() - multipliers);

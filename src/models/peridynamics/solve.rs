@@ -16,7 +16,7 @@ use crate::linalg::{self, SolveReport};
 use crate::parallel::petsc::World;
 use crate::parallel::distributed;
 use crate::parallel::share::Share;
-use crate::stages::{stage, Progress, RunError, Stage, StageTimer, StageTimings};
+use crate::stages::{stage, Progress, RunError, SolveProgress, Stage, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
 use std::borrow::Cow;
 
@@ -252,13 +252,14 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         Ok(((m, rhs, b, layer), note))
     })?;
     let nonzeros = matrix.nnz();
+    let watch = SolveProgress(timer.progress());
     let (x, report) = timer.run(stage::SOLVE, || {
         let (x, report) = if disc.share.is_split() {
             disc.share.solve(2, matrix.entries(), &rhs, free_positions, &params.solver)?
         } else {
             // The unknowns are the free nodes' displacements, free nodes first.
             let layout = linalg::NodeLayout { per_node: 2, positions: free_positions, multipliers: 0 };
-            linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None)?
+            linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None, &watch)?
         };
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
