@@ -30,8 +30,9 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // Ctrl-C: a time loop stops between steps and its staged results are removed
-    // (exit 130); anywhere else the process removes its staged results and ends at once.
+    // Ctrl-C, SIGTERM (a job scheduler's stop) and SIGHUP (ctrlc's `termination`): a
+    // time loop stops between steps and its staged results are removed (exit 130);
+    // anywhere else the process removes its staged results and ends at once.
     let _ = ctrlc::set_handler(|| {
         if !mlsm::stages::interrupt::request() {
             mlsm::output::remove_uncommitted();

@@ -131,9 +131,10 @@ fn a_failing_run_leaves_the_earlier_result_byte_for_byte() {
     assert_eq!(names(tmp.path()), ["bad.toml", "res"], "a temporary folder was left");
 }
 
-/// SIGINT while snapshots are being written (the time loop stops, exit 130) and during
-/// a static solve (the process ends at once, exit 130): the earlier result stays as it
-/// was and no temporary folder is left.
+/// SIGINT (Ctrl-C) and SIGTERM (a job scheduler's stop) while snapshots are being
+/// written (the time loop stops, exit 130) and during a static solve (the process ends
+/// at once, exit 130): the earlier result stays as it was and no temporary folder is
+/// left.
 #[cfg(unix)]
 #[test]
 fn an_interrupted_run_leaves_the_earlier_result_and_no_temporary_folder() {
@@ -153,8 +154,9 @@ fn an_interrupted_run_leaves_the_earlier_result_and_no_temporary_folder() {
             0,
         ),
     ];
-    for (args, inside, entries) in cases {
-        let mut child = mlsm(tmp.path()).args(&args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    for ((args, inside, entries), signal) in cases.iter().flat_map(|c| [(c, libc::SIGINT), (c, libc::SIGTERM)]) {
+        let (args, inside, entries) = (args.as_slice(), *inside, *entries);
+        let mut child = mlsm(tmp.path()).args(args).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
         let staged = tmp.path().join(format!(".res.tmp-{}", child.id())).join(inside);
         // Until the staged folder holds its entries or the run ends, however long that
         // takes: no clock.
@@ -163,11 +165,11 @@ fn an_interrupted_run_leaves_the_earlier_result_and_no_temporary_folder() {
             std::thread::sleep(Duration::from_millis(5));
         }
         // SAFETY: sending a signal to our own child process.
-        assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) }, 0);
+        assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, signal) }, 0);
         let o = child.wait_with_output().unwrap();
-        assert_eq!(o.status.code(), Some(130), "{args:?}: {}", describe(&o));
-        assert_eq!(tree(&res), before, "{args:?}: the earlier result changed");
-        assert_eq!(names(tmp.path()), ["long.toml", "res"], "{args:?}: a temporary folder was left");
+        assert_eq!(o.status.code(), Some(130), "{args:?}, signal {signal}: {}", describe(&o));
+        assert_eq!(tree(&res), before, "{args:?}, signal {signal}: the earlier result changed");
+        assert_eq!(names(tmp.path()), ["long.toml", "res"], "{args:?}, signal {signal}: a temporary folder was left");
     }
 }
 
