@@ -36,7 +36,7 @@ pub(super) fn write_points_vtu(path: &Path, points: &[[f64; 2]], domain: &Domain
 }
 
 /// Strain, stress and von Mises arrays, as far as the scene asks for them.
-pub(super) fn stress_fields(case: &Case, gradient: &Option<Vec<Gradient>>, stress: &Option<StressField>) -> Vec<PointField> {
+pub(super) fn stress_fields(case: &Case, gradient: Option<&[Gradient]>, stress: Option<&StressField>) -> Vec<PointField> {
     let mut f = Vec::new();
     if let (Some(g), true) = (gradient, case.outputs.strain) {
         let e: Vec<[f64; 3]> = g.iter().map(|g| strain(*g)).collect();
@@ -88,7 +88,7 @@ pub(super) fn navier_fields(case: &Case, sol: &Solution) -> Vec<PointField> {
     let n = sol.nodes.len();
     let nb = sol.nodes.boundary.len();
     let mut f = vec![vector("displacement", sol.displacement.iter().copied())];
-    f.extend(stress_fields(case, &sol.gradient, &sol.stress));
+    f.extend(stress_fields(case, sol.gradient.as_deref(), sol.stress.as_ref()));
     if let Some(p) = &sol.pressure {
         f.push(scalar("pressure", p.iter().copied()));
     }
@@ -117,7 +117,7 @@ pub(super) fn estimate_fields(estimate: &Estimate) -> Vec<PointField> {
 pub(super) fn pd_fields(case: &Case, sol: &PdSolution, estimate: &Estimate) -> Vec<PointField> {
     let n = sol.nodes.free;
     let mut f = vec![vector("displacement", sol.displacement[..n].iter().copied())];
-    f.extend(stress_fields(case, &sol.gradient, &sol.stress));
+    f.extend(stress_fields(case, sol.gradient.as_deref(), sol.stress.as_ref()));
     f.push(vector("body_force", sol.body_force.iter().copied()));
     f.push(integer("interior", sol.interior.iter().map(|&b| b as i32)));
     f.push(scalar("volume", sol.nodes.volumes[..n].iter().copied()));

@@ -54,7 +54,7 @@ impl<'a> Series<'a> {
             std::fs::create_dir(&folder).map_err(|e| OutputError::io(&folder, e))?;
         }
         let file = format!("step_{:06}.vtu", s.step);
-        self.last_stress = stress_fields(self.case, &None, &s.stress.cloned());
+        self.last_stress = stress_fields(self.case, None, s.stress);
         self.write(&folder.join(&file), s.positions, (s.u, s.v), self.last_stress.clone())?;
         self.entries.push((s.t, format!("{SNAPSHOTS}/{file}")));
         Ok(())
