@@ -186,6 +186,21 @@ impl SolverKind {
     /// degree-4 run it solved: docs/notebook/2026-11-25-multigrid-symmetry-edges.md);
     /// LU, PETSc and `auto` stay.
     pub fn for_reference(&self) -> SolverKind {
+        self.reference_kind()
+    }
+
+    /// The same solver with its Krylov tolerance set to `tolerance` (LU unchanged):
+    /// a correction needs only a few digits.
+    pub fn with_tolerance(&self, tolerance: f64) -> SolverKind {
+        let mut kind = *self;
+        if let SolverKind::Auto(k) | SolverKind::Bicgstab(k) | SolverKind::Gmres { krylov: k, .. } | SolverKind::Petsc { krylov: k, .. } = &mut kind {
+            k.tolerance = tolerance;
+        }
+        kind
+    }
+
+    /// [`SolverKind::for_reference`].
+    fn reference_kind(&self) -> SolverKind {
         match *self {
             SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. }
             | SolverKind::Bicgstab(Krylov { tolerance, max_iterations, .. }) => {

@@ -6,7 +6,8 @@
 //! [`wls`] one least-squares solve, [`rbffd`] one RBF-FD solve, [`fit`] the one
 //! dispatch from a basis to its solve, [`stencil`] default support sizes, [`shapes`]
 //! the parallel computation for all nodes of exactly the operators each node needs,
-//! [`interpolate`] nodal fields at other points.
+//! [`interpolate`] nodal fields at other points, [`taylor`] local polynomial fits and
+//! their Taylor parts.
 
 pub mod basis;
 pub mod fit;
@@ -17,6 +18,7 @@ pub mod radial;
 pub mod rbffd;
 pub mod shapes;
 pub mod stencil;
+pub mod taylor;
 pub mod wls;
 
 pub use basis::{Basis, BasisKind, Weight, WeightKind};

@@ -47,6 +47,8 @@ choice! {
         Auto = "auto" => "higher-degree for a static Navier run, refined for a dynamic one, local-model for a peridynamic run",
         /// Difference to a solution two degrees higher on the same nodes.
         HigherDegree = "higher-degree" => "static Navier runs: difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes; about 1-3x the cost of the run",
+        /// The run's truncation error on local fits of its solution, mapped by its own operator.
+        Defect = "defect" => "static Navier runs: the run's truncation error measured on local fits of degree p + 2 of its own solution, mapped to an error by one loose solve with the run's own operator (no second discretisation)",
         /// Difference to a run on nodes at half the spacing with a finer time step.
         Refined = "refined" => "dynamic Navier runs: difference to the run on nodes at half the spacing with the time step halved (quartered for emu); 8x the nodes x steps of the run (16x with emu): 3-4x its time on the shipped scenes, 6x at 1.2e4 nodes",
         /// Difference to the local (Navier) model's solution of the same scene.
@@ -76,9 +78,9 @@ impl Default for EstimateParams {
 }
 
 impl EstimateMethod {
-    /// Whether a static Navier run estimates its error (`auto` or `higher-degree`).
+    /// Whether a static Navier run estimates its error (`auto`, `higher-degree` or `defect`).
     pub fn static_navier_estimates(self) -> bool {
-        matches!(self, EstimateMethod::Auto | EstimateMethod::HigherDegree)
+        matches!(self, EstimateMethod::Auto | EstimateMethod::HigherDegree | EstimateMethod::Defect)
     }
 
     /// Whether a dynamic Navier run estimates its error (`auto` or `refined`).

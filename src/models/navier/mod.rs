@@ -24,6 +24,7 @@
 //!    estimate (the reference run it compares with).
 
 pub mod cloud;
+pub mod defect;
 pub mod discrete;
 pub mod dynamics;
 pub mod equations;

@@ -31,9 +31,12 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = exact.as_deref();
     let mut solution = stages(case, params, exact, &mut timer)?;
     let method = params.estimate.method;
-    solution.estimate = stage(method, method.static_navier_estimates(), &mut timer, || {
-        higher_degree(case, params, &solution.nodes, &solution.displacement, solution.stress.as_ref(), exact, progress)
-    })?;
+    // `defect` is made by the run's own stages, with its operator at hand.
+    if method != EstimateMethod::Defect {
+        solution.estimate = stage(method, method.static_navier_estimates(), &mut timer, || {
+            higher_degree(case, params, &solution.nodes, &solution.displacement, solution.stress.as_ref(), exact, progress)
+        })?;
+    }
     solution.timings = timer.finish();
     if let Some(ranks) = solution.solver.ranks.as_mut() {
         ranks.stage_seconds = distributed::stage_seconds_per_rank(&solution.timings.named())?;

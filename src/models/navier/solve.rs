@@ -7,7 +7,9 @@ use std::borrow::Cow;
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
-use super::estimate::Estimate;
+use super::defect;
+use crate::scene::choice::Choice;
+use super::estimate::{ErrorEstimate, Estimate, EstimateMethod, ESTIMATE};
 use super::low_order;
 use super::sector;
 use super::system::System;
@@ -22,6 +24,7 @@ use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
 use crate::stages::{stage, RunError, SolveProgress, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
 use crate::quality::post::{ErrorNorms, ExactFields};
+use std::time::Instant;
 
 /// Everything a static Navier run computed.
 pub struct Solution {
@@ -102,11 +105,11 @@ pub(super) fn stages(
     timer: &mut StageTimer,
 ) -> Result<Solution, RunError> {
     let mut disc = Discretisation::new(case, params, exact, timer)?;
-    let Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced } =
+    let Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced, correction } =
         assemble_and_solve(case, &mut disc, exact, params, timer)?;
 
     let n = disc.nodes.len();
-    let Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes } = timer.run(stage::POST, || {
+    let Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes, estimate } = timer.run(stage::POST, || {
         let displacement = disc.dofs.displacements(&x, n);
         let pressure = disc.pressure(&case.material, &x);
         if case.outputs.needs_gradient() {
@@ -123,7 +126,12 @@ pub(super) fn stages(
             Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
             None => String::new(),
         };
-        Ok((Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes }, note))
+        let estimate = match (params.estimate.method, correction) {
+            (EstimateMethod::Defect, Some(c)) => defect_estimate(case, &disc, &x, (&displacement, stress.as_ref()), c),
+            (EstimateMethod::Defect, None) => Estimate::Unavailable(EstimateMethod::Defect.name(), "the defect estimate is not made over MPI ranks".into()),
+            _ => Estimate::Off,
+        };
+        Ok((Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes, estimate }, note))
     })?;
 
     let system = system.map(|(matrix, rhs)| LinearSystem {
@@ -151,7 +159,7 @@ pub(super) fn stages(
         errors,
         equilibrium,
         probes,
-        estimate: Estimate::Off,
+        estimate,
         ghost_nodes,
         widened_supports,
         sector_balances: sectors,
@@ -177,6 +185,7 @@ struct Post {
     errors: Option<ErrorNorms>,
     equilibrium: Option<Equilibrium>,
     probes: Vec<ProbeValue>,
+    estimate: Estimate,
 }
 
 /// An assembled and solved system.
@@ -197,6 +206,20 @@ pub(super) struct Solved {
     pub sectors: Vec<sector::SectorSummary>,
     /// The corners and holes with traction edges that got no balance, and why.
     pub unbalanced: Vec<sector::Unbalanced>,
+    /// The `defect` estimate's correction, when the scene asks for it, or why there
+    /// is none.
+    pub correction: Option<Result<Correction, String>>,
+}
+
+/// The correction of the `defect` estimate ([`defect`]): `e ~ x - u*` over all
+/// unknowns (multipliers excluded), and the fits it was measured with.
+pub(super) struct Correction {
+    e: Vec<f64>,
+    fits: defect::Fits,
+    /// What the correction's solve did.
+    solve: String,
+    /// Seconds of the estimate stage.
+    seconds: f64,
 }
 
 /// Assemble the rows of `disc` and solve them with `params.solver` (stages `assembly`,
@@ -213,6 +236,7 @@ pub(super) fn assemble_and_solve(
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
     let (solver, keep) = (&params.solver, params.keep_system);
+    let defect = params.estimate.method == EstimateMethod::Defect;
     let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
     if disc.share.is_split() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
@@ -233,12 +257,14 @@ pub(super) fn assemble_and_solve(
     let watch = SolveProgress(timer.progress());
     let (x, multipliers, report, kept) = timer.run(stage::SOLVE, || {
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions, multipliers });
-        let auxiliary: linalg::Auxiliary = params.multigrid.low_order(disc.supports.requested()).then(|| {
+        let requested = disc.supports.requested();
+        let disc_for_aux = &mut *disc;
+        let auxiliary: linalg::Auxiliary = params.multigrid.low_order(requested).then(|| {
             let approximation = low_order::approximation(&params.approximation, params.fill.kind);
-            Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
+            Box::new(move || low_order::rows(case, disc_for_aux, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
         });
         // Handed over unless kept: the solver frees it once it holds its own form.
-        let ((mut x, report), kept) = if keep {
+        let ((mut x, report), kept) = if keep || defect {
             (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary, &watch)?, Some(matrix))
         } else {
             (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary, &watch)?, None)
@@ -248,8 +274,20 @@ pub(super) fn assemble_and_solve(
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
         Ok(((x, lambda, report, kept), note))
     })?;
-    let system = kept.map(|matrix| (linalg::csr::columns_of(matrix), rhs));
-    Ok(Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced })
+    let correction = match (defect, kept.as_ref()) {
+        (true, Some(matrix)) => Some(timer.run(ESTIMATE, || {
+            let t0 = Instant::now();
+            let c = correct(case, disc, exact, params, matrix, &x, &positions);
+            let note = match &c {
+                Ok(c) => format!("{} fit centres; correction: {}", c.fits.centres(), c.solve),
+                Err(why) => format!("unavailable: {why}"),
+            };
+            Ok((c.map(|c| Correction { seconds: t0.elapsed().as_secs_f64(), ..c }), note))
+        })?),
+        _ => None,
+    };
+    let system = kept.filter(|_| keep).map(|matrix| (linalg::csr::columns_of(matrix), rhs));
+    Ok(Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced, correction })
 }
 
 /// [`assemble_and_solve`] over MPI ranks: each rank writes the rows of the nodes it
@@ -277,5 +315,73 @@ fn assemble_and_solve_distributed(
     })?;
     let nonzeros = report.ranks.as_ref().map_or(0, |r| r.nonzeros.iter().sum());
     let unbalanced = disc.survey.none_balanced("its rows are split over MPI ranks (solver.kind = \"petsc\")");
-    Ok(Solved { x, multipliers: Vec::new(), nonzeros, report, system: None, sectors: Vec::new(), unbalanced })
+    Ok(Solved { x, multipliers: Vec::new(), nonzeros, report, system: None, sectors: Vec::new(), unbalanced, correction: None })
+}
+
+/// The `defect` correction of the run `x` of `disc` ([`defect`]): fits of `x`, the
+/// truncation error of the run's rows `matrix` on them, and `e = -A^-1 tau` solved
+/// with the scene's solver to [`defect::CORRECTION_TOLERANCE`].
+fn correct(
+    case: &Case,
+    disc: &mut Discretisation,
+    exact: Option<&dyn ExactSolution>,
+    params: &NavierParams,
+    matrix: &linalg::Csr,
+    x: &[f64],
+    positions: &[[f64; 2]],
+) -> Result<Correction, String> {
+    let p = params.approximation.basis.polynomial_degree();
+    let fits = defect::Fits::of(disc, x, p)?;
+    let tau = defect::truncation_error(disc, matrix, &fits);
+    let rhs: Vec<f64> = tau.iter().map(|t| -t).collect();
+    let multipliers = matrix.nrows() - disc.dofs.len();
+    let (unknowns, per_node) = (disc.dofs.len(), disc.dofs.unknowns().per_node());
+    let layout = Some(linalg::NodeLayout { per_node, positions, multipliers });
+    let requested = disc.supports.requested();
+    let auxiliary: linalg::Auxiliary = params.multigrid.low_order(requested).then(|| {
+        let approximation = low_order::approximation(&params.approximation, params.fill.kind);
+        Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
+    });
+    let solver = SolverParams { kind: params.solver.kind.with_tolerance(defect::CORRECTION_TOLERANCE), ..params.solver };
+    let (mut e, report) = linalg::solve_nodal(Cow::Borrowed(matrix), &rhs, &solver, layout, auxiliary, &())
+        .map_err(|err| format!("the correction's solve failed: {err}"))?;
+    e.truncate(unknowns);
+    let solve = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
+    Ok(Correction { e, fits, solve, seconds: 0.0 })
+}
+
+/// The `defect` estimate of the run `(x, displacement, stress)` from its `correction`
+/// (`stress` made from `disc`'s gradient shapes, in place): the reference is `x - e`
+/// and its stress `G (x - e) - tau_G` ([`defect`]).
+fn defect_estimate(
+    case: &Case,
+    disc: &Discretisation,
+    x: &[f64],
+    (displacement, stress): (&[[f64; 2]], Option<&StressField>),
+    correction: Result<Correction, String>,
+) -> Estimate {
+    let t0 = Instant::now();
+    let c = match correction {
+        Ok(c) => c,
+        Err(why) => return Estimate::Unavailable(EstimateMethod::Defect.name(), why),
+    };
+    let n = disc.nodes.len();
+    let reference_x: Vec<f64> = x.iter().zip(&c.e).map(|(x, e)| x - e).collect();
+    let sigma = stress.map(|_| {
+        let mut g = disc.gradients(&reference_x);
+        for (g, t) in g.iter_mut().zip(defect::gradient_truncation_error(disc, &c.fits)) {
+            for (gc, tc) in g.iter_mut().zip(t) {
+                gc[0] -= tc[0];
+                gc[1] -= tc[1];
+            }
+        }
+        disc.stress(&case.material, &g, &reference_x).sigma
+    });
+    let reference = ExactFields { displacement: disc.dofs.displacements(&reference_x, n), stress: sigma };
+    let q = c.fits.exact_degree + 2;
+    let description = format!("fits of degree {q} at {} centres; the run's operator ({})", c.fits.centres(), c.solve);
+    let mut e = ErrorEstimate::between(EstimateMethod::Defect, description, &disc.nodes.positions, displacement, stress, &reference, t0);
+    e.reference_degree = q;
+    e.seconds += c.seconds;
+    Estimate::Done(Box::new(e))
 }

@@ -48,7 +48,7 @@ choice! {
 }
 
 /// Why `method` cannot estimate a run of `model` (static, or `dynamic`), or `None`:
-/// `higher-degree` estimates static Navier runs, `refined` dynamic Navier runs,
+/// `higher-degree` and `defect` estimate static Navier runs, `refined` dynamic Navier runs,
 /// `local-model` peridynamic runs.
 pub fn estimate_mismatch(model: Model, dynamic: bool, method: crate::models::navier::EstimateMethod) -> Option<&'static str> {
     use crate::models::navier::EstimateMethod as M;
@@ -62,7 +62,7 @@ pub fn estimate_mismatch(model: Model, dynamic: bool, method: crate::models::nav
     }
     Some(match (model, dynamic) {
         (Model::Peridynamics, _) => "a peridynamic run is estimated against the Navier model: \"local-model\" (or \"auto\", \"none\")",
-        (Model::Navier, false) => "a static Navier run takes \"higher-degree\" (or \"auto\", \"none\")",
+        (Model::Navier, false) => "a static Navier run takes \"higher-degree\" or \"defect\" (or \"auto\", \"none\")",
         (Model::Navier, true) => {
             "a dynamic Navier run takes \"refined\" (or \"auto\", \"none\"); higher-degree PHS stencils have growing modes in explicit dynamics"
         }

@@ -1,0 +1,165 @@
+//! The `defect` error estimate of a static Navier run: its truncation error measured
+//! on local polynomial fits of its own solution, mapped to an error by its own
+//! operator (defect correction without a second discretisation).
+//!
+//! The run solves `A x = b`; at the exact nodal values `u*` (extended smoothly to the
+//! ghosts) its rows leave the truncation error `tau = A u* - b`, and `x - u* =
+//! -A^-1 tau` exactly. `tau` is estimated row by row from fits `P` of degree
+//! `q = p + 2` (`p` the run's polynomial degree) of `x` at coarse centres
+//! ([`crate::mlsm::taylor`]): every row of node `i` is exact on polynomials of degree
+//! `<= p`, so `tau_r ~ sum_j a_rj H_p(x_j)` with `H_p` the part of `P` above degree
+//! `p` about `x_i`. Then `e = -A^-1 tau` (one solve with the run's operator, to a
+//! relative residual of [`CORRECTION_TOLERANCE`]) and the reference is `x - e`. The
+//! stress reference is `G (x - e) - tau_G`, `G` the run's gradient stencils and
+//! `tau_G = sum_j g_ij H_p(x_j)` their own truncation error.
+//!
+//! Measured against the true errors and the `higher-degree` reference:
+//! docs/notebook/2026-11-28-cheap-estimate.md.
+
+use super::discrete::Discretisation;
+use crate::domain::Point;
+use crate::linalg::Csr;
+use crate::mlsm::taylor::{fit, fit_points, HighPart, LocalPolynomial};
+use crate::mlsm::Op;
+use crate::physics::elasticity::stress::Gradient;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+use std::num::NonZeroUsize;
+
+/// Relative residual the correction `A e = -tau` is solved to: an estimate needs one
+/// or two digits of `e`.
+pub const CORRECTION_TOLERANCE: f64 = 1e-3;
+
+/// Nodes of its support (nearest first) a fit centre stands for: each node is
+/// measured with the fit of the centre nearest to it among the first ones of its
+/// support (about one centre per five nodes).
+const CENTRE_REACH: usize = 9;
+
+/// The fits of a run's solution at coarse centres, and which centre measures each node.
+pub struct Fits {
+    /// The run's polynomial degree `p`: the rows are exact on degree `<= p`.
+    pub exact_degree: u32,
+    /// One fit per centre, of the unknowns of a node (displacement, and pressure in
+    /// the displacement-pressure form: 0 otherwise).
+    fits: Vec<LocalPolynomial<3>>,
+    /// Index into `fits` of every node.
+    centre_of: Vec<u32>,
+}
+
+impl Fits {
+    /// Fits of degree `p + 2` of the unknowns `x` of `disc` at coarse centres chosen
+    /// greedily over the supports, or why there are none (too few nodes).
+    pub fn of(disc: &Discretisation, x: &[f64], p: u32) -> Result<Fits, String> {
+        let n = disc.nodes.len();
+        let q = p + 2;
+        let points = fit_points(q);
+        if points > n {
+            return Err(format!("{n} nodes are too few for the fits of degree {q} it needs ({points} nodes each)"));
+        }
+        let mut centre_of = vec![u32::MAX; n];
+        let mut centres = Vec::new();
+        for i in 0..n {
+            if centre_of[i] == u32::MAX {
+                let k = centres.len() as u32;
+                centres.push(i);
+                for &j in disc.supports.of(i).iter().take(CENTRE_REACH) {
+                    if (j as usize) < n && centre_of[j as usize] == u32::MAX {
+                        centre_of[j as usize] = k;
+                    }
+                }
+                centre_of[i] = k;
+            }
+        }
+        let positions = &disc.nodes.positions;
+        let tree = ImmutableKdTree::<f64, 2>::new_from_slice(positions).map_err(|e| format!("node positions: {e}"))?;
+        let per_node = disc.dofs.unknowns().per_node();
+        let value = |j: usize| {
+            let mut v = [0.0; 3];
+            for (c, slot) in v.iter_mut().enumerate().take(per_node) {
+                *slot = x[disc.dofs.dof(j, c)];
+            }
+            v
+        };
+        let count = NonZeroUsize::new(points).expect("a fit takes points");
+        let fits = centres
+            .par_iter()
+            .map(|&c| {
+                let found = tree.query(&positions[c]).nearest_n::<SquaredEuclidean<f64>>(count).execute();
+                let near: Vec<Point> = found.iter().map(|f| positions[f.item as usize]).collect();
+                let values: Vec<[f64; 3]> = found.iter().map(|f| value(f.item as usize)).collect();
+                fit(positions[c], &near, &values, q)
+                    .map_err(|_| format!("the {points} nodes nearest to ({:.4e}, {:.4e}) do not determine a fit of degree {q}", positions[c][0], positions[c][1]))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        Ok(Fits { exact_degree: p, fits, centre_of })
+    }
+
+    /// `H_p` about node `i` of the fit that measures it.
+    fn high_part(&self, i: usize, at: Point) -> HighPart<3> {
+        self.fits[self.centre_of[i] as usize].high_part_about(at, self.exact_degree)
+    }
+
+    /// Number of fit centres.
+    pub fn centres(&self) -> usize {
+        self.fits.len()
+    }
+}
+
+/// The truncation error `tau` of every row of `matrix` (the run's assembled rows, the
+/// multipliers of a bordered system last, where `tau` is 0) from `fits`: the rows of
+/// node `i` and of its ghost are measured about `x_i` (module docs).
+pub fn truncation_error(disc: &Discretisation, matrix: &Csr, fits: &Fits) -> Vec<f64> {
+    let (dofs, n) = (disc.dofs, disc.nodes.len());
+    let per_node = dofs.unknowns().per_node();
+    let rows_of_node: Vec<Vec<(usize, f64)>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let at = disc.nodes.positions[i];
+            let high = fits.high_part(i, at);
+            let owners = std::iter::once(i).chain(disc.ghost[i]);
+            owners
+                .flat_map(|k| (0..per_node).map(move |c| dofs.dof(k, c)))
+                .map(|r| {
+                    let row = matrix.row(r);
+                    let tau = row
+                        .col_indices()
+                        .iter()
+                        .zip(row.values())
+                        .filter(|(&col, _)| (col as usize) < dofs.len())
+                        .map(|(&col, &a)| {
+                            let (j, c) = dofs.location(col as usize);
+                            a * high.value(disc.point(j))[c]
+                        })
+                        .sum();
+                    (r, tau)
+                })
+                .collect()
+        })
+        .collect();
+    let mut tau = vec![0.0; matrix.nrows()];
+    for (r, t) in rows_of_node.into_iter().flatten() {
+        tau[r] = t;
+    }
+    tau
+}
+
+/// The truncation error of the gradient stencils `(Dx, Dy)` of `disc` (in place at
+/// every node) on `fits`: `tau_G[i][c][d] = sum_k g^d_ik H_p(x_jk)[c]`.
+pub fn gradient_truncation_error(disc: &Discretisation, fits: &Fits) -> Vec<Gradient> {
+    (0..disc.nodes.len())
+        .into_par_iter()
+        .map(|i| {
+            let high = fits.high_part(i, disc.nodes.positions[i]);
+            let (dx, dy) = (disc.shapes.get(i, Op::Dx), disc.shapes.get(i, Op::Dy));
+            let mut g = [[0.0; 2]; 2];
+            for (k, &j) in disc.supports.of(i).iter().enumerate() {
+                let h = high.value(disc.point(j as usize));
+                for c in 0..2 {
+                    g[c][0] += dx[k] * h[c];
+                    g[c][1] += dy[k] * h[c];
+                }
+            }
+            g
+        })
+        .collect()
+}
