@@ -252,10 +252,9 @@ fn no_estimate_is_a_warning() {
 
 /// The `defect` estimate (the run's truncation error on fits of its own solution,
 /// one loose solve with its own operator; opt-in while it is measured, issue 51) is
-/// within the same bands on the shipped scenes with an exact solution, and costs less
-/// than the higher-degree reference on each (measured 0.3-0.5x of it: its stage
-/// skips the second discretisation and solves to 1e-3). The cantilever's error is
-/// round-off, outside the bands' scope.
+/// within the same bands on the shipped scenes with an exact solution (costs:
+/// docs/notebook/2026-11-28-cheap-estimate.md). The cantilever's error is round-off,
+/// outside the bands' scope.
 #[test]
 fn the_defect_estimate_tracks_the_true_error_on_the_shipped_scenes() {
     for name in ["kirsch", "lame", "manufactured_traction", "manufactured_dirichlet", "flamant"] {

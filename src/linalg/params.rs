@@ -186,7 +186,13 @@ impl SolverKind {
     /// degree-4 run it solved: docs/notebook/2026-11-25-multigrid-symmetry-edges.md);
     /// LU, PETSc and `auto` stay.
     pub fn for_reference(&self) -> SolverKind {
-        self.reference_kind()
+        match *self {
+            SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. }
+            | SolverKind::Bicgstab(Krylov { tolerance, max_iterations, .. }) => {
+                SolverKind::Auto(Krylov { preconditioner: Preconditioner::Amg, tolerance, max_iterations })
+            }
+            other => other,
+        }
     }
 
     /// The same solver with its Krylov tolerance set to `tolerance` (LU unchanged):
@@ -197,17 +203,6 @@ impl SolverKind {
             k.tolerance = tolerance;
         }
         kind
-    }
-
-    /// [`SolverKind::for_reference`].
-    fn reference_kind(&self) -> SolverKind {
-        match *self {
-            SolverKind::Gmres { krylov: Krylov { tolerance, max_iterations, .. }, .. }
-            | SolverKind::Bicgstab(Krylov { tolerance, max_iterations, .. }) => {
-                SolverKind::Auto(Krylov { preconditioner: Preconditioner::Amg, tolerance, max_iterations })
-            }
-            other => other,
-        }
     }
 
     /// `auto`'s choice by memory alone, and why: LU when its estimated factors
