@@ -1,21 +1,62 @@
 #!/usr/bin/env bash
-# Cost and effectivity of the error estimate on the shipped static scenes: one
-# `mlsm run` each; seconds of the run without the estimate, of the estimate
-# (timings_s.estimate), estimated and true e_inf(u), e_inf(sigma) from summary.json.
-# Usage: bash benches/estimate.sh
+# What the error estimate costs, as users run it: every shipped static scene (or the
+# scenes given) with the default estimate (`auto`), with `higher-degree` (the
+# certificate, the default before 2026-11-28) and with `none`, back to back, PAIRS
+# times alternated. Prints per scene: the method `auto` took, seconds without the
+# estimate, the estimate's seconds under auto and under higher-degree, the estimate's
+# share of the run, the whole run's time and peak-memory ratios (auto / none), and
+# the effectivities (estimate / true error) where the scene has an exact solution.
+# Medians over the pairs.
+#
+# Usage: bash benches/estimate.sh [SCENE[:SPACING][@key=value,...]]...
+#   e.g. bash benches/estimate.sh kirsch "cantilever:0.035@approximation.basis=tensor"
+# Environment: PAIRS (default 3), MLSM (default target/release/mlsm), METHODS (default
+# "none auto higher-degree"; leave higher-degree out at 1e6 nodes, where it takes minutes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --quiet
-echo "| scene | nodes | run s | estimate s | reference | e_inf(u) | est. | e_inf(sigma) | est. |"
+[ -n "${MLSM:-}" ] || { cargo build --release --quiet; MLSM=target/release/mlsm; }
+PAIRS=${PAIRS:-3}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+scenes=("$@")
+if [ ${#scenes[@]} -eq 0 ]; then
+  scenes=(cantilever cantilever_traction manufactured_dirichlet manufactured_traction lame kirsch flamant gravity_dam steel_plate bracket)
+fi
+echo "| scene | nodes | auto took | run s (none) | estimate s: auto / higher-degree | share of run: auto / higher-degree | total auto / none | peak auto / none | eff u / sigma (auto) |"
 echo "|---|---|---|---|---|---|---|---|---|"
-for scene in cantilever manufactured_dirichlet manufactured_traction lame kirsch flamant steel_plate bracket; do
-  out="output/bench_estimate_$scene"
-  ./target/release/mlsm --quiet run "problems/$scene.toml" --out "$out" 2> /dev/null
-  python3 - "$out/summary.json" "$scene" <<'PY'
-import json, sys
-s = json.load(open(sys.argv[1])); t = s["timings_s"]; e = s.get("errors") or {}; x = s["estimated_errors"]
-f = lambda v: "-" if v is None else f"{v:.2e}"
-run = t["total"] - t["estimate"] - t.get("output", 0)
-print(f"| {sys.argv[2]} | {s['nodes']} | {run:.2f} | {t['estimate']:.2f} | degree {x['reference_degree']} | {f(e.get('e_inf_u'))} | {f(x['e_inf_u'])} | {f(e.get('e_inf_sigma'))} | {f(x['e_inf_sigma'])} |")
+for spec in "${scenes[@]}"; do
+  base=${spec%%@*}; edits=""; [ "$base" != "$spec" ] && edits=${spec#*@}
+  name=${base%%:*}; spacing=""; [ "$name" != "$base" ] && spacing=${base#*:}
+  args=(); [ -n "$spacing" ] && args=(--spacing "$spacing")
+  kv=(); IFS=',' read -ra kv <<< "$edits"
+  for method in auto higher-degree none; do
+    python3 benches/scene_variant.py "problems/$name.toml" "$work/$method.toml" "estimate.method=\"$method\"" "${kv[@]/#/}" > /dev/null
+  done
+  for k in $(seq "$PAIRS"); do
+    for method in ${METHODS:-none auto higher-degree}; do
+      "$MLSM" --quiet run "$work/$method.toml" "${args[@]}" --out "$work/o_${method}_$k" > /dev/null 2>&1
+    done
+  done
+  python3 - "$work" "$PAIRS" "$spec" <<'PY'
+import json, statistics, sys
+work, pairs, spec = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+def runs(m):
+    return [json.load(open(f"{work}/o_{m}_{k}/summary.json")) for k in range(1, pairs + 1)]
+import os
+none, auto = runs("none"), runs("auto")
+hd = runs("higher-degree") if os.path.exists(f"{work}/o_higher-degree_1") else [{"timings_s": {"estimate": float("nan")}}]
+med = statistics.median
+total = lambda s: s["timings_s"]["total"] - s["timings_s"].get("output", 0)
+est = lambda s: s["timings_s"].get("estimate", 0.0)
+run_s = med(total(s) for s in none)
+a_est, h_est = med(est(s) for s in auto), med(est(s) for s in hd)
+t_ratio = med(total(a) / total(n) for a, n in zip(auto, none))
+m_ratio = med(a["peak_memory_bytes"] / n["peak_memory_bytes"] for a, n in zip(auto, none))
+x = auto[0]["estimated_errors"]; e = auto[0].get("errors")
+eff = "-"
+if e and x:
+    eff = f"{x['e_inf_u'] / e['e_inf_u']:.2f} / {x['e_inf_sigma'] / e['e_inf_sigma']:.2f}"
+took = x["method"] if x else "none"
+print(f"| {spec} | {auto[0]['nodes']} | {took} | {run_s:.2f} | {a_est:.2f} / {h_est:.2f} | {a_est / run_s:.2f} / {h_est / run_s:.2f} | {t_ratio:.2f} | {m_ratio:.2f} | {eff} |")
 PY
 done

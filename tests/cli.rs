@@ -175,8 +175,8 @@ fn run_reports_its_estimate_and_strict_turns_warnings_into_exit_4() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("estimated: e_inf(u) ~"), "{}", describe(&o));
     let s = read_json(&res.join("summary.json"));
     let (e, est) = (&s["errors"], &s["estimated_errors"]);
-    assert_eq!(est["method"], "higher-degree");
-    // Degree-2 least squares against a degree-4 reference: within the bands of tests/estimate.rs.
+    assert_eq!(est["method"], "defect");
+    // Degree-2 least squares, its truncation error on degree-4 fits: within the bands of tests/estimate.rs.
     let eff = num(est, "e_inf_u") / num(e, "e_inf_u");
     assert!((0.5..=2.0).contains(&eff), "effectivity {eff}: {s}");
     assert_eq!(s["warnings"].as_array().map(Vec::len), Some(0), "{s}");

@@ -1,22 +1,23 @@
-//! The error estimate (difference to a solution two degrees higher on the same nodes)
+//! The error estimate as a user gets it (`estimate.method = "auto"`: the `defect`
+//! estimate, and the higher-degree reference where the defect cannot be trusted)
 //! against the true error, and the checks that turn a doubtful run into a warning.
 //!
 //! Bands (issue 11): effectivity = estimate / true error in [0.5, 2] for e_inf(u) and
 //! [0.33, 3] for e_inf(sigma) wherever the true error is above 1e-8. They are the
 //! acceptance bands of the estimator, not fitted to it: measured effectivities on
-//! these cases lie in 0.78..1.67 (docs/verification.md, "The error estimate: measured
+//! these cases lie in 0.80..1.42 (docs/verification.md, "The error estimate: measured
 //! effectivities").
 
 mod common;
 
 use common::{f, i, s, scene};
 use mlsm::models::navier::{Estimate, Solution};
-use mlsm::scene::problem::Problem;
 use mlsm::quality::warnings::{navier_static, Checks};
+use mlsm::scene::problem::Problem;
 
-/// A shipped scene with the estimate on and `edits`.
+/// A shipped scene with the default estimate (`auto`) and `edits`.
 fn estimated(name: &str, edits: &[(&'static str, Option<toml::Value>)]) -> Problem {
-    let mut all = vec![("estimate.method", s("higher-degree"))];
+    let mut all = vec![("estimate.method", s("auto"))];
     all.extend_from_slice(edits);
     scene(name, &all)
 }
@@ -53,19 +54,82 @@ fn effectivities(label: &str, sol: &Solution) -> (f64, f64) {
     (eu, es)
 }
 
+/// The method `auto` took, and why when it is the higher-degree reference.
+fn method_of(sol: &Solution) -> (&'static str, String) {
+    let e = sol.estimate.done().expect("estimated");
+    (e.method, e.reference.clone())
+}
+
 /// Every shipped static scene with an exact solution: the estimate is within the bands
-/// and the healthy scene gets no warning.
+/// and the healthy scene gets no warning. `auto` takes the `defect` estimate on each,
+/// except the cantilever (186 nodes, too few for its fits: the higher-degree reference,
+/// saying why). The tensor cantilever (the published MLSM setting, h = 0.125, 9 881
+/// nodes), whose cubic exact solution made fits of 2.5x their monomials overshoot 1.5x
+/// (4x at h = 0.035), is in the bands with fits of 10x.
 #[test]
 fn estimate_tracks_the_true_error_on_the_shipped_scenes() {
     for name in ["kirsch", "lame", "manufactured_traction", "manufactured_dirichlet", "flamant", "cantilever"] {
         let p = estimated(name, &[]);
         let (sol, checks) = run(&p);
         effectivities(name, &sol);
+        let (method, reference) = method_of(&sol);
+        match name {
+            "cantilever" => assert!(method == "higher-degree" && reference.contains("defect estimate is unavailable"), "{reference}"),
+            _ => assert_eq!(method, "defect", "{name}: {reference}"),
+        }
         assert!(checks.warnings.is_empty(), "{name}: {:?}", checks.warnings);
         assert!(checks.singular_corners.is_empty(), "{name}: an exact solution is smooth: {:?}", checks.singular_corners);
     }
+    let tensor = [
+        ("approximation.basis", s("tensor")),
+        ("approximation.degree", i(2)),
+        ("approximation.weight", s("gaussian")),
+        ("approximation.sigma", f(1.0)),
+        ("approximation.support", i(13)),
+        ("nodes.spacing", f(0.125)),
+    ];
+    let (sol, _) = run(&estimated("cantilever", &tensor));
+    assert_eq!(method_of(&sol).0, "defect");
+    effectivities("cantilever, tensor p = 2, h = 0.125", &sol);
 }
 
+/// The higher-degree reference, the certificate a user can ask for, within the same
+/// bands on the shipped scenes.
+#[test]
+fn the_higher_degree_certificate_tracks_the_true_error_on_the_shipped_scenes() {
+    for name in ["kirsch", "lame", "manufactured_traction", "manufactured_dirichlet", "flamant"] {
+        let (sol, _) = run(&scene(name, &[("estimate.method", s("higher-degree"))]));
+        assert_eq!(method_of(&sol).0, "higher-degree");
+        effectivities(&format!("{name} (higher-degree)"), &sol);
+    }
+}
+
+/// Every shipped static Navier scene, run as shipped: its estimate is made, never
+/// skipped. Where `auto` takes the higher-degree reference it says why (the bracket,
+/// the dam and the steel plate have singular corners).
+#[test]
+fn the_default_estimate_is_never_skipped() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("problems");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok()?.strip_suffix(".toml").map(String::from))
+        .collect();
+    names.sort();
+    let mut run_count = 0;
+    for name in names {
+        let p = Problem::from_file(&dir.join(format!("{name}.toml"))).unwrap_or_else(|e| panic!("{e}"));
+        if p.case.dynamics.is_some() || matches!(p.model, mlsm::scene::problem::ModelParams::Peridynamics(_)) {
+            continue;
+        }
+        assert_eq!(p.navier.estimate.method, mlsm::models::navier::EstimateMethod::Auto, "{name} ships with another method");
+        let sol = common::solve(&p);
+        let (method, reference) = method_of(&sol);
+        eprintln!("{name}: {method} ({reference})");
+        assert!(method == "defect" || reference.contains("auto took it because"), "{name}: {reference}");
+        run_count += 1;
+    }
+    assert!(run_count >= 10, "{run_count} static scenes");
+}
 /// Near-incompressible plane strain with the displacement form: the error grows
 /// (Lame, 3388 nodes: e_inf(sigma) 5.8e-2 at nu = 0.45 to 51 at nu = 0.4999) and every
 /// run is warned with an estimate inside the bands.
@@ -244,24 +308,13 @@ fn an_unbalanced_corner_or_hole_is_a_note() {
 /// unestimated, never silent.
 #[test]
 fn no_estimate_is_a_warning() {
-    let p = estimated("manufactured_traction", &[("approximation.basis", s("phs")), ("approximation.degree", i(8))]);
+    let p = scene(
+        "manufactured_traction",
+        &[("estimate.method", s("higher-degree")), ("approximation.basis", s("phs")), ("approximation.degree", i(8))],
+    );
     let (sol, checks) = run(&p);
     assert!(matches!(&sol.estimate, Estimate::Unavailable(_, why) if why.contains("degree 8")), "{:?}", sol.estimate);
     assert!(checks.warnings.iter().any(|w| w.check == "no-estimate"));
-}
-
-/// The `defect` estimate (the run's truncation error on fits of its own solution,
-/// one loose solve with its own operator; opt-in while it is measured, issue 51) is
-/// within the same bands on the shipped scenes with an exact solution (costs:
-/// docs/notebook/2026-11-28-cheap-estimate.md). The cantilever's error is round-off,
-/// outside the bands' scope.
-#[test]
-fn the_defect_estimate_tracks_the_true_error_on_the_shipped_scenes() {
-    for name in ["kirsch", "lame", "manufactured_traction", "manufactured_dirichlet", "flamant"] {
-        let (sol, _) = run(&scene(name, &[("estimate.method", s("defect"))]));
-        assert!(matches!(sol.estimate, Estimate::Done(_)), "{name}: {:?}", sol.estimate);
-        effectivities(&format!("{name} (defect)"), &sol);
-    }
 }
 
 /// Too few nodes for the fits make the defect estimate unavailable with the reason,

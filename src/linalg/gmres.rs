@@ -16,6 +16,7 @@
 use super::csr::{product, Csr};
 use super::orthogonal::{norm, orthogonalise};
 use super::watch::Watch;
+use super::Preconditioner;
 use rayon::prelude::*;
 
 /// How a GMRES run ended.
@@ -305,4 +306,16 @@ mod tests {
         assert!((out.relative_residual - 1.0).abs() < 1e-12);
         assert!(out.iterations < 100);
     }
+}
+
+/// The settings of a GMRES solve.
+#[derive(Clone, Copy)]
+pub struct GmresSettings {
+    pub preconditioner: Preconditioner,
+    pub tolerance: f64,
+    pub max_iterations: usize,
+    pub restart: usize,
+    /// The largest share of its residual a restart cycle may leave
+    /// ([`gmres::solve_gmres_with`]).
+    pub stall: f64,
 }

@@ -5,10 +5,14 @@
 //! ([`Rhs::residuals`]), so the assembled matrix need not be kept.
 
 use std::borrow::Cow;
+use std::cell::RefCell;
 use std::time::Instant;
 
 use super::csr::Csr;
+use super::gmres::GmresSettings;
 use super::inverse::Inverse;
+use super::report::IN_PROCESS_HINT;
+use super::retained::{Inverse as Kept, Retained};
 use super::{
     amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error, subtract_column_product,
 };
@@ -48,9 +52,19 @@ pub(super) struct Start<'w> {
     pub(super) equilibrated: bool,
     /// Told the residual after each iteration.
     pub(super) watch: &'w dyn super::watch::Watch,
+    /// Where a solver that succeeded leaves itself when the caller keeps it
+    /// ([`super::solve_nodal_retained`]).
+    pub(super) keep: Option<&'w RefCell<Option<Retained>>>,
 }
 
 impl Start<'_> {
+    /// Leave the solver made by `make` for the caller, when it keeps one.
+    pub(super) fn retain(&self, make: impl FnOnce() -> Retained) {
+        if let Some(slot) = self.keep {
+            *slot.borrow_mut() = Some(make());
+        }
+    }
+
     /// The report of a finished solve, before its iteration counts are filled in;
     /// the method's name carries what the preconditioner says of itself (AMG: its
     /// levels).
@@ -103,9 +117,6 @@ fn with_own_error(
     SolveReport { solver_error: Some(own), solve_seconds: report.solve_seconds + t_error.elapsed().as_secs_f64(), ..report }
 }
 
-/// What to try when an in-process Krylov solver does not converge.
-pub(super) const IN_PROCESS_HINT: &str = "try lu, a stronger preconditioner (ilut with smaller drop / larger fill) or more iterations";
-
 /// What stopped a Krylov method that ran out of iterations.
 pub(super) fn iteration_limit(max_iterations: usize) -> String {
     format!("the iteration limit (solver.max_iterations = {max_iterations})")
@@ -152,13 +163,13 @@ impl Leftover {
 }
 
 /// Sparse LU of the solved operator `a` (`D A`).
-pub(super) fn solve_lu(a: &SparseMatrix, rhs: &Rhs, start: &Start) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let lu = lu::SparseLu::factor(a)?;
+pub(super) fn solve_lu(a: SparseMatrix, rhs: &Rhs, start: &Start) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    let lu = lu::SparseLu::factor(&a)?;
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
     let x = lu.solve(&rhs.solved);
-    let (relres, original_relative_residual) = rhs.residuals(&residual(a, &x, &rhs.solved));
-    let kappa = lu::check_solution(&lu, a, &x, &rhs.solved, relres)?;
+    let (relres, original_relative_residual) = rhs.residuals(&residual(&a, &x, &rhs.solved));
+    let kappa = lu::check_solution(&lu, &a, &x, &rhs.solved, relres)?;
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let report = SolveReport {
         iterations: 1,
@@ -167,19 +178,20 @@ pub(super) fn solve_lu(a: &SparseMatrix, rhs: &Rhs, start: &Start) -> Result<(Ve
         condition_estimate: Some(kappa),
         ..start.report(None, (setup_seconds, solve_seconds))
     };
+    start.retain(|| Retained { method: start.method.clone(), rows: None, columns: Some(a), inverse: Kept::Lu(lu) });
     Ok((x, report))
 }
 
 /// Right-preconditioned BiCGSTAB on the solved operator `a` (`D A`) with
 /// `(preconditioner, tolerance, max_iterations)`.
 pub(super) fn solve_krylov_bicgstab(
-    a: &SparseMatrix,
+    a: SparseMatrix,
     rhs: &Rhs,
     start: &Start,
     (preconditioner, tolerance, max_iterations): (Preconditioner, f64, usize),
     layout: Option<NodeLayout>,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
-    let pc = precond::BuiltPreconditioner::build(a, preconditioner, layout)?;
+    let pc = precond::BuiltPreconditioner::build(&a, preconditioner, layout)?;
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
     // Converged means the true residual of the solved (equilibrated) system is
@@ -189,8 +201,8 @@ pub(super) fn solve_krylov_bicgstab(
     // The residual of the last check is kept: BiCGSTAB returns the iterate it checked
     // last, whose residual also gives the original system's.
     let mut last_residual = Vec::new();
-    let out = bicgstab::solve_bicgstab(a, &rhs.solved, &pc, tolerance, max_iterations, |x| {
-        last_residual = residual(a, x, &rhs.solved);
+    let out = bicgstab::solve_bicgstab(&a, &rhs.solved, &pc, tolerance, max_iterations, |x| {
+        last_residual = residual(&a, x, &rhs.solved);
         let reached = relative(norm2(&last_residual), norm2(&rhs.solved));
         start.watch.residual(reached, tolerance);
         reached
@@ -203,12 +215,13 @@ pub(super) fn solve_krylov_bicgstab(
             // `y = A x` as `−(0 − A x)`, without a vector allocated per product.
             let product = |x: &[f64], y: &mut [f64]| {
                 y.fill(0.0);
-                subtract_column_product(a, x, y);
+                subtract_column_product(&a, x, y);
                 y.iter_mut().for_each(|v| *v = -*v);
             };
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(&pc, (setup_seconds, solve_seconds), counts);
             let report = with_own_error(report, product, &last_residual, &pc, &out.x, layout.as_ref());
+            start.retain(|| Retained { method: name, rows: None, columns: Some(a), inverse: Kept::Bicgstab(pc, max_iterations) });
             Ok((out.x, report))
         }
         bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
@@ -238,18 +251,6 @@ pub(super) fn solve_krylov_bicgstab(
             ),
         }),
     }
-}
-
-/// The settings of a GMRES solve.
-#[derive(Clone, Copy)]
-pub(super) struct GmresSettings {
-    pub(super) preconditioner: Preconditioner,
-    pub(super) tolerance: f64,
-    pub(super) max_iterations: usize,
-    pub(super) restart: usize,
-    /// The largest share of its residual a restart cycle may leave
-    /// ([`gmres::solve_gmres_with`]).
-    pub(super) stall: f64,
 }
 
 /// GMRES with the multigrid built on the solved operator in rows (`D A`, kept as its
@@ -287,14 +288,20 @@ pub(super) fn solve_gmres_multigrid(
         },
     };
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
-    run_gmres(rows, &pc, rhs, &start, settings, layout.as_ref()).map_err(|e| {
-        let e = e.with_cycle_growth(pc.multigrid());
-        let rows = system.unwrap_or_else(|| {
-            let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
-            amg.into_fine_operator().expect("kept as the system")
-        });
-        Box::new((e, Leftover::Rows(rows)))
-    })
+    match run_gmres(rows, &pc, rhs, &start, settings, layout.as_ref()) {
+        Ok(done) => {
+            start.retain(|| Retained { method: start.method.clone(), rows: system, columns: None, inverse: Kept::Gmres(pc, settings) });
+            Ok(done)
+        }
+        Err(e) => {
+            let e = e.with_cycle_growth(pc.multigrid());
+            let rows = system.unwrap_or_else(|| {
+                let precond::BuiltPreconditioner::Amg(amg) = pc else { unreachable!("built as the multigrid above") };
+                amg.into_fine_operator().expect("kept as the system")
+            });
+            Err(Box::new((e, Leftover::Rows(rows))))
+        }
+    }
 }
 
 /// GMRES on the solved rows of a displacement-pressure system with the block-triangular
@@ -324,7 +331,9 @@ pub(super) fn solve_gmres_saddle_point(
     if layout.multipliers > 0 {
         pc = precond::BuiltPreconditioner::Bordered(Box::new(border::Bordered::build(&rows, layout.multipliers, Box::new(pc))?));
     }
-    run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))
+    let done = run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))?;
+    start.retain(|| Retained { method: start.method.clone(), rows: Some(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
+    Ok(done)
 }
 
 /// GMRES with a one-level preconditioner built on the solved operator `a` (`D A`).
@@ -337,7 +346,9 @@ pub(super) fn solve_krylov_gmres(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let pc = precond::BuiltPreconditioner::build(a, settings.preconditioner, layout)?;
     let rows = csr::to_csr(a);
-    run_gmres(&rows, &pc, rhs, start, settings, layout.as_ref())
+    let done = run_gmres(&rows, &pc, rhs, start, settings, layout.as_ref())?;
+    start.retain(|| Retained { method: start.method.clone(), rows: Some(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
+    Ok(done)
 }
 
 /// GMRES(restart) on `rows` (the solved operator) with the preconditioner `pc`.
@@ -352,7 +363,8 @@ pub(super) fn run_gmres(
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
     let apply = |x: &[f64], y: &mut [f64]| csr::product(rows, x, y);
-    let out = gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), (tolerance, max_iterations, restart, stall), start.watch);
+    let out =
+        gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), (tolerance, max_iterations, restart, stall), start.watch);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
     let r = row_residual(rows, &out.x, &rhs.solved);

@@ -41,6 +41,7 @@ pub mod orthogonal;
 pub mod params;
 pub mod precond;
 pub mod report;
+pub mod retained;
 pub mod row_assembly;
 pub mod rowmat;
 pub mod saddle;
@@ -58,18 +59,20 @@ mod tests;
 use std::borrow::Cow;
 use std::time::Instant;
 
+use gmres::GmresSettings;
 use methods::{
-    solve_gmres_multigrid, solve_gmres_saddle_point, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, solved_rows, working,
-    GmresSettings, Leftover, Rhs, Start,
+    solve_gmres_multigrid, solve_gmres_saddle_point, solve_krylov_bicgstab, solve_krylov_gmres, solve_lu, solved_rows, working, Leftover,
+    Rhs, Start,
 };
 
-pub use layout::NodeLayout;
 pub use csr::Csr;
+pub use layout::NodeLayout;
 pub use params::{
-    lu_factor_bytes, Krylov, Preconditioner, PreconditionerKind, SolverChoice, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES, AUTO_KRYLOV_PACE,
-    AUTO_LU_SHARE, GMRES_RESTART, SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
+    lu_factor_bytes, Krylov, Preconditioner, PreconditionerKind, SolverChoice, SolverKind, SolverMethod, SolverParams, AUTO_KRYLOV_BYTES,
+    AUTO_KRYLOV_PACE, AUTO_LU_SHARE, GMRES_RESTART, SADDLE_POINT_ITERATIONS, SADDLE_POINT_RESTART,
 };
 pub use report::{SolveError, SolveReport};
+pub use retained::Retained;
 pub use rowmat::{mul_add, row_matrix, RowMatrix};
 pub use triplets::{assemble, Triplets};
 
@@ -164,6 +167,35 @@ pub fn solve_nodal(
     auxiliary: Auxiliary<'_>,
     watch: &dyn watch::Watch,
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    solve_nodal_kept(a, b, params, layout, auxiliary, (watch, None))
+}
+
+/// [`solve_nodal`], the solver kept for further right-hand sides on the same matrix
+/// ([`Retained`]: the solved rows and their factors or preconditioner; a run's peak
+/// memory stays where the solve's was). `None` when the solve did not leave one (an
+/// empty system).
+pub fn solve_nodal_retained(
+    a: Cow<'_, Csr>,
+    b: &[f64],
+    params: &SolverParams,
+    layout: Option<NodeLayout>,
+    auxiliary: Auxiliary<'_>,
+    watch: &dyn watch::Watch,
+) -> Result<(Vec<f64>, SolveReport, Option<Retained>), SolveError> {
+    let slot = std::cell::RefCell::new(None);
+    let (x, report) = solve_nodal_kept(a, b, params, layout, auxiliary, (watch, Some(&slot)))?;
+    Ok((x, report, slot.into_inner()))
+}
+
+/// [`solve_nodal`] leaving its solver in `keep` when given.
+fn solve_nodal_kept(
+    a: Cow<'_, Csr>,
+    b: &[f64],
+    params: &SolverParams,
+    layout: Option<NodeLayout>,
+    auxiliary: Auxiliary<'_>,
+    (watch, keep): (&dyn watch::Watch, Option<&std::cell::RefCell<Option<Retained>>>),
+) -> Result<(Vec<f64>, SolveReport), SolveError> {
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
@@ -171,7 +203,7 @@ pub fn solve_nodal(
     let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
     let scale = |x: f64, e: i32| x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
     let scaled: Vec<f64> = b.iter().map(|v| scale(*v, -exponent)).collect();
-    let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch))?;
+    let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch, keep))?;
     if let Some(i) = x.iter().position(|v| !scale(*v, exponent).is_finite()) {
         return Err(SolveError::Overflow {
             detail: format!(
@@ -222,11 +254,12 @@ pub(crate) fn solve_with_memory(
     params: &SolverParams,
     layout: Option<NodeLayout>,
     auxiliary: Auxiliary<'_>,
-    (available, watch): (Option<f64>, &dyn watch::Watch),
+    (available, watch, keep): (Option<f64>, &dyn watch::Watch, Option<&std::cell::RefCell<Option<Retained>>>),
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let saddle_point = layout.filter(|l| l.has_pressure());
     let (unknowns, nonzeros) = (a.nrows() as f64, a.nnz() as f64);
-    let SolverChoice { primary: kind, fallback, reason: choice } = params.kind.choose(unknowns, nonzeros, saddle_point.is_some(), available);
+    let SolverChoice { primary: kind, fallback, reason: choice } =
+        params.kind.choose(unknowns, nonzeros, saddle_point.is_some(), available);
     if let SolverKind::Petsc { .. } = kind {
         return Err(SolveError::Petsc { detail: "PETSc solves the rows each MPI rank owns (`parallel::share::Share::solve`)".into() });
     }
@@ -246,7 +279,7 @@ pub(crate) fn solve_with_memory(
         }
     }
 
-    let start = Start { method: kind.label(), choice, setup: Instant::now(), equilibrated: params.equilibrate, watch };
+    let start = Start { method: kind.label(), choice, setup: Instant::now(), equilibrated: params.equilibrate, watch, keep };
     if n == 0 {
         let report =
             SolveReport { iterations: 0, relative_residual: 0.0, original_relative_residual: 0.0, ..start.report(None, (0.0, 0.0)) };
@@ -268,9 +301,9 @@ pub(crate) fn solve_with_memory(
     };
     match kind {
         SolverKind::Auto(..) | SolverKind::Petsc { .. } => unreachable!("resolved and returned above"),
-        SolverKind::Lu => solve_lu(&working(a, &rhs), &rhs, &start),
+        SolverKind::Lu => solve_lu(working(a, &rhs), &rhs, &start),
         SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations }) => {
-            solve_krylov_bicgstab(&working(a, &rhs), &rhs, &start, (preconditioner, tolerance, max_iterations), layout)
+            solve_krylov_bicgstab(working(a, &rhs), &rhs, &start, (preconditioner, tolerance, max_iterations), layout)
         }
         SolverKind::Gmres { krylov: Krylov { preconditioner, tolerance, max_iterations }, restart } => {
             // GMRES chosen for time gives way to LU as soon as a cycle shows it is slow.
@@ -323,9 +356,9 @@ pub(crate) fn solve_with_memory(
                     // that says what is wrong with the system.
                     let retried = match retry_kind {
                         SolverKind::Bicgstab(Krylov { preconditioner, tolerance, max_iterations }) => {
-                            solve_krylov_bicgstab(&columns, &rhs, &retry, (preconditioner, tolerance, max_iterations), layout)
+                            solve_krylov_bicgstab(columns, &rhs, &retry, (preconditioner, tolerance, max_iterations), layout)
                         }
-                        _ => solve_lu(&columns, &rhs, &retry),
+                        _ => solve_lu(columns, &rhs, &retry),
                     };
                     retried.map_err(|retry| SolveError::FallbackFailed { first: Box::new(e), retry_method, retry: Box::new(retry) })
                 }

@@ -3,6 +3,9 @@
 #[cfg(doc)]
 use super::{assemble, solve};
 
+/// What to try when an in-process Krylov solver does not converge.
+pub const IN_PROCESS_HINT: &str = "try lu, a stronger preconditioner (ilut with smaller drop / larger fill) or more iterations";
+
 /// What a successful [`solve`] did and how well.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct SolveReport {

@@ -356,8 +356,10 @@ fn no_convergence_reports_the_true_residual() {
     let (t, _, b) = navier_like(40, 20.0);
     let a = assemble(&t).unwrap();
     let (pc, tol, max_it) = (Preconditioner::Jacobi, 1e-10, 2);
-    let params =
-        SolverParams { kind: SolverKind::Bicgstab(Krylov { preconditioner: pc, tolerance: tol, max_iterations: max_it }), equilibrate: true };
+    let params = SolverParams {
+        kind: SolverKind::Bicgstab(Krylov { preconditioner: pc, tolerance: tol, max_iterations: max_it }),
+        equilibrate: true,
+    };
     let err = solve(&a, &b, &params).unwrap_err();
     let msg = err.to_string();
     let SolveError::NoConvergence { iterations, relative_residual, ref method, .. } = err else {
@@ -398,7 +400,10 @@ fn auto_resolves_by_the_memory_of_the_factors() {
     let (kind, why) = auto.resolve(n, nnz, Some(1.5 * factors));
     assert_eq!(
         kind,
-        SolverKind::Gmres { krylov: Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 }, restart: GMRES_RESTART }
+        SolverKind::Gmres {
+            krylov: Krylov { preconditioner: Preconditioner::Ilu0, tolerance: 1e-9, max_iterations: 300 },
+            restart: GMRES_RESTART
+        }
     );
     assert!(why.unwrap().contains("GMRES+ILU(0)"));
     assert_eq!(auto.resolve(n, nnz, None).0, SolverKind::Lu);
@@ -413,7 +418,10 @@ fn auto_resolves_by_the_memory_of_the_factors() {
 fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
     use super::params::AUTO_KRYLOV_BYTES;
     let auto = SolverKind::Auto(Krylov { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 });
-    let gmres = SolverKind::Gmres { krylov: Krylov { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 }, restart: GMRES_RESTART };
+    let gmres = SolverKind::Gmres {
+        krylov: Krylov { preconditioner: Preconditioner::Amg, tolerance: 1e-10, max_iterations: 500 },
+        restart: GMRES_RESTART,
+    };
     let n = 1e4;
     let nnz = |bytes: f64| bytes / lu_factor_bytes(1.0, n);
     let roomy = Some(1e12);
@@ -456,13 +464,13 @@ fn auto_retries_with_ilu0_when_the_iteration_stops() {
         kind: SolverKind::Auto(Krylov { preconditioner: Preconditioner::Jacobi, tolerance: 1e-10, max_iterations: 300 }),
         equilibrate: true,
     };
-    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, (Some(1.0), &())).unwrap();
+    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, (Some(1.0), &(), None)).unwrap();
     assert_eq!(rep.method, "bicgstab+ilu0");
     let why = rep.choice.unwrap();
     assert!(why.contains("did not converge") && why.contains("retried with BiCGSTAB+ILU(0)"), "{why}");
     let (x_lu, _) = solve(&a, &b, &SolverParams::lu()).unwrap();
     assert!(max_rel_diff(&x, &x_lu) < 1e-7);
-    let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, (Some(1e12), &())).unwrap();
+    let (_, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &auto, None, None, (Some(1e12), &(), None)).unwrap();
     assert_eq!(rep.method, "lu");
 }
 
@@ -475,11 +483,11 @@ fn a_failed_low_order_operator_is_reported() {
     let a = assemble(&t).unwrap();
     let params = SolverParams { kind: SolverKind::default_gmres(), equilibrate: true };
     let failing: Auxiliary = Some(Box::new(|| Err("a stencil without enough nodes".to_string())));
-    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, failing, (None, &())).unwrap();
+    let (x, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, failing, (None, &(), None)).unwrap();
     assert!(!rep.method.contains("low-order"), "{}", rep.method);
     let why = rep.choice.unwrap_or_default();
     assert!(why.contains("could not be made (a stencil without enough nodes): built on the system"), "{why}");
-    let (plain, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, None, (None, &())).unwrap();
+    let (plain, rep) = solve_with_memory(std::borrow::Cow::Owned(csr::to_csr(&a)), &b, &params, None, None, (None, &(), None)).unwrap();
     assert_eq!(rep.choice, None);
     // The same method on the same operator (rayon's reductions may order sums
     // differently between runs: round-off only).

@@ -4,16 +4,18 @@
 //! models read a [`Case`]; each adds its own discretisation parameters
 //! (`navier::NavierParams`, `peridynamics::PdParams`).
 
-use crate::scene::choice::choice;
-use crate::domain::Domain;
+use crate::domain::corner::corners;
 use crate::domain::Point;
+use crate::domain::{Domain, NodeSet};
 use crate::models::dynamics::DynamicsParams;
+use crate::physics::elasticity::conditions::ComponentCondition;
 use crate::physics::elasticity::conditions::{BoundaryCondition, Value};
 use crate::physics::elasticity::material::Material;
 use crate::physics::exact::{ExactKind, ExactSolution, ExpressionSolution, NamedSolution};
+use crate::quality::post::probe::Probe;
+use crate::scene::choice::choice;
 use crate::scene::expression::VectorExpression;
 use crate::stages::RunError;
-use crate::quality::post::probe::Probe;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -200,4 +202,45 @@ impl Case {
         }
         Ok(())
     }
+}
+
+/// Radius of the neighbourhood of a singular corner that the stress check skips, in
+/// local node spacings (on the steel plate, h = 0.01, the estimated stress error falls
+/// from 0.36 at the clamped corners to 2.2e-3 at ten spacings).
+pub const SINGULAR_RADIUS: f64 = 10.0;
+
+/// A corner where the stress is singular.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SingularCorner {
+    /// Position.
+    pub at: Point,
+    /// Why: `re-entrant` or `clamped meets traction`.
+    pub reason: &'static str,
+    /// Radius skipped by the stress check.
+    pub radius: f64,
+}
+
+/// The singular corners of `case` on `nodes`: where a clamped part meets a part with
+/// a traction component, and re-entrant corners; none when the case has an exact
+/// solution (exact solutions are smooth). There the exact stress is unbounded.
+pub fn singular_corners(case: &Case, nodes: &NodeSet) -> Vec<SingularCorner> {
+    if case.exact.is_some() {
+        return Vec::new();
+    }
+    let clamped = |part: usize| case.conditions[part].components.iter().all(|c| *c == ComponentCondition::Displacement);
+    let traction = |part: usize| case.conditions[part].components.contains(&ComponentCondition::Traction);
+    corners(&case.domain, nodes)
+        .into_iter()
+        .filter_map(|c| {
+            let [a, b] = c.parts;
+            let reason = if c.reentrant {
+                "re-entrant"
+            } else if (clamped(a) && traction(b)) || (clamped(b) && traction(a)) {
+                "clamped meets traction"
+            } else {
+                return None;
+            };
+            Some(SingularCorner { at: c.position, reason, radius: SINGULAR_RADIUS * nodes.local_spacing[c.node] })
+        })
+        .collect()
 }

@@ -25,12 +25,12 @@
 //! the stress): written to `solution.vtu` as `estimated_error` (and
 //! `estimated_error_stress`).
 
-use crate::scene::choice::{choice, Choice};
 use crate::domain::{FillKind, Point};
-use crate::physics::elasticity::stress::StressField;
 use crate::mlsm::{default_rbf_fd_support, Approximation, Basis, Radial, Weight};
-use crate::stages::{RunError, Stage, StageTimer};
+use crate::physics::elasticity::stress::StressField;
 use crate::quality::post::{ErrorNorms, ExactFields};
+use crate::scene::choice::{choice, Choice};
+use crate::stages::{RunError, Stage, StageTimer};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -43,12 +43,12 @@ pub const MAX_REFERENCE_DEGREE: u32 = 8;
 choice! {
     /// How a static Navier run estimates its error (`estimate.method`).
     pub enum EstimateMethod("estimate.method", default Some(EstimateMethod::Auto), serde "kebab-case") {
-        /// `higher-degree` for a Navier run, `local-model` for a peridynamic one.
-        Auto = "auto" => "higher-degree for a static Navier run, refined for a dynamic one, local-model for a peridynamic run",
+        /// `defect` for a static Navier run (`higher-degree` where it cannot be trusted), `refined` for a dynamic one, `local-model` for a peridynamic one.
+        Auto = "auto" => "defect for a static Navier run, and higher-degree where the defect estimate is unavailable, reaches the warning threshold (or 1e-2) or the scene has singular corners; refined for a dynamic run, local-model for a peridynamic run",
         /// Difference to a solution two degrees higher on the same nodes.
-        HigherDegree = "higher-degree" => "static Navier runs: difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes; about 1-3x the cost of the run",
+        HigherDegree = "higher-degree" => "static Navier runs: difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes, solved afresh; the certificate, 0.5-3x the cost of the run (BENCHMARKS.md, \"What the error estimate costs\")",
         /// The run's truncation error on local fits of its solution, mapped by its own operator.
-        Defect = "defect" => "static Navier runs: the run's truncation error measured on local fits of degree p + 2 of its own solution, mapped to an error by one loose solve with the run's own operator (no second discretisation)",
+        Defect = "defect" => "static Navier runs: the run's truncation error measured on local fits of degree p + 2 of its own solution, mapped to an error by one loose solve with the run's own factors or preconditioner (no second discretisation or solver)",
         /// Difference to a run on nodes at half the spacing with a finer time step.
         Refined = "refined" => "dynamic Navier runs: difference to the run on nodes at half the spacing with the time step halved (quartered for emu); 8x the nodes x steps of the run (16x with emu): 3-4x its time on the shipped scenes, 6x at 1.2e4 nodes",
         /// Difference to the local (Navier) model's solution of the same scene.
@@ -81,6 +81,13 @@ impl EstimateMethod {
     /// Whether a static Navier run estimates its error (`auto`, `higher-degree` or `defect`).
     pub fn static_navier_estimates(self) -> bool {
         matches!(self, EstimateMethod::Auto | EstimateMethod::HigherDegree | EstimateMethod::Defect)
+    }
+
+    /// Whether a static Navier run makes the `defect` estimate in its own stages
+    /// (`defect`, and `auto`, which takes it where it can be trusted:
+    /// [`super::run::solve`]).
+    pub fn makes_defect(self) -> bool {
+        matches!(self, EstimateMethod::Auto | EstimateMethod::Defect)
     }
 
     /// Whether a dynamic Navier run estimates its error (`auto` or `refined`).

@@ -9,18 +9,18 @@ use super::dynamics::{simulate_sampled, Sampling, Simulation};
 use super::estimate::{compared_states, reference_approximation, stage, ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
 use super::solve::{assemble_and_solve, stages, Solution};
 use super::NavierParams;
-use crate::physics::case::Case;
-use crate::scene::choice::Choice;
 use crate::domain::{NodeSet, Point};
-use crate::models::dynamics::driver::Snapshot;
-use crate::models::dynamics::DynamicsParams;
-use crate::physics::elasticity::stress::StressField;
-use crate::physics::exact::ExactSolution;
-use crate::parallel::distributed;
 use crate::linalg::SolverParams;
 use crate::mlsm::interpolate::mls_values;
-use crate::stages::{Progress, RunError, StageTimer, Within};
+use crate::models::dynamics::driver::Snapshot;
+use crate::models::dynamics::DynamicsParams;
+use crate::parallel::distributed;
+use crate::physics::case::Case;
+use crate::physics::elasticity::stress::StressField;
+use crate::physics::exact::ExactSolution;
 use crate::quality::post::ExactFields;
+use crate::scene::choice::Choice;
+use crate::stages::{Progress, RunError, StageTimer, Within};
 use std::time::Instant;
 
 /// Run every stage of the static run of `case` with `params`, then its error estimate
@@ -31,17 +31,60 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
     let exact = exact.as_deref();
     let mut solution = stages(case, params, exact, &mut timer)?;
     let method = params.estimate.method;
-    // `defect` is made by the run's own stages, with its operator at hand.
-    if method != EstimateMethod::Defect {
-        solution.estimate = stage(method, method.static_navier_estimates(), &mut timer, || {
+    // `defect` is made by the run's own stages, with its operator at hand; `auto`
+    // takes it unless it cannot be trusted, and then the higher-degree reference.
+    let reference = match method {
+        EstimateMethod::Defect => None,
+        EstimateMethod::Auto => untrusted_defect(case, params, &solution),
+        _ => Some(String::new()),
+    };
+    if let Some(why) = reference {
+        let made = stage(method, method.static_navier_estimates(), &mut timer, || {
             higher_degree(case, params, &solution.nodes, &solution.displacement, solution.stress.as_ref(), exact, progress)
         })?;
+        solution.estimate = match (made, std::mem::replace(&mut solution.estimate, Estimate::Off)) {
+            (Estimate::Done(mut e), _) if !why.is_empty() => {
+                e.reference = format!("{}; auto took it because {why}", e.reference);
+                Estimate::Done(e)
+            }
+            (Estimate::Unavailable(..), defect @ Estimate::Done(_)) => defect,
+            (made, _) => made,
+        };
     }
     solution.timings = timer.finish();
     if let Some(ranks) = solution.solver.ranks.as_mut() {
         ranks.stage_seconds = distributed::stage_seconds_per_rank(&solution.timings.named())?;
     }
     Ok(solution)
+}
+
+/// Why `auto` does not take the `defect` estimate of a static run, or `None` when it
+/// does: the estimate is unavailable (too few nodes for its fits, MPI ranks); the
+/// scene has singular corners (local fits cannot see a singularity: on the bracket the
+/// defect estimate is 0.11 of the finite-element error, the higher-degree one 0.32);
+/// or the estimate reaches the warning threshold (at most 1e-2), where the run's own
+/// error pollutes the fits of its solution (Lame at nu = 0.49 in the displacement form:
+/// true e_inf(u) 7.4, defect 0.95, higher-degree 7.4). A run that is warned is then
+/// warned with the higher-degree reference's number
+/// (docs/notebook/2026-11-28-cheap-estimate.md).
+fn untrusted_defect(case: &Case, params: &NavierParams, solution: &Solution) -> Option<String> {
+    let e = match &solution.estimate {
+        Estimate::Done(e) => e,
+        Estimate::Unavailable(_, why) => return Some(format!("the defect estimate is unavailable ({why})")),
+        Estimate::Off => return Some("the run made no defect estimate".into()),
+    };
+    let corners = crate::physics::case::singular_corners(case, &solution.nodes);
+    if !corners.is_empty() {
+        return Some(format!("the scene has {} singular corner(s), which local fits of the solution cannot see", corners.len()));
+    }
+    let limit = params.estimate.threshold.min(super::estimate::DEFAULT_THRESHOLD);
+    let sigma = e.norms.e_inf_sigma.unwrap_or(0.0);
+    (e.norms.e_inf_u.is_nan() || sigma.is_nan() || e.norms.e_inf_u > limit || sigma > limit).then(|| {
+        format!(
+            "the defect estimate (e_inf(u) ~ {:.1e}, e_inf(sigma) ~ {sigma:.1e}) reaches {limit:.0e}, where the run's own error pollutes its fits",
+            e.norms.e_inf_u
+        )
+    })
 }
 
 /// Run `case` (with `dynamics`) by explicit MLSM elastodynamics, calling `snapshot`
@@ -83,7 +126,8 @@ pub fn higher_degree(
         Err(reason) => return Estimate::Unavailable(EstimateMethod::HigherDegree.name(), reason),
     };
     let solver = SolverParams { kind: params.solver.kind.for_reference(), ..params.solver };
-    let reference_params = NavierParams { approximation, keep_system: false, solver, ..params.clone() };
+    let estimate = EstimateParams { method: EstimateMethod::None, ..params.estimate };
+    let reference_params = NavierParams { approximation, keep_system: false, solver, estimate, ..params.clone() };
     let within = Within(progress);
     let mut timer = StageTimer::new(&within);
     let solved = Discretisation::on_nodes(case, &reference_params, nodes.clone(), exact, &mut timer)

@@ -4,26 +4,26 @@
 
 use std::borrow::Cow;
 
+use super::defect;
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
 use super::equilibrium::{self, Equilibrium};
-use super::defect;
-use crate::scene::choice::Choice;
 use super::estimate::{ErrorEstimate, Estimate, EstimateMethod, ESTIMATE};
 use super::low_order;
 use super::sector;
 use super::system::System;
 use super::NavierParams;
-use crate::physics::case::Case;
 use crate::domain::{NodeSet, Point};
+use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
+use crate::parallel::distributed::agree;
+use crate::physics::case::Case;
 use crate::physics::elasticity::dofs::{DofMap, Unknowns};
 use crate::physics::elasticity::stress::{Gradient, StressField};
 use crate::physics::exact::ExactSolution;
-use crate::parallel::distributed::agree;
-use crate::linalg::{self, SolveReport, SolverParams, SparseMatrix};
-use crate::stages::{stage, RunError, SolveProgress, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
 use crate::quality::post::{ErrorNorms, ExactFields};
+use crate::scene::choice::Choice;
+use crate::stages::{stage, Progress, RunError, SolveProgress, StageTimer, StageTimings};
 use std::time::Instant;
 
 /// Everything a static Navier run computed.
@@ -109,30 +109,34 @@ pub(super) fn stages(
         assemble_and_solve(case, &mut disc, exact, params, timer)?;
 
     let n = disc.nodes.len();
-    let Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes, estimate } = timer.run(stage::POST, || {
-        let displacement = disc.dofs.displacements(&x, n);
-        let pressure = disc.pressure(&case.material, &x);
-        if case.outputs.needs_gradient() {
-            disc.restore_gradient_shapes(&params.approximation)?;
-        }
-        let gradient = case.outputs.needs_gradient().then(|| disc.gradients(&x));
-        let stress = gradient.as_ref().map(|g| disc.stress(&case.material, g, &x));
-        let exact_fields = exact.map(|e| ExactFields::at(e, &disc.nodes.positions, true));
-        let errors = exact_fields.as_ref().map(|ef| ErrorNorms::against(&displacement, stress.as_ref(), ef));
-        let equilibrium = stress.as_ref().map(|s| equilibrium::balance(case, &disc.nodes, s, exact));
-        let fields = NodalFields { positions: &disc.nodes.positions, displacement: &displacement, stress: stress.as_ref() };
-        let probes = probe_values(&case.probes, &fields, exact)?;
-        let note = match &errors {
-            Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
-            None => String::new(),
-        };
-        let estimate = match (params.estimate.method, correction) {
-            (EstimateMethod::Defect, Some(c)) => defect_estimate(case, &disc, &x, (&displacement, stress.as_ref()), c),
-            (EstimateMethod::Defect, None) => Estimate::Unavailable(EstimateMethod::Defect.name(), "the defect estimate is not made over MPI ranks".into()),
-            _ => Estimate::Off,
-        };
-        Ok((Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes, estimate }, note))
-    })?;
+    let Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes, estimate } =
+        timer.run(stage::POST, || {
+            let displacement = disc.dofs.displacements(&x, n);
+            let pressure = disc.pressure(&case.material, &x);
+            if case.outputs.needs_gradient() {
+                disc.restore_gradient_shapes(&params.approximation)?;
+            }
+            let gradient = case.outputs.needs_gradient().then(|| disc.gradients(&x));
+            let stress = gradient.as_ref().map(|g| disc.stress(&case.material, g, &x));
+            let exact_fields = exact.map(|e| ExactFields::at(e, &disc.nodes.positions, true));
+            let errors = exact_fields.as_ref().map(|ef| ErrorNorms::against(&displacement, stress.as_ref(), ef));
+            let equilibrium = stress.as_ref().map(|s| equilibrium::balance(case, &disc.nodes, s, exact));
+            let fields = NodalFields { positions: &disc.nodes.positions, displacement: &displacement, stress: stress.as_ref() };
+            let probes = probe_values(&case.probes, &fields, exact)?;
+            let note = match &errors {
+                Some(e) => format!("e_inf(u) = {:.3e}", e.e_inf_u),
+                None => String::new(),
+            };
+            let estimate = match (params.estimate.method, correction) {
+                (m, Some(c)) if m.makes_defect() => defect_estimate(case, &disc, &x, (&displacement, stress.as_ref()), c),
+                (m, None) if m.makes_defect() => {
+                    let why = if disc.share.is_split() { "it is not made over MPI ranks" } else { "the scene has singular corners" };
+                    Estimate::Unavailable(EstimateMethod::Defect.name(), why.into())
+                }
+                _ => Estimate::Off,
+            };
+            Ok((Post { displacement, pressure, gradient, stress, exact_fields, errors, equilibrium, probes, estimate }, note))
+        })?;
 
     let system = system.map(|(matrix, rhs)| LinearSystem {
         matrix,
@@ -236,7 +240,10 @@ pub(super) fn assemble_and_solve(
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
     let (solver, keep) = (&params.solver, params.keep_system);
-    let defect = params.estimate.method == EstimateMethod::Defect;
+    // `auto` does not take the defect estimate on a scene with singular corners
+    // (`super::run::untrusted_defect`), so it is not made there.
+    let defect = params.estimate.method == EstimateMethod::Defect
+        || (params.estimate.method.makes_defect() && crate::physics::case::singular_corners(case, &disc.nodes).is_empty());
     let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
     if disc.share.is_split() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
@@ -255,7 +262,7 @@ pub(super) fn assemble_and_solve(
     disc.release_row_shapes();
     let nonzeros = matrix.nnz();
     let watch = SolveProgress(timer.progress());
-    let (x, multipliers, report, kept) = timer.run(stage::SOLVE, || {
+    let (x, multipliers, report, kept, retained) = timer.run(stage::SOLVE, || {
         let layout = Some(linalg::NodeLayout { per_node: disc.dofs.unknowns().per_node(), positions: &positions, multipliers });
         let requested = disc.supports.requested();
         let disc_for_aux = &mut *disc;
@@ -263,29 +270,40 @@ pub(super) fn assemble_and_solve(
             let approximation = low_order::approximation(&params.approximation, params.fill.kind);
             Box::new(move || low_order::rows(case, disc_for_aux, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
         });
-        // Handed over unless kept: the solver frees it once it holds its own form.
-        let ((mut x, report), kept) = if keep || defect {
-            (linalg::solve_nodal(Cow::Borrowed(&matrix), &rhs, solver, layout, auxiliary, &watch)?, Some(matrix))
-        } else {
-            (linalg::solve_nodal(Cow::Owned(matrix), &rhs, solver, layout, auxiliary, &watch)?, None)
+        // Handed over unless kept: the solver frees it once it holds its own form. The
+        // `defect` estimate keeps the solver (its rows and factors or preconditioner)
+        // for its correction.
+        let solve = |a: Cow<'_, linalg::Csr>| {
+            if defect {
+                linalg::solve_nodal_retained(a, &rhs, solver, layout, auxiliary, &watch)
+            } else {
+                linalg::solve_nodal(a, &rhs, solver, layout, auxiliary, &watch).map(|(x, report)| (x, report, None))
+            }
         };
+        let ((mut x, report, retained), kept) =
+            if keep { (solve(Cow::Borrowed(&matrix))?, Some(matrix)) } else { (solve(Cow::Owned(matrix))?, None) };
         // The multipliers of the balances are not unknowns of the field.
         let lambda = x.split_off(x.len() - multipliers);
         let note = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
-        Ok(((x, lambda, report, kept), note))
+        Ok(((x, lambda, report, kept, retained), note))
     })?;
-    let correction = match (defect, kept.as_ref()) {
-        (true, Some(matrix)) => Some(timer.run(ESTIMATE, || {
+    let progress = timer.progress();
+    let correction = defect.then(|| {
+        timer.run(ESTIMATE, || {
             let t0 = Instant::now();
-            let c = correct(case, disc, exact, params, matrix, &x, &positions);
+            let c = match &retained {
+                Some(solver) => correct(disc, params, solver, &x, progress),
+                None => Err("the solve left no solver to reuse".to_string()),
+            };
             let note = match &c {
                 Ok(c) => format!("{} fit centres; correction: {}", c.fits.centres(), c.solve),
                 Err(why) => format!("unavailable: {why}"),
             };
             Ok((c.map(|c| Correction { seconds: t0.elapsed().as_secs_f64(), ..c }), note))
-        })?),
-        _ => None,
-    };
+        })
+    });
+    drop(retained);
+    let correction = correction.transpose()?;
     let system = kept.filter(|_| keep).map(|matrix| (linalg::csr::columns_of(matrix), rhs));
     Ok(Solved { x, multipliers, nonzeros, report, system, sectors, unbalanced, correction })
 }
@@ -319,34 +337,25 @@ fn assemble_and_solve_distributed(
 }
 
 /// The `defect` correction of the run `x` of `disc` ([`defect`]): fits of `x`, the
-/// truncation error of the run's rows `matrix` on them, and `e = -A^-1 tau` solved
-/// with the scene's solver to [`defect::CORRECTION_TOLERANCE`].
+/// truncation error `D tau` of the rows the run solved (`D A`, kept with their
+/// factors or preconditioner in `solver`), and `e = -(D A)^-1 D tau` by `solver` to
+/// [`defect::CORRECTION_TOLERANCE`]: no second factorisation or multigrid. `progress`
+/// is told the fits made, then the residual digits of the solve.
 fn correct(
-    case: &Case,
-    disc: &mut Discretisation,
-    exact: Option<&dyn ExactSolution>,
+    disc: &Discretisation,
     params: &NavierParams,
-    matrix: &linalg::Csr,
+    solver: &linalg::Retained,
     x: &[f64],
-    positions: &[[f64; 2]],
+    progress: &dyn Progress,
 ) -> Result<Correction, String> {
     let p = params.approximation.basis.polynomial_degree();
-    let fits = defect::Fits::of(disc, x, p)?;
-    let tau = defect::truncation_error(disc, matrix, &fits);
+    let fits = defect::Fits::of(disc, x, p, &|k, n| progress.advance(k as u64, n as u64, "fit centres"))?;
+    let tau = defect::truncation_error(disc, &solver.rows(), &fits);
     let rhs: Vec<f64> = tau.iter().map(|t| -t).collect();
-    let multipliers = matrix.nrows() - disc.dofs.len();
-    let (unknowns, per_node) = (disc.dofs.len(), disc.dofs.unknowns().per_node());
-    let layout = Some(linalg::NodeLayout { per_node, positions, multipliers });
-    let requested = disc.supports.requested();
-    let auxiliary: linalg::Auxiliary = params.multigrid.low_order(requested).then(|| {
-        let approximation = low_order::approximation(&params.approximation, params.fill.kind);
-        Box::new(move || low_order::rows(case, disc, exact, &approximation)) as Box<dyn FnOnce() -> Result<linalg::Csr, String>>
-    });
-    let solver = SolverParams { kind: params.solver.kind.with_tolerance(defect::CORRECTION_TOLERANCE), ..params.solver };
-    let (mut e, report) = linalg::solve_nodal(Cow::Borrowed(matrix), &rhs, &solver, layout, auxiliary, &())
+    let (mut e, solve) = solver
+        .solve(&rhs, defect::CORRECTION_TOLERANCE, &SolveProgress(progress))
         .map_err(|err| format!("the correction's solve failed: {err}"))?;
-    e.truncate(unknowns);
-    let solve = format!("{}: {} iterations, relative residual {:.1e}", report.method, report.iterations, report.relative_residual);
+    e.truncate(disc.dofs.len());
     Ok(Correction { e, fits, solve, seconds: 0.0 })
 }
 

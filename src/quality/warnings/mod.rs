@@ -48,19 +48,18 @@ mod time;
 pub use peridynamics::{peridynamics_static, LOCAL_REFERENCE_MARGIN, PD_MIN_RATIO};
 pub use time::{dynamic, energy_drift, load_time_resolution};
 
-use crate::physics::case::Case;
-use crate::domain::corner::corners;
-use crate::domain::{NodeSet, Point};
-use crate::physics::elasticity::conditions::ComponentCondition;
-use crate::physics::elasticity::dofs::Unknowns;
-use crate::physics::elasticity::material::{Material, PlaneModel};
+use crate::domain::Point;
 use crate::linalg::SolveReport;
 use crate::mlsm::Basis;
 use crate::models::navier::equilibrium::Equilibrium;
 use crate::models::navier::formulation::AUTO_FROM_POISSON;
 use crate::models::navier::{ErrorEstimate, Estimate, NavierParams, Solution};
-use crate::scene::problem::Problem;
 use crate::models::resources;
+use crate::physics::case::Case;
+pub use crate::physics::case::{singular_corners, SingularCorner, SINGULAR_RADIUS};
+use crate::physics::elasticity::dofs::Unknowns;
+use crate::physics::elasticity::material::{Material, PlaneModel};
+use crate::scene::problem::Problem;
 use serde::Serialize;
 
 /// Factor the estimated displacement error counts for, against the threshold and
@@ -90,11 +89,6 @@ pub fn singular_estimate_note(what: &str) -> String {
     )
 }
 
-/// Radius of the neighbourhood of a singular corner that the stress check skips, in
-/// local node spacings (on the steel plate, h = 0.01, the estimated stress error falls
-/// from 0.36 at the clamped corners to 2.2e-3 at ten spacings).
-pub const SINGULAR_RADIUS: f64 = 10.0;
-
 /// With singular corners, the equilibrium imbalance warns above this multiple of the
 /// threshold (module docs).
 pub const SINGULAR_EQUILIBRIUM_FACTOR: f64 = 10.0;
@@ -115,17 +109,6 @@ pub const DIGITS_LIMIT: f64 = 1e-6;
 /// adds at most 10 % to the error the run reports.
 pub const SOLVER_ERROR_SHARE: f64 = 0.1;
 
-/// A corner where the stress is singular.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SingularCorner {
-    /// Position.
-    pub at: Point,
-    /// Why: `re-entrant` or `clamped meets traction`.
-    pub reason: &'static str,
-    /// Radius skipped by the stress check.
-    pub radius: f64,
-}
-
 /// The checks of one run: warnings (something is doubtful) and notes (something the
 /// user should know to read the result).
 #[derive(Debug, Clone, Default, Serialize)]
@@ -136,29 +119,6 @@ pub struct Checks {
     pub notes: Vec<String>,
     /// Corners where the stress is singular.
     pub singular_corners: Vec<SingularCorner>,
-}
-
-/// The singular corners of `case` on `nodes` (module docs).
-pub fn singular_corners(case: &Case, nodes: &NodeSet) -> Vec<SingularCorner> {
-    if case.exact.is_some() {
-        return Vec::new();
-    }
-    let clamped = |part: usize| case.conditions[part].components.iter().all(|c| *c == ComponentCondition::Displacement);
-    let traction = |part: usize| case.conditions[part].components.contains(&ComponentCondition::Traction);
-    corners(&case.domain, nodes)
-        .into_iter()
-        .filter_map(|c| {
-            let [a, b] = c.parts;
-            let reason = if c.reentrant {
-                "re-entrant"
-            } else if (clamped(a) && traction(b)) || (clamped(b) && traction(a)) {
-                "clamped meets traction"
-            } else {
-                return None;
-            };
-            Some(SingularCorner { at: c.position, reason, radius: SINGULAR_RADIUS * nodes.local_spacing[c.node] })
-        })
-        .collect()
 }
 
 /// One doubtful aspect of a run.

@@ -1,0 +1,124 @@
+//! A solver kept past its solve: the solved rows `D A` and what inverted them (LU
+//! factors, or a Krylov method with its built preconditioner), for a second
+//! right-hand side on the same matrix at the cost of a back-substitution or a few
+//! preconditioned iterations instead of a second factorisation or multigrid setup
+//! (the `defect` error estimate's correction, `models::navier::defect`).
+
+use std::borrow::Cow;
+
+use super::gmres::GmresSettings;
+use super::inverse::Inverse as _;
+use super::report::IN_PROCESS_HINT;
+use super::watch::Watch;
+use super::{bicgstab, csr, gmres, lu, norm2, precond, relative, residual, row_residual, Csr, SolveError, SparseMatrix};
+
+/// What inverts the kept rows.
+pub(super) enum Inverse {
+    /// The LU factors of the solved rows.
+    Lu(lu::SparseLu),
+    /// GMRES(restart) with its preconditioner.
+    Gmres(precond::BuiltPreconditioner, GmresSettings),
+    /// BiCGSTAB with its preconditioner and iteration limit.
+    Bicgstab(precond::BuiltPreconditioner, usize),
+}
+
+/// A solver kept after its solve ([`super::solve_nodal_retained`]): the rows it solved,
+/// `D A` (row-equilibrated when the scene asks, multipliers of a bordered system
+/// last), and their inverse.
+pub struct Retained {
+    /// The solver's label, for the note of a second solve.
+    pub(super) method: String,
+    /// The solved rows, unless the preconditioner holds them (the multigrid's finest
+    /// level) or the solver kept them in columns.
+    pub(super) rows: Option<Csr>,
+    /// The solved operator in columns (LU, BiCGSTAB).
+    pub(super) columns: Option<SparseMatrix>,
+    pub(super) inverse: Inverse,
+}
+
+impl Retained {
+    /// The solved rows `D A`: those the solver holds, or made from its columns.
+    pub fn rows(&self) -> Cow<'_, Csr> {
+        if let Some(rows) = &self.rows {
+            return Cow::Borrowed(rows);
+        }
+        if let Inverse::Gmres(pc, _) | Inverse::Bicgstab(pc, _) = &self.inverse {
+            if let Some(rows) = pc.fine_operator() {
+                return Cow::Borrowed(rows);
+            }
+        }
+        Cow::Owned(csr::to_csr(self.columns.as_ref().expect("a retained solver keeps its operator in rows or in columns")))
+    }
+
+    /// Solve `D A y = c` (`c` in the solved rows' scale, of any magnitude: it is
+    /// scaled by a power of two first, as [`super::solve_nodal`] scales the loads) to a
+    /// relative residual `tolerance` (LU: as exact as its factors), from `y = 0`;
+    /// returns `y` and a note of what the solve did. `watch` is told the residual of each
+    /// iteration.
+    pub fn solve(&self, c: &[f64], tolerance: f64, watch: &dyn Watch) -> Result<(Vec<f64>, String), SolveError> {
+        let largest = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if !largest.is_finite() {
+            return Err(SolveError::Dimension { detail: "the second right-hand side is not finite".into() });
+        }
+        if largest == 0.0 {
+            return Ok((vec![0.0; c.len()], format!("{}: a zero right-hand side", self.method)));
+        }
+        let exponent = largest.log2().floor() as i32;
+        let scale = |v: f64, e: i32| v * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
+        let b: Vec<f64> = c.iter().map(|v| scale(*v, -exponent)).collect();
+        let rows = || self.rows();
+        let (y, iterations, relres) = match &self.inverse {
+            Inverse::Lu(lu) => {
+                let y = lu.solve(&b);
+                let r = match &self.columns {
+                    Some(a) => residual(a, &y, &b),
+                    None => row_residual(&rows(), &y, &b),
+                };
+                (y, 1, relative(norm2(&r), norm2(&b)))
+            }
+            Inverse::Gmres(pc, settings) => {
+                let ops = rows();
+                let apply = |x: &[f64], y: &mut [f64]| csr::product(ops.as_ref(), x, y);
+                let limits = (tolerance, settings.max_iterations, settings.restart, settings.stall);
+                let out = gmres::solve_gmres_with(apply, &b, |v, z| pc.solve_into(v, z), limits, watch);
+                if !matches!(out.status, gmres::Status::Converged) {
+                    return Err(self.not_converged(out.iterations, out.relative_residual, tolerance));
+                }
+                (out.x, out.iterations, out.relative_residual)
+            }
+            Inverse::Bicgstab(pc, max_iterations) => {
+                let a = self.columns.as_ref().expect("BiCGSTAB keeps its operator in columns");
+                let out = bicgstab::solve_bicgstab(a, &b, pc, tolerance, *max_iterations, |y| {
+                    let reached = relative(norm2(&residual(a, y, &b)), norm2(&b));
+                    watch.residual(reached, tolerance);
+                    reached
+                });
+                if !matches!(out.status, bicgstab::Status::Converged) {
+                    return Err(self.not_converged(out.iterations, out.relative_residual, tolerance));
+                }
+                (out.x, out.iterations, out.relative_residual)
+            }
+        };
+        if let Some(i) = y.iter().position(|v| !scale(*v, exponent).is_finite()) {
+            return Err(SolveError::Overflow { detail: format!("unknown {i} of the second solve is beyond the double range") });
+        }
+        let y = y.into_iter().map(|v| scale(v, exponent)).collect();
+        let note = match self.inverse {
+            Inverse::Lu(_) => format!("{} factors reused, relative residual {relres:.1e}", self.method),
+            _ => format!("{} reused: {iterations} iterations, relative residual {relres:.1e}", self.method),
+        };
+        Ok((y, note))
+    }
+
+    fn not_converged(&self, iterations: usize, relative_residual: f64, tolerance: f64) -> SolveError {
+        SolveError::NoConvergence {
+            hint: IN_PROCESS_HINT,
+            limit: "the iteration limit or stagnation".into(),
+            restarts: 0,
+            iterations,
+            relative_residual,
+            method: format!("{} (reused)", self.method),
+            tolerance,
+        }
+    }
+}
