@@ -127,8 +127,8 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
     let mut p = p.clone();
     let mut notes = Vec::new();
     if p.case.exact.is_none() && !p.navier.estimate.method.static_navier_estimates() {
-        p.navier.estimate.method = EstimateMethod::HigherDegree;
-        notes.push("the scene has no exact solution: the error estimate is switched on (estimate.method = \"higher-degree\")".to_string());
+        p.navier.estimate.method = EstimateMethod::Auto;
+        notes.push("the scene has no exact solution: the error estimate is switched on (estimate.method = \"auto\")".to_string());
     }
     if !quiet {
         for n in &notes {

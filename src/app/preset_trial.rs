@@ -63,7 +63,7 @@ pub(super) fn trial_problem(p: &Problem, req: &RunRequest) -> Result<Option<Prob
     let mut t = Problem::from_file_with_preset(&req.scene, Some(trial))?;
     t.model = t.model.running(Model::Navier).expect("the Navier model always runs");
     if !t.navier.estimate.method.static_navier_estimates() {
-        t.navier.estimate.method = EstimateMethod::HigherDegree;
+        t.navier.estimate.method = EstimateMethod::Auto;
     }
     crate::models::resources::check(&t)?;
     Ok(Some(t))

@@ -3,7 +3,7 @@
 //! (time budget, memory, node count, a stalled estimate, [`MAX_STEPS`]) ends the loop.
 //!
 //! Each step solves the static Navier problem on the current nodes with the
-//! higher-degree estimate ([`crate::models::navier::estimate`]); its per-node indicator
+//! scene's error estimate (`auto` if it had none: [`crate::models::navier::estimate`]); its per-node indicator
 //! `eta_i` (relative to the field's largest value, as the e_inf norms) sets the next
 //! spacing ([`crate::domain::adapt`]):
 //!
@@ -267,8 +267,8 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
     let mut notes = Vec::new();
     let mut problem = p.clone();
     if !problem.navier.estimate.method.static_navier_estimates() {
-        problem.navier.estimate.method = EstimateMethod::HigherDegree;
-        notes.push("the error estimate is switched on (estimate.method = \"higher-degree\"): the target is set on it".into());
+        problem.navier.estimate.method = EstimateMethod::Auto;
+        notes.push("the error estimate is switched on (estimate.method = \"auto\"): the target is set on it".into());
     }
     let mut refinement = target.refinement;
     if refinement == Refinement::Local && problem.navier.fill.kind == FillKind::Grid {
