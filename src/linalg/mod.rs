@@ -115,6 +115,21 @@ fn row_residual(a: &Csr, x: &[f64], b: &[f64]) -> Vec<f64> {
     r
 }
 
+/// `floor(log2 m)` of the largest magnitude `m` of a right-hand side (0 for `m = 0`):
+/// the loads are solved as `b / 2^e`, so that any representable answer is computed.
+fn binary_exponent(m: f64) -> i32 {
+    if m > 0.0 {
+        m.log2().floor() as i32
+    } else {
+        0
+    }
+}
+
+/// `x 2^e`, in two factors so that neither overflows for `|e|` up to 2 x 1023.
+fn times_power_of_two(x: f64, e: i32) -> f64 {
+    x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2)
+}
+
 /// `‖r‖ / ‖b‖`, or `‖r‖` when `b = 0`.
 fn relative(r: f64, b: f64) -> f64 {
     if b > 0.0 {
@@ -200,11 +215,10 @@ fn solve_nodal_kept(
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
     let b_max = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let exponent = if b_max > 0.0 { b_max.log2().floor() as i32 } else { 0 };
-    let scale = |x: f64, e: i32| x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
-    let scaled: Vec<f64> = b.iter().map(|v| scale(*v, -exponent)).collect();
+    let exponent = binary_exponent(b_max);
+    let scaled: Vec<f64> = b.iter().map(|v| times_power_of_two(*v, -exponent)).collect();
     let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch, keep))?;
-    if let Some(i) = x.iter().position(|v| !scale(*v, exponent).is_finite()) {
+    if let Some(i) = x.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {
         return Err(SolveError::Overflow {
             detail: format!(
                 "unknown {i} is {:.3e} x 2^{exponent}, beyond the largest double (1.8e308): the loads are too \
@@ -213,7 +227,7 @@ fn solve_nodal_kept(
             ),
         });
     }
-    let x: Vec<f64> = x.into_iter().map(|v| scale(v, exponent)).collect();
+    let x: Vec<f64> = x.into_iter().map(|v| times_power_of_two(v, exponent)).collect();
     // Entries below 1e-12 of the largest are round-off of a zero (a symmetry line);
     // only significant entries that lost digits count.
     let largest = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -10,6 +10,7 @@ use super::gmres::GmresSettings;
 use super::inverse::Inverse as _;
 use super::report::IN_PROCESS_HINT;
 use super::watch::Watch;
+use super::{binary_exponent, times_power_of_two};
 use super::{bicgstab, csr, gmres, lu, norm2, precond, relative, residual, row_residual, Csr, SolveError, SparseMatrix};
 
 /// What inverts the kept rows.
@@ -63,9 +64,8 @@ impl Retained {
         if largest == 0.0 {
             return Ok((vec![0.0; c.len()], format!("{}: a zero right-hand side", self.method)));
         }
-        let exponent = largest.log2().floor() as i32;
-        let scale = |v: f64, e: i32| v * 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
-        let b: Vec<f64> = c.iter().map(|v| scale(*v, -exponent)).collect();
+        let exponent = binary_exponent(largest);
+        let b: Vec<f64> = c.iter().map(|v| times_power_of_two(*v, -exponent)).collect();
         let rows = || self.rows();
         let (y, iterations, relres) = match &self.inverse {
             Inverse::Lu(lu) => {
@@ -99,10 +99,10 @@ impl Retained {
                 (out.x, out.iterations, out.relative_residual)
             }
         };
-        if let Some(i) = y.iter().position(|v| !scale(*v, exponent).is_finite()) {
+        if let Some(i) = y.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {
             return Err(SolveError::Overflow { detail: format!("unknown {i} of the second solve is beyond the double range") });
         }
-        let y = y.into_iter().map(|v| scale(v, exponent)).collect();
+        let y = y.into_iter().map(|v| times_power_of_two(v, exponent)).collect();
         let note = match self.inverse {
             Inverse::Lu(_) => format!("{} factors reused, relative residual {relres:.1e}", self.method),
             _ => format!("{} reused: {iterations} iterations, relative residual {relres:.1e}", self.method),

@@ -350,8 +350,8 @@ fn correct(
 ) -> Result<Correction, String> {
     let p = params.approximation.basis.polynomial_degree();
     let fits = defect::Fits::of(disc, x, p, &|k, n| progress.advance(k as u64, n as u64, "fit centres"))?;
-    let tau = defect::truncation_error(disc, &solver.rows(), &fits);
-    let rhs: Vec<f64> = tau.iter().map(|t| -t).collect();
+    let mut rhs = defect::truncation_error(disc, &solver.rows(), &fits);
+    rhs.iter_mut().for_each(|t| *t = -*t);
     let (mut e, solve) = solver
         .solve(&rhs, defect::CORRECTION_TOLERANCE, &SolveProgress(progress))
         .map_err(|err| format!("the correction's solve failed: {err}"))?;
