@@ -62,9 +62,13 @@ fn tradeoff_writes_everything_for_a_sweep_of_eight_runs() {
         assert!(why == "8 runs were made (MLSM_TRADEOFF_MAX_RUNS, for tests)" || why.contains("beaten by"), "{fam}");
     }
     // Every finished run has its cost and both errors (Kirsch has an exact solution,
-    // and the estimate is on); the fronts are non-empty and consist of finished runs.
+    // and the estimate is on); its seconds count the estimate (the run as users run
+    // it) and stay within the process's wall clock; the fronts are non-empty and
+    // consist of finished runs.
     for r in &ok {
         assert!(r["seconds"].as_f64().unwrap() > 0.0 && r["peak_memory_bytes"].as_f64().unwrap() > 0.0);
+        let (seconds, estimate) = (r["seconds"].as_f64().unwrap(), r["estimate_seconds"].as_f64().unwrap());
+        assert!(estimate > 0.0 && seconds > estimate && seconds <= r["wall_seconds"].as_f64().unwrap(), "{r}");
         assert!(r["exact"]["e_inf_sigma"].as_f64().is_some() && r["estimated"]["e_inf_sigma"].as_f64().is_some(), "{r}");
     }
     let front: Vec<&str> = s["front_sigma"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();

@@ -12,7 +12,7 @@
 //! `x_i` is `sum_j a_j H_p(x_j)`: no exact operator is needed, only the weights.
 
 use super::basis::polynomial_size;
-use nalgebra::{DMatrix, DVector};
+use super::wls::{householder_qr, pivot_ratio, reflect};
 
 /// The exponents `(a, b)` of the monomials `z1^a z2^b` of total degree `<= q`,
 /// degree by degree.
@@ -44,6 +44,11 @@ pub enum FitError {
 /// The weighted least-squares fit of degree `q` of `values` at `points` about `centre`
 /// (module docs); an error when the points do not determine the `(q+1)(q+2)/2`
 /// coefficients (a diagonal of `R` below `1e-10` of its largest).
+///
+/// Solved by the normal equations where they are well conditioned (every fit of
+/// degree `<= 5`, and the interior ones of degree 6, on grid and jittered clouds,
+/// one-sided at edges and corners: `cond(V)` 5-2.5e3 column-scaled), at about half the
+/// cost of the Householder QR that takes the others (150 x 15: 10 against 20 us).
 pub fn fit<const K: usize>(centre: [f64; 2], points: &[[f64; 2]], values: &[[f64; K]], q: u32) -> Result<LocalPolynomial<K>, FitError> {
     let powers = exponents(q);
     let (n, m) = (points.len(), powers.len());
@@ -53,37 +58,123 @@ pub fn fit<const K: usize>(centre: [f64; 2], points: &[[f64; 2]], values: &[[f64
     }
     let scale = points.iter().map(|p| (p[0] - centre[0]).hypot(p[1] - centre[1])).fold(0.0, f64::max);
     let scale = if scale > 0.0 { scale } else { 1.0 };
-    let mut v = DMatrix::<f64>::zeros(n, m);
-    let mut rhs = DMatrix::<f64>::zeros(n, K);
+    // The weighted monomial matrix (column-major, n x m), then the K weighted value
+    // columns.
+    let mut a = vec![0.0; n * (m + K)];
     for (j, p) in points.iter().enumerate() {
         let z = [(p[0] - centre[0]) / scale, (p[1] - centre[1]) / scale];
         let w = (-(z[0] * z[0] + z[1] * z[1])).exp();
         let (z1, z2) = (powers_of(z[0], q), powers_of(z[1], q));
-        for (k, &(a, b)) in powers.iter().enumerate() {
-            v[(j, k)] = w * z1[a as usize] * z2[b as usize];
+        for (k, &(e1, e2)) in powers.iter().enumerate() {
+            a[k * n + j] = w * z1[e1 as usize] * z2[e2 as usize];
         }
         for c in 0..K {
-            rhs[(j, c)] = w * values[j][c];
+            a[(m + c) * n + j] = w * values[j][c];
         }
     }
-    let qr = v.qr();
-    let r = qr.r();
-    let largest = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
-    if (0..m).any(|k| !(r[(k, k)].abs() > 1e-10 * largest)) {
-        return Err(underdetermined);
+    if let Some(coefficients) = normal_equations::<K>(&a, n, m) {
+        return Ok(LocalPolynomial { centre, scale, degree: q, coefficients });
     }
-    let mut qt_rhs = rhs;
-    qr.q_tr_mul(&mut qt_rhs);
-    let mut coefficients = vec![[0.0; K]; m];
-    for c in 0..K {
-        let column: DVector<f64> = qt_rhs.rows(0, m).column(c).into_owned();
-        let solved = r.solve_upper_triangular(&column).ok_or(underdetermined.clone())?;
-        for k in 0..m {
-            coefficients[k][c] = solved[k];
-        }
-    }
+    let coefficients = householder(&mut a, n, m).ok_or(underdetermined)?;
     Ok(LocalPolynomial { centre, scale, degree: q, coefficients })
 }
+
+/// The least-squares solution of `V c = Y` from `a = [V | Y]` (column-major, `n` rows,
+/// `m + K` columns, overwritten) by the shape functions' Householder kernel
+/// ([`super::wls`]); `None` when a diagonal of `R` is below `1e-10` of its largest.
+fn householder<const K: usize>(a: &mut [f64], n: usize, m: usize) -> Option<Vec<[f64; K]>> {
+    let (v, y) = a.split_at_mut(m * n);
+    let (mut diag, mut beta) = (vec![0.0; m], vec![0.0; m]);
+    householder_qr(v, n, m, &mut diag, &mut beta);
+    let ratio = pivot_ratio(diag.iter().copied());
+    if ratio.is_nan() || ratio <= 1e-10 {
+        return None;
+    }
+    // Q^T y, then R c = (Q^T y)[..m] by back substitution.
+    let mut coefficients = vec![[0.0; K]; m];
+    for (c, column) in y.chunks_exact_mut(n).enumerate() {
+        for j in 0..m {
+            reflect(&v[j * n + j..(j + 1) * n], beta[j], &mut column[j..]);
+        }
+        for k in (0..m).rev() {
+            let above: f64 = (k + 1..m).map(|t| v[t * n + k] * coefficients[t][c]).sum();
+            coefficients[k][c] = (column[k] - above) / diag[k];
+        }
+    }
+    Some(coefficients)
+}
+
+/// The least-squares solution of `V c = Y` from `a = [V | Y]` (column-major, `n` rows,
+/// `m + K` columns) by the normal equations, `V^T V c = V^T Y`, formed in one product
+/// `V^T [V | Y]` (faer's small-matrix kernels), Jacobi-scaled and Cholesky-factored,
+/// with one step of iterative refinement on the residual `Y - V c` (without it the
+/// corner fits of degree 4 were off by 5e-11 of the largest coefficient); `None` when a
+/// scaled pivot falls below [`NORMAL_PIVOT`] (the QR then decides).
+fn normal_equations<const K: usize>(a: &[f64], n: usize, m: usize) -> Option<Vec<[f64; K]>> {
+    use faer::{linalg::matmul::matmul, Accum, MatMut, MatRef, Par};
+    let all = MatRef::from_column_major_slice(a, n, m + K);
+    let v = all.subcols(0, m);
+    let mut gram = vec![0.0; m * (m + K)];
+    matmul(MatMut::from_column_major_slice_mut(&mut gram, m, m + K), Accum::Replace, v.transpose(), all, 1.0, Par::Seq);
+    // Jacobi scaling d_k = 1 / sqrt(G_kk), then G = R^T R in place (upper triangle,
+    // column-major: G[(i, j)] at i + j m).
+    let d: Vec<f64> = (0..m).map(|k| 1.0 / gram[k + k * m].sqrt()).collect();
+    if d.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    let g = |i: usize, j: usize| i + j * m;
+    for j in 0..m {
+        for i in 0..=j {
+            gram[g(i, j)] *= d[i] * d[j];
+        }
+    }
+    for k in 0..m {
+        let pivot = gram[g(k, k)] - (0..k).map(|i| gram[g(i, k)] * gram[g(i, k)]).sum::<f64>();
+        if !(pivot > NORMAL_PIVOT) {
+            return None;
+        }
+        let r = pivot.sqrt();
+        gram[g(k, k)] = r;
+        for j in k + 1..m {
+            gram[g(k, j)] = (gram[g(k, j)] - (0..k).map(|i| gram[g(i, k)] * gram[g(i, j)]).sum::<f64>()) / r;
+        }
+    }
+    // c = D R^-1 R^-T D b for a right-hand side b = V^T y.
+    let solve = |b: &mut [f64]| {
+        for k in 0..m {
+            b[k] = (b[k] * d[k] - (0..k).map(|i| gram[g(i, k)] * b[i]).sum::<f64>()) / gram[g(k, k)];
+        }
+        for k in (0..m).rev() {
+            b[k] = (b[k] - (k + 1..m).map(|j| gram[g(k, j)] * b[j]).sum::<f64>()) / gram[g(k, k)];
+        }
+        b.iter_mut().zip(&d).for_each(|(x, dk)| *x *= dk);
+    };
+    let mut c = vec![0.0; m * K];
+    for (column, b) in c.chunks_exact_mut(m).zip(gram[m * m..].chunks_exact(m)) {
+        column.copy_from_slice(b);
+        solve(column);
+    }
+    let mut coefficients = vec![[0.0; K]; m];
+    // One refinement step: c += (V^T V)^-1 V^T (Y - V c).
+    let mut residual = a[m * n..].to_vec();
+    let cm = MatRef::from_column_major_slice(&c, m, K);
+    matmul(MatMut::from_column_major_slice_mut(&mut residual, n, K), Accum::Add, v, cm, -1.0, Par::Seq);
+    let mut step = vec![0.0; m * K];
+    let rm = MatRef::from_column_major_slice(&residual, n, K);
+    matmul(MatMut::from_column_major_slice_mut(&mut step, m, K), Accum::Replace, v.transpose(), rm, 1.0, Par::Seq);
+    for (col, (ck, sk)) in c.chunks_exact(m).zip(step.chunks_exact_mut(m)).enumerate() {
+        solve(sk);
+        for k in 0..m {
+            coefficients[k][col] = ck[k] + sk[k];
+        }
+    }
+    Some(coefficients)
+}
+
+/// Smallest scaled Cholesky pivot the normal equations are taken with: `cond(V^T V)`
+/// below about `1e8`, where one refinement step leaves errors of `~(1e8 eps)^2` of the
+/// largest coefficient.
+const NORMAL_PIVOT: f64 = 1e-8;
 
 /// Highest degree of a fit: the degree 8 of the highest basis plus 2.
 pub const MAX_FIT_DEGREE: u32 = 10;
@@ -98,10 +189,21 @@ fn powers_of(z: f64, q: u32) -> [f64; MAX_FIT_DEGREE as usize + 1] {
     p
 }
 
-/// `C(n, k)`.
-fn binomial(n: u32, k: u32) -> f64 {
-    (0..k).fold(1.0, |acc, i| acc * f64::from(n - i) / f64::from(i + 1))
-}
+/// `C(n, k)` for `k <= n <=` [`MAX_FIT_DEGREE`] (Pascal's triangle, built at compile time).
+const BINOMIAL: [[f64; MAX_FIT_DEGREE as usize + 1]; MAX_FIT_DEGREE as usize + 1] = {
+    let mut c = [[0.0; MAX_FIT_DEGREE as usize + 1]; MAX_FIT_DEGREE as usize + 1];
+    let mut n = 0;
+    while n <= MAX_FIT_DEGREE as usize {
+        c[n][0] = 1.0;
+        let mut k = 1;
+        while k <= n {
+            c[n][k] = c[n - 1][k - 1] + c[n - 1][k];
+            k += 1;
+        }
+        n += 1;
+    }
+    c
+};
 
 /// The part of degree above `p` of a polynomial re-expanded about a point
 /// ([`LocalPolynomial::high_part_about`]).
@@ -129,7 +231,7 @@ impl<const K: usize> LocalPolynomial<K> {
                 let mut c = [0.0; K];
                 for (k, &(big_a, big_b)) in powers.iter().enumerate() {
                     if big_a >= a && big_b >= b {
-                        let f = binomial(big_a, a) * binomial(big_b, b) * d1[(big_a - a) as usize] * d2[(big_b - b) as usize];
+                        let f = BINOMIAL[big_a as usize][a as usize] * BINOMIAL[big_b as usize][b as usize] * d1[(big_a - a) as usize] * d2[(big_b - b) as usize];
                         for (ci, v) in c.iter_mut().zip(&self.coefficients[k]) {
                             *ci += f * v;
                         }
@@ -209,6 +311,62 @@ mod tests {
             let g = grad(c);
             let taylor = f(o)[c] + g[0] * (x[0] - o[0]) + g[1] * (x[1] - o[1]);
             assert!((taylor + h.value(x)[c] - f(x)[c]).abs() < 1e-8, "component {c}");
+        }
+    }
+
+    /// The normal equations and the QR give the same coefficients on an interior and a
+    /// one-sided (corner) cloud of 150 jittered grid points with rough values at degree
+    /// 4, and [`fit`] takes the normal equations there. Both solve one least-squares
+    /// problem with a scaled condition number below 5e2, the normal equations refined
+    /// once, so they agree to about `cond * eps` of the largest coefficient; 1e-11
+    /// leaves a factor 100.
+    #[test]
+    fn normal_equations_agree_with_the_qr() {
+        let cloud: Vec<[f64; 2]> = (0..900)
+            .map(|k| {
+                let (i, j) = ((k % 30) as f64, (k / 30) as f64);
+                [0.01 * (i + 0.3 * (k as f64 * 1.7).sin()), 0.01 * (j + 0.3 * (k as f64 * 2.3).cos())]
+            })
+            .collect();
+        let f = |x: [f64; 2]| [3.0 + (4.0 * x[0]).sin() * x[1].exp() + 1e-7 * (x[0] * 1e3).cos(), 1.0 / (1.0 + x[0] + x[1])];
+        for centre in [[0.15, 0.15], [0.0, 0.0]] {
+            let distance = |p: &[f64; 2]| (p[0] - centre[0]).hypot(p[1] - centre[1]);
+            let mut near = cloud.clone();
+            near.sort_by(|a, b| distance(a).total_cmp(&distance(b)));
+            near.truncate(150);
+            let (n, m) = (near.len(), polynomial_size(4));
+            let mut a = vec![0.0; n * (m + 2)];
+            for (j, p) in near.iter().enumerate() {
+                let z = [(p[0] - centre[0]) / 0.2, (p[1] - centre[1]) / 0.2];
+                for (k, &(e1, e2)) in exponents(4).iter().enumerate() {
+                    a[k * n + j] = z[0].powi(e1 as i32) * z[1].powi(e2 as i32);
+                }
+                let y = f(*p);
+                (a[m * n + j], a[(m + 1) * n + j]) = (y[0], y[1]);
+            }
+            let normal = normal_equations::<2>(&a, n, m).expect("well conditioned");
+            let qr = householder::<2>(&mut a.clone(), n, m).expect("full rank");
+            let largest = qr.iter().flatten().fold(0.0f64, |l, x| l.max(x.abs()));
+            for (x, y) in normal.iter().flatten().zip(qr.iter().flatten()) {
+                assert!((x - y).abs() < 1e-11 * largest, "centre {centre:?}: {x} against {y}");
+            }
+            let values: Vec<[f64; 2]> = near.iter().map(|&p| f(p)).collect();
+            let scale = near.iter().map(distance).fold(0.0, f64::max);
+            let weighted = |k: usize, j: usize| {
+                let z = [(near[j][0] - centre[0]) / scale, (near[j][1] - centre[1]) / scale];
+                let (e1, e2) = exponents(4)[k];
+                (-(z[0] * z[0] + z[1] * z[1])).exp() * z[0].powi(e1 as i32) * z[1].powi(e2 as i32)
+            };
+            let mut b: Vec<f64> = (0..m * n).map(|i| weighted(i / n, i % n)).collect();
+            b.extend((0..2).flat_map(|c| (0..n).map(move |j| (c, j))).map(|(c, j)| {
+                let z = [(near[j][0] - centre[0]) / scale, (near[j][1] - centre[1]) / scale];
+                (-(z[0] * z[0] + z[1] * z[1])).exp() * values[j][c]
+            }));
+            let expected = normal_equations::<2>(&b, n, m).unwrap();
+            let fitted = fit(centre, &near, &values, 4).unwrap();
+            for (x, y) in fitted.coefficients.iter().flatten().zip(expected.iter().flatten()) {
+                assert!((x - y).abs() <= 1e-13 * largest, "fit takes the normal equations: {x} against {y}");
+            }
         }
     }
 

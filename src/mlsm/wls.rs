@@ -19,7 +19,7 @@ pub const RANK_TOLERANCE: f64 = 1e-10;
 
 /// Smallest `|R_kk| / max |R_kk|` over the diagonal `diag` of an upper triangular `R`
 /// (0 for a zero matrix).
-fn pivot_ratio(diag: impl Iterator<Item = f64> + Clone) -> f64 {
+pub(super) fn pivot_ratio(diag: impl Iterator<Item = f64> + Clone) -> f64 {
     let diag_max = diag.clone().map(f64::abs).fold(0.0, f64::max);
     let diag_min = diag.map(f64::abs).fold(f64::INFINITY, f64::min);
     if diag_max > 0.0 {
@@ -146,7 +146,7 @@ fn fit(
 /// is `R_jj` and `beta[j]` is `beta_j` (0 for a zero column, `H_j = I`). Written here
 /// because nalgebra's QR forms `Q` (`QR::q`) to apply it, which cost as much as the
 /// factorisation on these `13 x 9` systems; its reflections are private.
-fn householder_qr(a: &mut [f64], n: usize, m: usize, diag: &mut [f64], beta: &mut [f64]) {
+pub(super) fn householder_qr(a: &mut [f64], n: usize, m: usize, diag: &mut [f64], beta: &mut [f64]) {
     for j in 0..m {
         let (done, rest) = a.split_at_mut((j + 1) * n);
         let v = &mut done[j * n + j..];
@@ -167,7 +167,7 @@ fn householder_qr(a: &mut [f64], n: usize, m: usize, diag: &mut [f64], beta: &mu
 }
 
 /// `x <- (I - beta v v^T) x`.
-fn reflect(v: &[f64], beta: f64, x: &mut [f64]) {
+pub(super) fn reflect(v: &[f64], beta: f64, x: &mut [f64]) {
     let s = beta * dot(v, x);
     for (xi, vi) in x.iter_mut().zip(v) {
         *xi -= s * vi;

@@ -80,8 +80,9 @@ struct Row {
     estimated_nodes: f64,
     estimated_peak_memory_bytes: f64,
     nodes: Option<u64>,
-    /// Seconds of the run without its error estimate.
+    /// Seconds of the run as a user runs it, its error estimate included.
     seconds: Option<f64>,
+    /// Seconds of its error estimate (part of `seconds`).
     estimate_seconds: Option<f64>,
     /// Wall-clock seconds of the whole process (estimate and output included).
     wall_seconds: Option<f64>,
