@@ -31,13 +31,15 @@ use rayon::prelude::*;
 /// 1.35 (1e6 nodes); 1e-1 overshot to 1.56 (docs/notebook/2026-11-28-cheap-estimate.md).
 pub const CORRECTION_TOLERANCE: f64 = 3e-2;
 
-/// Members of its support (nearest first) a fit centre stands for, when not yet taken
-/// by another: one centre per 5 to 10 nodes, more near the boundary, where supports
-/// hold ghost nodes (claiming the 20 nearest nodes instead lowered Kirsch's
-/// effectivity from 0.84 to 0.71). The fits are wide ([`fit_points`]), so a centre
-/// serves its neighbours as well as their own fits would
-/// (docs/notebook/2026-11-28-cheap-estimate.md).
-const CENTRE_REACH: usize = 20;
+/// Radius, in units of the distance to its farthest support member, within which a
+/// fit centre stands for every node not yet taken by another: one centre per 10 to 13
+/// nodes. The fits are wide ([`fit_points`], about 3.4 support radii), so a node 1.5
+/// support radii from its centre is measured as well as by its own fit: against 1.0
+/// (the support itself, twice the centres) the effectivities moved by at most 0.12
+/// (kirsch 0.82 -> 0.87, flamant sigma 0.82 -> 0.90, tensor cantilever at 1.2e5 nodes
+/// 1.00 -> 1.12 in u) and the estimate stage took 0.67x; at 2.0 flamant's rose to
+/// 1.38 (docs/notebook/2026-11-28-cheap-estimate.md).
+const CLAIM_RADIUS: f64 = 1.5;
 
 /// The fits of a run's solution at coarse centres, and which centre measures each node.
 pub struct Fits {
@@ -52,7 +54,7 @@ pub struct Fits {
 
 impl Fits {
     /// Fits of degree `p + 2` of the unknowns `x` of `disc` at coarse centres chosen
-    /// greedily over the supports, or why there are none (too few nodes). `done(k, n)`
+    /// greedily in node order ([`CLAIM_RADIUS`]), or why there are none (too few nodes). `done(k, n)`
     /// is told after each of about twenty batches that `k` of the `n` fits are made.
     pub fn of(disc: &Discretisation, x: &[f64], p: u32, done: &dyn Fn(usize, usize)) -> Result<Fits, String> {
         let n = disc.nodes.len();
@@ -69,11 +71,19 @@ impl Fits {
             if centre_of[i] == u32::MAX {
                 let k = centres.len() as u32;
                 centres.push(i);
-                for &j in disc.supports.of(i).iter().take(CENTRE_REACH) {
-                    if (j as usize) < n && centre_of[j as usize] == u32::MAX {
-                        centre_of[j as usize] = k;
+                let at = positions[i];
+                let reach2 = disc
+                    .supports
+                    .of(i)
+                    .iter()
+                    .filter(|&&j| (j as usize) < n)
+                    .map(|&j| squared_distance(positions[j as usize], at))
+                    .fold(0.0, f64::max);
+                tree.query(&at).within::<SquaredEuclidean<f64>>(reach2 * CLAIM_RADIUS * CLAIM_RADIUS).unsorted().visit(|f| {
+                    if centre_of[f.item as usize] == u32::MAX {
+                        centre_of[f.item as usize] = k;
                     }
-                }
+                });
                 centre_of[i] = k;
             }
         }
@@ -115,6 +125,11 @@ impl Fits {
     }
 }
 
+/// `|a - b|^2`.
+fn squared_distance(a: Point, b: Point) -> f64 {
+    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)
+}
+
 /// The `count` nodes nearest to node `c` (`count <= ` the node count), in no order: all
 /// nodes within a radius guessed from the support `support` of `c` (the area of
 /// `count` nodes at its density, 1.5x), widened until it holds `count`, and the
@@ -122,8 +137,7 @@ impl Fits {
 /// fraction of a sorted k-nearest search of 150 (insertion into a sorted list).
 fn nearest(tree: &ImmutableKdTree<f64, 2>, positions: &[Point], c: usize, count: usize, support: &[u32]) -> Vec<usize> {
     let at = positions[c];
-    let distance2 = |p: Point| (p[0] - at[0]).powi(2) + (p[1] - at[1]).powi(2);
-    let members: Vec<f64> = support.iter().filter(|&&j| (j as usize) < positions.len()).map(|&j| distance2(positions[j as usize])).collect();
+    let members: Vec<f64> = support.iter().filter(|&&j| (j as usize) < positions.len()).map(|&j| squared_distance(positions[j as usize], at)).collect();
     let reach2 = members.iter().copied().fold(0.0, f64::max);
     let mut radius2 = if reach2 > 0.0 { reach2 * 1.5 * count as f64 / members.len() as f64 } else { f64::INFINITY };
     let mut found: Vec<(f64, usize)> = Vec::with_capacity(2 * count);
