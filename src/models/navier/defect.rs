@@ -31,9 +31,12 @@ use rayon::prelude::*;
 /// 1.35 (1e6 nodes); 1e-1 overshot to 1.56 (docs/notebook/2026-11-28-cheap-estimate.md).
 pub const CORRECTION_TOLERANCE: f64 = 3e-2;
 
-/// Radius, in units of the distance to its farthest support member, within which a
-/// fit centre stands for every node not yet taken by another: one centre per 10 to 13
-/// nodes. The fits are wide ([`fit_points`], about 3.4 support radii), so a node 1.5
+/// Support members (nearest first) whose farthest sets a fit centre's reach.
+const REACH_MEMBERS: usize = 20;
+
+/// Radius, in units of its reach (the farthest of its [`REACH_MEMBERS`] nearest support
+/// members), within which a fit centre stands for every node not yet taken by
+/// another: one centre per 10 to 13 nodes. The fits are wide ([`fit_points`], about 3.4 support radii), so a node 1.5
 /// support radii from its centre is measured as well as by its own fit: against 1.0
 /// (the support itself, twice the centres) the effectivities moved by at most 0.12
 /// (kirsch 0.82 -> 0.87, flamant sigma 0.82 -> 0.90, tensor cantilever at 1.2e5 nodes
@@ -76,6 +79,7 @@ impl Fits {
                     .supports
                     .of(i)
                     .iter()
+                    .take(REACH_MEMBERS)
                     .filter(|&&j| (j as usize) < n)
                     .map(|&j| squared_distance(positions[j as usize], at))
                     .fold(0.0, f64::max);
