@@ -36,8 +36,9 @@ const REACH_MEMBERS: usize = 20;
 
 /// Radius, in units of its reach (the farthest of its [`REACH_MEMBERS`] nearest support
 /// members), within which a fit centre stands for every node not yet taken by
-/// another: one centre per 10 to 13 nodes. The fits are wide ([`fit_points`], about 3.4 support radii), so a node 1.5
-/// support radii from its centre is measured as well as by its own fit: against 1.0
+/// another: one centre per 7 to 17 nodes on the shipped scenes. The fits are wide
+/// ([`fit_points`], about 3.4 support radii), so a node 1.5 support radii from its
+/// centre is measured as well as by its own fit: against 1.0
 /// (the support itself, twice the centres) the effectivities moved by at most 0.12
 /// (kirsch 0.82 -> 0.87, flamant sigma 0.82 -> 0.90, tensor cantilever at 1.2e5 nodes
 /// 1.00 -> 1.12 in u) and the estimate stage took 0.67x; at 2.0 flamant's rose to
@@ -57,8 +58,9 @@ pub struct Fits {
 
 impl Fits {
     /// Fits of degree `p + 2` of the unknowns `x` of `disc` at coarse centres chosen
-    /// greedily in node order ([`CLAIM_RADIUS`]), or why there are none (too few nodes). `done(k, n)`
-    /// is told after each of about twenty batches that `k` of the `n` fits are made.
+    /// greedily in node order ([`CLAIM_RADIUS`]), or why there are none (too few
+    /// nodes). `done(k, n)` is told after each of about twenty batches that `k` of the
+    /// `n` fits are made.
     pub fn of(disc: &Discretisation, x: &[f64], p: u32, done: &dyn Fn(usize, usize)) -> Result<Fits, String> {
         let n = disc.nodes.len();
         let q = p + 2;
