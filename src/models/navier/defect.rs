@@ -13,6 +13,9 @@
 //! stress reference is `G (x - e) - tau_G`, `G` the run's gradient stencils and
 //! `tau_G = sum_j g_ij H_p(x_j)` their own truncation error.
 //!
+//! Near singular corners the fits cannot see the solution; there `tau` comes from
+//! the higher-degree operator instead ([`super::corner_defect`]).
+//!
 //! Measured against the true errors and the `higher-degree` reference:
 //! docs/notebook/2026-11-28-cheap-estimate.md.
 

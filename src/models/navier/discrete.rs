@@ -142,10 +142,34 @@ impl Discretisation {
     /// coefficients ([`crate::models::navier::low_order`]). The scene's supports and shapes are
     /// back in place afterwards. In-process runs only (not distributed).
     pub fn with_approximation<T>(&mut self, approximation: &Approximation, assemble: impl FnOnce(&Self) -> T) -> Result<T, RunError> {
+        self.with_approximation_at(approximation, None, OpSet::EMPTY, assemble)
+    }
+
+    /// [`Discretisation::with_approximation`] with supports and shapes only at the
+    /// nodes `at` picks (all when `None`; the others get none, so only their rows may
+    /// be read), each with the operators `extra` as well as those of its rows.
+    pub fn with_approximation_at<T>(
+        &mut self,
+        approximation: &Approximation,
+        at: Option<&[bool]>,
+        extra: OpSet,
+        assemble: impl FnOnce(&Self) -> T,
+    ) -> Result<T, RunError> {
         let positions: Vec<Point> = (0..self.dofs.nodes()).map(|i| self.point(i)).collect();
-        let needs = shape_needs(&self.nodes, &self.boundary_equations, &self.ghost, positions.len(), (self.dofs.unknowns(), false));
+        let picked = |i: usize| at.is_none_or(|a| a.get(i).copied().unwrap_or(false));
+        let mut needs = shape_needs(&self.nodes, &self.boundary_equations, &self.ghost, positions.len(), (self.dofs.unknowns(), false));
+        for (i, ops) in needs.iter_mut().enumerate() {
+            *ops = if !picked(i) {
+                OpSet::EMPTY
+            } else if i < self.nodes.len() {
+                *ops | extra
+            } else {
+                *ops
+            };
+        }
         let size = approximation.support.min(positions.len());
-        let (supports, _) = widen_degenerate(Supports::nearest(&positions, size), &positions, &approximation.basis, &needs)?;
+        let supports = Supports::nearest_where(&positions, size, picked);
+        let (supports, _) = widen_degenerate(supports, &positions, &approximation.basis, &needs)?;
         let shapes = compute_shapes(&positions, &supports, approximation, &needs)?;
         let scene_supports = std::mem::replace(&mut self.supports, supports);
         let scene_shapes = std::mem::replace(&mut self.shapes, shapes);
@@ -258,23 +282,24 @@ impl Discretisation {
     pub fn gradients(&self, x: &[f64]) -> Vec<Gradient> {
         let mut g: Vec<Gradient> = (0..self.nodes.len())
             .into_par_iter()
-            .map(|i| {
-                if !self.owns(i) {
-                    return [[0.0; 2]; 2];
-                }
-                let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
-                let mut g = [[0.0; 2]; 2];
-                for (k, &j) in self.supports.of(i).iter().enumerate() {
-                    let u = self.dofs.displacement(x, j as usize);
-                    for c in 0..2 {
-                        g[c][0] += dx[k] * u[c];
-                        g[c][1] += dy[k] * u[c];
-                    }
-                }
-                g
-            })
+            .map(|i| if self.owns(i) { self.gradient_at(i, x) } else { [[0.0; 2]; 2] })
             .collect();
         self.share.sum(g.as_flattened_mut().as_flattened_mut(), "the gradients over the ranks");
+        g
+    }
+
+    /// Displacement gradient at node `i` from `x`, `g[c][d] = sum_k D^d_ik u_c(x_jk)`
+    /// over its support; needs its first-derivative shapes.
+    pub fn gradient_at(&self, i: usize, x: &[f64]) -> Gradient {
+        let (dx, dy) = (self.shapes.get(i, Op::Dx), self.shapes.get(i, Op::Dy));
+        let mut g = [[0.0; 2]; 2];
+        for (k, &j) in self.supports.of(i).iter().enumerate() {
+            let u = self.dofs.displacement(x, j as usize);
+            for c in 0..2 {
+                g[c][0] += dx[k] * u[c];
+                g[c][1] += dy[k] * u[c];
+            }
+        }
         g
     }
 }

@@ -24,6 +24,7 @@
 //!    estimate (the reference run it compares with).
 
 pub mod cloud;
+pub mod corner_defect;
 pub mod defect;
 pub mod discrete;
 pub mod dynamics;

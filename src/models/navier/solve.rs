@@ -4,6 +4,7 @@
 
 use std::borrow::Cow;
 
+use super::corner_defect::CornerRows;
 use super::defect;
 use super::discrete::Discretisation;
 use super::equations::ComponentEquation;
@@ -220,6 +221,9 @@ pub(super) struct Solved {
 pub(super) struct Correction {
     e: Vec<f64>,
     fits: defect::Fits,
+    /// `(node, G_H x)` at the nodes near singular corners, whose gradient's
+    /// truncation error is `(G - G_H) x` ([`super::corner_defect`]).
+    corners: Vec<(usize, Gradient)>,
     /// What the correction's solve did.
     solve: String,
     /// Seconds of the estimate stage.
@@ -240,10 +244,7 @@ pub(super) fn assemble_and_solve(
     timer: &mut StageTimer,
 ) -> Result<Solved, RunError> {
     let (solver, keep) = (&params.solver, params.keep_system);
-    // `auto` does not take the defect estimate on a scene with singular corners
-    // (`super::run::untrusted_defect`), so it is not made there.
-    let defect = params.estimate.method == EstimateMethod::Defect
-        || (params.estimate.method.makes_defect() && crate::physics::case::singular_corners(case, &disc.nodes).is_empty());
+    let defect = params.estimate.method.makes_defect();
     let positions: Vec<[f64; 2]> = (0..disc.dofs.nodes()).map(|i| disc.point(i)).collect();
     if disc.share.is_split() {
         return assemble_and_solve_distributed(case, disc, exact, &positions, solver, timer);
@@ -260,6 +261,13 @@ pub(super) fn assemble_and_solve(
         Ok(((m, rhs, balances.iter().map(|b| b.summary()).collect(), unbalanced, border.len()), note))
     })?;
     disc.release_row_shapes();
+    // The rows near singular corners, as assembled, for the defect estimate's
+    // higher-degree truncation error there ([`super::corner_defect`]).
+    let corner_rows = if defect && !disc.share.is_split() {
+        CornerRows::of(disc, &crate::physics::case::singular_corners(case, &disc.nodes), &matrix)
+    } else {
+        None
+    };
     let nonzeros = matrix.nnz();
     let watch = SolveProgress(timer.progress());
     let (x, multipliers, report, kept, retained) = timer.run(stage::SOLVE, || {
@@ -292,10 +300,13 @@ pub(super) fn assemble_and_solve(
         timer.run(ESTIMATE, || {
             let t0 = Instant::now();
             let c = match &retained {
-                Some(solver) => correct(disc, params, solver, &x, progress),
+                Some(solver) => correct(case, disc, params, solver, (&x, corner_rows.as_ref()), progress),
                 None => Err("the solve left no solver to reuse".to_string()),
             };
             let note = match &c {
+                Ok(c) if !c.corners.is_empty() => {
+                    format!("{} fit centres, {} nodes near singular corners; correction: {}", c.fits.centres(), c.corners.len(), c.solve)
+                }
                 Ok(c) => format!("{} fit centres; correction: {}", c.fits.centres(), c.solve),
                 Err(why) => format!("unavailable: {why}"),
             };
@@ -339,24 +350,38 @@ fn assemble_and_solve_distributed(
 /// The `defect` correction of the run `x` of `disc` ([`defect`]): fits of `x`, the
 /// truncation error `D tau` of the rows the run solved (`D A`, kept with their
 /// factors or preconditioner in `solver`), and `e = -(D A)^-1 D tau` by `solver` to
-/// [`defect::CORRECTION_TOLERANCE`]: no second factorisation or multigrid. `progress`
-/// is told the fits made, then the residual digits of the solve.
+/// [`defect::CORRECTION_TOLERANCE`]: no second factorisation or multigrid. Near
+/// singular corners (`corner_rows`) `tau` is `(A - A_H) x` and the correction's
+/// operator takes the higher-degree rows `A_H` there ([`super::corner_defect`]).
+/// `progress` is told the fits made, then the residual digits of the solve.
 fn correct(
-    disc: &Discretisation,
+    case: &Case,
+    disc: &mut Discretisation,
     params: &NavierParams,
     solver: &linalg::Retained,
-    x: &[f64],
+    (x, corner_rows): (&[f64], Option<&CornerRows>),
     progress: &dyn Progress,
 ) -> Result<Correction, String> {
     let p = params.approximation.basis.polynomial_degree();
     let fits = defect::Fits::of(disc, x, p, &|k, n| progress.advance(k as u64, n as u64, "fit centres"))?;
-    let mut rhs = defect::truncation_error(disc, &solver.rows(), &fits);
+    let solved = solver.rows();
+    let mut rhs = defect::truncation_error(disc, &solved, &fits);
+    let (mut corners, mut replaced) = (Vec::new(), Vec::new());
+    if let Some(rows) = corner_rows {
+        let approximation = super::estimate::reference_approximation(&params.approximation, params.fill.kind, disc.nodes.len())?;
+        let measured = rows.measure(case, disc, &approximation, &solved, x)?;
+        for &(r, t) in &measured.tau {
+            rhs[r] = t;
+        }
+        (corners, replaced) = (measured.gradients, measured.rows);
+    }
+    drop(solved);
     rhs.iter_mut().for_each(|t| *t = -*t);
     let (mut e, solve) = solver
-        .solve(&rhs, defect::CORRECTION_TOLERANCE, &SolveProgress(progress))
+        .solve_replaced(&rhs, &replaced, defect::CORRECTION_TOLERANCE, &SolveProgress(progress))
         .map_err(|err| format!("the correction's solve failed: {err}"))?;
     e.truncate(disc.dofs.len());
-    Ok(Correction { e, fits, solve, seconds: 0.0 })
+    Ok(Correction { e, fits, corners, solve, seconds: 0.0 })
 }
 
 /// The `defect` estimate of the run `(x, displacement, stress)` from its `correction`
@@ -378,7 +403,12 @@ fn defect_estimate(
     let reference_x: Vec<f64> = x.iter().zip(&c.e).map(|(x, e)| x - e).collect();
     let sigma = stress.map(|_| {
         let mut g = disc.gradients(&reference_x);
-        for (g, t) in g.iter_mut().zip(defect::gradient_truncation_error(disc, &c.fits)) {
+        let mut tau = defect::gradient_truncation_error(disc, &c.fits);
+        for &(i, high) in &c.corners {
+            let own = disc.gradient_at(i, x);
+            tau[i] = std::array::from_fn(|r| std::array::from_fn(|d| own[r][d] - high[r][d]));
+        }
+        for (g, t) in g.iter_mut().zip(tau) {
             for (gc, tc) in g.iter_mut().zip(t) {
                 gc[0] -= tc[0];
                 gc[1] -= tc[1];
@@ -388,7 +418,11 @@ fn defect_estimate(
     });
     let reference = ExactFields { displacement: disc.dofs.displacements(&reference_x, n), stress: sigma };
     let q = c.fits.exact_degree + 2;
-    let description = format!("fits of degree {q} at {} centres; the run's operator ({})", c.fits.centres(), c.solve);
+    let corners = match c.corners.len() {
+        0 => String::new(),
+        k => format!(", the higher-degree operator's rows at {k} nodes near singular corners"),
+    };
+    let description = format!("fits of degree {q} at {} centres{corners}; the run's operator ({})", c.fits.centres(), c.solve);
     let mut e = ErrorEstimate::between(EstimateMethod::Defect, description, &disc.nodes.positions, displacement, stress, &reference, t0);
     e.reference_degree = q;
     e.seconds += c.seconds;

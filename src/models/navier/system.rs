@@ -91,6 +91,18 @@ impl System<'_> {
         }
     }
 
+    /// The coefficients of the rows of `nodes` (each node's own and its ghost's), in
+    /// the order written: a few rows read where the discretisation has shapes at
+    /// those nodes only ([`Discretisation::with_approximation_at`]).
+    pub fn rows_of(&self, nodes: &[usize]) -> Entries {
+        let writer = self.writer();
+        let mut e = Entries::new();
+        for &i in nodes {
+            self.node_rows(&writer, i, &mut e);
+        }
+        e
+    }
+
     /// Right-hand sides `(row, value)` of node `i` under `loads`: the prescribed
     /// value of each boundary row (in the rows of its ghost, if any), `-f` in the
     /// Navier rows (`L u = -f`); the continuity row that of its stabilisation
