@@ -134,9 +134,9 @@ fn the_default_estimate_is_never_skipped() {
 /// operator's rows near the corners (`navier::corner_defect`). They have no exact
 /// solution, so the yardstick is the full higher-degree reference: on the steel plate
 /// and the dam the defect estimate's e_inf(u) is within [0.5, 2] of it (measured 1.02
-/// and 1.20; with the fits alone the steel plate's was 0.06 of it, 1.3e-4 against
-/// 2.2e-3). The bracket, whose defect estimate warns (the stress at a hole, 4.5e-2),
-/// takes the reference as a warned run does, and says why.
+/// and 1.07; with the fits alone the steel plate's was 0.06 of it, 1.3e-4 against
+/// 2.2e-3). The bracket, whose defect estimate warns (e_inf(u) 2.3e-2, the stress at a
+/// hole 0.21), takes the reference as a warned run does, and says why.
 #[test]
 fn singular_corners_take_the_defect_estimate_with_higher_degree_rows() {
     for name in ["steel_plate", "gravity_dam"] {

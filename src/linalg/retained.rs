@@ -152,10 +152,17 @@ impl Retained {
             Inverse::Lu(_) => (REPLACED_LU_ITERATIONS, super::params::GMRES_RESTART),
         };
         let limits = (tolerance, max_iterations, restart, gmres::STAGNATION);
-        let out = match &self.inverse {
-            Inverse::Lu(lu) => gmres::solve_gmres_with(apply, &b, |v, z| z.copy_from_slice(&lu.solve(v)), limits, watch),
-            Inverse::Gmres(pc, _) | Inverse::Bicgstab(pc, _) => gmres::solve_gmres_with(apply, &b, |v, z| pc.solve_into(v, z), limits, watch),
+        let block = ReplacedBlock::new(replaced);
+        let precondition = |v: &[f64], z: &mut [f64]| {
+            match &self.inverse {
+                Inverse::Lu(lu) => z.copy_from_slice(&lu.solve(v)),
+                Inverse::Gmres(pc, _) | Inverse::Bicgstab(pc, _) => pc.solve_into(v, z),
+            }
+            if let Some(block) = &block {
+                block.correct(replaced, v, z);
+            }
         };
+        let out = gmres::solve_gmres_with(apply, &b, precondition, limits, watch);
         if !matches!(out.status, gmres::Status::Converged) {
             return Err(self.not_converged(out.iterations, out.relative_residual, tolerance));
         }
@@ -182,6 +189,42 @@ impl Retained {
             relative_residual,
             method: format!("{} (reused)", self.method),
             tolerance,
+        }
+    }
+}
+
+/// The square block `M_CC` of replaced rows `C` (their columns among the same
+/// indices), factorised: after the kept inverse `z = (D A)^-1 v`, the replaced rows'
+/// residual is solved on their own unknowns, `z_C += M_CC^-1 (v - M z)_C` (one block
+/// Gauss-Seidel step). The kept inverse knows nothing of the replaced rows; without
+/// this step GMRES took 18 iterations where `D A` takes 4, with it 2 (the steel
+/// plate's 400 corner rows, `models::navier::corner_defect`).
+struct ReplacedBlock {
+    lu: lu::SparseLu,
+}
+
+impl ReplacedBlock {
+    /// The factorised block, or `None` when it is singular.
+    fn new(replaced: &[(usize, Vec<(u32, f64)>)]) -> Option<Self> {
+        let index: std::collections::HashMap<usize, usize> = replaced.iter().enumerate().map(|(a, (r, _))| (*r, a)).collect();
+        let mut t = super::Triplets::new(replaced.len());
+        for (a, (_, entries)) in replaced.iter().enumerate() {
+            for &(col, v) in entries {
+                if let Some(&b) = index.get(&(col as usize)) {
+                    t.push(a, b, v);
+                }
+            }
+        }
+        let lu = lu::SparseLu::factor(&super::assemble(&t).ok()?).ok()?;
+        Some(ReplacedBlock { lu })
+    }
+
+    /// `z_C += M_CC^-1 (v - M z)_C`.
+    fn correct(&self, replaced: &[(usize, Vec<(u32, f64)>)], v: &[f64], z: &mut [f64]) {
+        let residual: Vec<f64> =
+            replaced.iter().map(|(r, entries)| v[*r] - entries.iter().map(|&(col, a)| a * z[col as usize]).sum::<f64>()).collect();
+        for ((r, _), d) in replaced.iter().zip(self.lu.solve(&residual)) {
+            z[*r] += d;
         }
     }
 }
