@@ -13,6 +13,29 @@ use super::watch::Watch;
 use super::{binary_exponent, times_power_of_two};
 use super::{bicgstab, csr, gmres, lu, norm2, precond, relative, residual, row_residual, Csr, SolveError, SparseMatrix};
 
+/// `c` scaled by a power of two to a largest entry in [1, 2), with the exponent;
+/// `None` for a zero `c`, an error for a non-finite one.
+fn scaled(c: &[f64]) -> Result<Option<(i32, Vec<f64>)>, SolveError> {
+    let largest = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !largest.is_finite() {
+        return Err(SolveError::Dimension { detail: "the second right-hand side is not finite".into() });
+    }
+    if largest == 0.0 {
+        return Ok(None);
+    }
+    let exponent = binary_exponent(largest);
+    Ok(Some((exponent, c.iter().map(|v| times_power_of_two(*v, -exponent)).collect())))
+}
+
+/// The solution of the [`scaled`] right-hand side scaled back, or the first unknown
+/// beyond the double range.
+fn unscaled(y: Vec<f64>, exponent: i32) -> Result<Vec<f64>, SolveError> {
+    if let Some(i) = y.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {
+        return Err(SolveError::Overflow { detail: format!("unknown {i} of the second solve is beyond the double range") });
+    }
+    Ok(y.into_iter().map(|v| times_power_of_two(v, exponent)).collect())
+}
+
 /// Iteration limit of [`Retained::solve_replaced`] preconditioned by LU factors (a
 /// perturbation of a few hundred rows converges in tens).
 const REPLACED_LU_ITERATIONS: usize = 500;
@@ -61,15 +84,9 @@ impl Retained {
     /// returns `y` and a note of what the solve did. `watch` is told the residual of each
     /// iteration.
     pub fn solve(&self, c: &[f64], tolerance: f64, watch: &dyn Watch) -> Result<(Vec<f64>, String), SolveError> {
-        let largest = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if !largest.is_finite() {
-            return Err(SolveError::Dimension { detail: "the second right-hand side is not finite".into() });
-        }
-        if largest == 0.0 {
+        let Some((exponent, b)) = scaled(c)? else {
             return Ok((vec![0.0; c.len()], format!("{}: a zero right-hand side", self.method)));
-        }
-        let exponent = binary_exponent(largest);
-        let b: Vec<f64> = c.iter().map(|v| times_power_of_two(*v, -exponent)).collect();
+        };
         let rows = || self.rows();
         let (y, iterations, relres) = match &self.inverse {
             Inverse::Lu(lu) => {
@@ -103,10 +120,7 @@ impl Retained {
                 (out.x, out.iterations, out.relative_residual)
             }
         };
-        if let Some(i) = y.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {
-            return Err(SolveError::Overflow { detail: format!("unknown {i} of the second solve is beyond the double range") });
-        }
-        let y = y.into_iter().map(|v| times_power_of_two(v, exponent)).collect();
+        let y = unscaled(y, exponent)?;
         let note = match self.inverse {
             Inverse::Lu(_) => format!("{} factors reused, relative residual {relres:.1e}", self.method),
             _ => format!("{} reused: {iterations} iterations, relative residual {relres:.1e}", self.method),
@@ -130,15 +144,9 @@ impl Retained {
         if replaced.is_empty() {
             return self.solve(c, tolerance, watch);
         }
-        let largest = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if !largest.is_finite() {
-            return Err(SolveError::Dimension { detail: "the second right-hand side is not finite".into() });
-        }
-        if largest == 0.0 {
+        let Some((exponent, b)) = scaled(c)? else {
             return Ok((vec![0.0; c.len()], format!("{}: a zero right-hand side", self.method)));
-        }
-        let exponent = binary_exponent(largest);
-        let b: Vec<f64> = c.iter().map(|v| times_power_of_two(*v, -exponent)).collect();
+        };
         let ops = self.rows();
         let apply = |x: &[f64], y: &mut [f64]| {
             csr::product(ops.as_ref(), x, y);
@@ -166,10 +174,7 @@ impl Retained {
         if !matches!(out.status, gmres::Status::Converged) {
             return Err(self.not_converged(out.iterations, out.relative_residual, tolerance));
         }
-        if let Some(i) = out.x.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {
-            return Err(SolveError::Overflow { detail: format!("unknown {i} of the second solve is beyond the double range") });
-        }
-        let y = out.x.into_iter().map(|v| times_power_of_two(v, exponent)).collect();
+        let y = unscaled(out.x, exponent)?;
         let note = format!(
             "gmres preconditioned by {} with {} rows replaced: {} iterations, relative residual {:.1e}",
             self.method,
