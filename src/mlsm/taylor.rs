@@ -43,7 +43,7 @@ pub enum FitError {
 
 /// The weighted least-squares fit of degree `q` of `values` at `points` about `centre`
 /// (module docs); an error when the points do not determine the `(q+1)(q+2)/2`
-/// coefficients (a diagonal of `R` below `1e-10` of its largest).
+/// coefficients (a diagonal of `R` below [`super::wls::RANK_TOLERANCE`] of its largest).
 ///
 /// Solved by the normal equations where they are well conditioned (every fit of
 /// degree `<= 5`, and the interior ones of degree 6, on grid and jittered clouds,
@@ -81,13 +81,13 @@ pub fn fit<const K: usize>(centre: [f64; 2], points: &[[f64; 2]], values: &[[f64
 
 /// The least-squares solution of `V c = Y` from `a = [V | Y]` (column-major, `n` rows,
 /// `m + K` columns, overwritten) by the shape functions' Householder kernel
-/// ([`super::wls`]); `None` when a diagonal of `R` is below `1e-10` of its largest.
+/// ([`super::wls`]); `None` when a diagonal of `R` is below [`super::wls::RANK_TOLERANCE`] of its largest.
 fn householder<const K: usize>(a: &mut [f64], n: usize, m: usize) -> Option<Vec<[f64; K]>> {
     let (v, y) = a.split_at_mut(m * n);
     let (mut diag, mut beta) = (vec![0.0; m], vec![0.0; m]);
     householder_qr(v, n, m, &mut diag, &mut beta);
     let ratio = pivot_ratio(diag.iter().copied());
-    if ratio.is_nan() || ratio <= 1e-10 {
+    if ratio.is_nan() || ratio <= super::wls::RANK_TOLERANCE {
         return None;
     }
     // Q^T y, then R c = (Q^T y)[..m] by back substitution.
