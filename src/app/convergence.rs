@@ -313,7 +313,7 @@ fn solve_level(
     let e = sol.errors;
     let exact_order = |prev: Option<f64>, cur: Option<f64>| order(before?.h, h, prev, cur);
     let corners = singular_corners(&q.case, &sol.nodes);
-    let regular = sol.nodes.positions.iter().map(|x| corners.iter().all(|c| (x[0] - c.at[0]).hypot(x[1] - c.at[1]) > c.radius)).collect();
+    let regular = sol.nodes.positions.iter().map(|x| !corners.iter().any(|c| c.covers(*x))).collect();
     let level = Level {
         nodes: sol.nodes.len(),
         h,

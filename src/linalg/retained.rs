@@ -233,3 +233,7 @@ impl ReplacedBlock {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "retained_tests.rs"]
+mod tests;

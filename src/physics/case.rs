@@ -220,6 +220,13 @@ pub struct SingularCorner {
     pub radius: f64,
 }
 
+impl SingularCorner {
+    /// Whether `p` lies within [`SingularCorner::radius`] of the corner, `|p - at| <= radius`.
+    pub fn covers(&self, p: Point) -> bool {
+        (p[0] - self.at[0]).hypot(p[1] - self.at[1]) <= self.radius
+    }
+}
+
 /// The singular corners of `case` on `nodes`: where a clamped part meets a part with
 /// a traction component, and re-entrant corners; none when the case has an exact
 /// solution (exact solutions are smooth). There the exact stress is unbounded.

@@ -56,8 +56,7 @@ impl CornerRows {
         if corners.is_empty() {
             return None;
         }
-        let near = |p: [f64; 2]| corners.iter().any(|c| (p[0] - c.at[0]).hypot(p[1] - c.at[1]) <= c.radius);
-        let nodes: Vec<usize> = (0..disc.nodes.len()).filter(|&i| near(disc.nodes.positions[i])).collect();
+        let nodes: Vec<usize> = (0..disc.nodes.len()).filter(|&i| corners.iter().any(|c| c.covers(disc.nodes.positions[i]))).collect();
         let per_node = disc.dofs.unknowns().per_node();
         let rows = nodes
             .iter()

@@ -74,10 +74,7 @@ fn untrusted_defect(case: &Case, params: &NavierParams, solution: &Solution) -> 
         Estimate::Off => return Some("the run made no defect estimate".into()),
     };
     let corners = crate::physics::case::singular_corners(case, &solution.nodes);
-    let away = |i: usize| {
-        let p = solution.nodes.positions[i];
-        !corners.iter().any(|c| (p[0] - c.at[0]).hypot(p[1] - c.at[1]) <= c.radius)
-    };
+    let away = |i: usize| !corners.iter().any(|c| c.covers(solution.nodes.positions[i]));
     let sigma = match &e.per_node_sigma {
         Some(per_node) => (0..per_node.len()).filter(|&i| away(i)).map(|i| per_node[i]).fold(0.0, |a: f64, b| if b.is_nan() { b } else { a.max(b) }),
         None => e.norms.e_inf_sigma.unwrap_or(0.0),

@@ -223,7 +223,7 @@ pub(super) struct Correction {
     fits: defect::Fits,
     /// `(node, G_H x)` at the nodes near singular corners, whose gradient's
     /// truncation error is `(G - G_H) x` ([`super::corner_defect`]).
-    corners: Vec<(usize, Gradient)>,
+    corner_gradients: Vec<(usize, Gradient)>,
     /// What the correction's solve did.
     solve: String,
     /// Seconds of the estimate stage.
@@ -304,8 +304,8 @@ pub(super) fn assemble_and_solve(
                 None => Err("the solve left no solver to reuse".to_string()),
             };
             let note = match &c {
-                Ok(c) if !c.corners.is_empty() => {
-                    format!("{} fit centres, {} nodes near singular corners; correction: {}", c.fits.centres(), c.corners.len(), c.solve)
+                Ok(c) if !c.corner_gradients.is_empty() => {
+                    format!("{} fit centres, {} nodes near singular corners; correction: {}", c.fits.centres(), c.corner_gradients.len(), c.solve)
                 }
                 Ok(c) => format!("{} fit centres; correction: {}", c.fits.centres(), c.solve),
                 Err(why) => format!("unavailable: {why}"),
@@ -366,14 +366,14 @@ fn correct(
     let fits = defect::Fits::of(disc, x, p, &|k, n| progress.advance(k as u64, n as u64, "fit centres"))?;
     let solved = solver.rows();
     let mut rhs = defect::truncation_error(disc, &solved, &fits);
-    let (mut corners, mut replaced) = (Vec::new(), Vec::new());
+    let (mut corner_gradients, mut replaced) = (Vec::new(), Vec::new());
     if let Some(rows) = corner_rows {
         let approximation = super::estimate::reference_approximation(&params.approximation, params.fill.kind, disc.nodes.len())?;
         let measured = rows.measure(case, disc, &approximation, &solved, x)?;
         for &(r, t) in &measured.tau {
             rhs[r] = t;
         }
-        (corners, replaced) = (measured.gradients, measured.rows);
+        (corner_gradients, replaced) = (measured.gradients, measured.rows);
     }
     drop(solved);
     rhs.iter_mut().for_each(|t| *t = -*t);
@@ -381,7 +381,7 @@ fn correct(
         .solve_replaced(&rhs, &replaced, defect::CORRECTION_TOLERANCE, &SolveProgress(progress))
         .map_err(|err| format!("the correction's solve failed: {err}"))?;
     e.truncate(disc.dofs.len());
-    Ok(Correction { e, fits, corners, solve, seconds: 0.0 })
+    Ok(Correction { e, fits, corner_gradients, solve, seconds: 0.0 })
 }
 
 /// The `defect` estimate of the run `(x, displacement, stress)` from its `correction`
@@ -404,7 +404,7 @@ fn defect_estimate(
     let sigma = stress.map(|_| {
         let mut g = disc.gradients(&reference_x);
         let mut tau = defect::gradient_truncation_error(disc, &c.fits);
-        for &(i, high) in &c.corners {
+        for &(i, high) in &c.corner_gradients {
             let own = disc.gradient_at(i, x);
             tau[i] = std::array::from_fn(|r| std::array::from_fn(|d| own[r][d] - high[r][d]));
         }
@@ -418,7 +418,7 @@ fn defect_estimate(
     });
     let reference = ExactFields { displacement: disc.dofs.displacements(&reference_x, n), stress: sigma };
     let q = c.fits.exact_degree + 2;
-    let corners = match c.corners.len() {
+    let corners = match c.corner_gradients.len() {
         0 => String::new(),
         k => format!(", the higher-degree operator's rows at {k} nodes near singular corners"),
     };

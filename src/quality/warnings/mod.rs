@@ -284,7 +284,7 @@ pub fn navier_static(sol: &Solution, params: &NavierParams, case: &Case) -> Chec
     let threshold = params.estimate.threshold;
     let material = &case.material;
     let mut checks = Checks { singular_corners: singular_corners(case, &sol.nodes), ..Checks::default() };
-    let near_singular = |p: Point| checks.singular_corners.iter().any(|c| (p[0] - c.at[0]).hypot(p[1] - c.at[1]) <= c.radius);
+    let near_singular = |p: Point| checks.singular_corners.iter().any(|c| c.covers(p));
     match &sol.estimate {
         Estimate::Done(e) => {
             let mut over = Vec::new();
