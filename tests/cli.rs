@@ -968,7 +968,7 @@ fn a_dynamic_navier_run_estimates_its_error_over_the_history() {
     assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
     let s = read_json(&res.join("summary.json"));
     let est = &s["estimated_errors"];
-    assert_eq!(est["method"], "refined", "{est}");
+    assert_eq!(est["method"], "richardson", "{est}");
     assert!(est["reference"].as_str().unwrap().contains("compared at 8 states"), "{est}");
     let (t, end) = (num(est, "largest_u_time"), num(&s["integration"], "time_step") * count(&s["integration"], "steps") as f64);
     assert!(t > 0.0 && t <= end * (1.0 + 1e-12), "largest at t = {t}, end {end}");

@@ -1,6 +1,6 @@
 //! The estimates of the runs that have no higher-degree reference: a peridynamic run
 //! against the local (Navier) model (`local-model`), and a dynamic Navier run against
-//! itself on nodes at half the spacing with a finer step (`refined`), each against the
+//! itself on other nodes and time steps (`richardson`, `refined`), each against the
 //! true error. Bands (issue 11): effectivity = estimate / true error in [0.5, 2] for
 //! e_inf(u).
 
@@ -132,18 +132,35 @@ initial_displacement = ["a * sin(pi * x)", 0]
 /// `pi sqrt(1.2)`: the standing wave's angular frequency.
 const WAVE_FREQUENCY: f64 = std::f64::consts::PI * 1.095_445_115_010_332_2;
 
-/// `refined` on the standing wave at two spacings and with two integrators: the
-/// estimate (the run against itself at half the spacing and a finer step, over the
-/// run's history) within [0.5, 2] of the true space-time error over the same states
-/// (`Simulation::history`, eight evenly spaced times up to the end); for a
-/// second-order error it is 0.75 of it in the asymptotic range. The error at the end
-/// time alone (what the estimate covered before) is printed beside it. Measured: see
-/// the printed lines (the table in docs/verification.md, "The error estimate: measured
+/// The dynamic estimates on the standing wave, against the true space-time error over
+/// the run's history states (`Simulation::history`, eight evenly spaced times up to
+/// the end; the error at the end time alone is printed beside it):
+///
+/// - `auto` (Richardson's, from the run at twice the spacing) at three spacings and
+///   with two integrators: for a second-order error its effectivity tends to
+///   3 / sqrt 3 = 1.73 in the asymptotic range (the divisor sqrt 3 keeps any order
+///   from 1 to 2 within [0.58, 1.73]); asserted in [0.5, 2];
+/// - `auto` where the run at twice the spacing would have fewer than
+///   `RICHARDSON_MIN_COARSE_NODES` nodes (h = 0.1: 24): it takes `refined` and says why;
+/// - `refined` (half the spacing): 0.75 for a second-order error; in [0.5, 2].
+///
+/// Measured: the printed lines (docs/verification.md, "The error estimate: measured
 /// effectivities").
 #[test]
-fn refined_tracks_the_dynamic_error() {
-    for (spacing, integrator) in [(0.1, "rk4"), (0.05, "rk4"), (0.05, "verlet")] {
-        let p = standing_wave(spacing, integrator);
+fn dynamic_estimates_track_the_dynamic_error() {
+    let cases = [
+        (0.05, "rk4", "auto"),
+        (0.05, "verlet", "auto"),
+        (0.025, "rk4", "auto"),
+        (0.025, "verlet", "auto"),
+        (0.0125, "verlet", "auto"),
+        (0.1, "rk4", "auto"),
+        (0.05, "rk4", "refined"),
+        (0.05, "verlet", "refined"),
+    ];
+    for (spacing, integrator, method) in cases {
+        let mut p = standing_wave(spacing, integrator);
+        p.navier.estimate.method = <mlsm::models::navier::EstimateMethod as mlsm::scene::choice::Choice>::parse(method).unwrap();
         let d = p.case.dynamics.as_ref().unwrap();
         let sim = mlsm::models::navier::simulate(&p.case, &p.navier, d, &Silent, |_| Ok(())).unwrap_or_else(|e| panic!("{e}"));
         let exact_at = |t: f64| -> Vec<[f64; 2]> {
@@ -158,9 +175,18 @@ fn refined_tracks_the_dynamic_error() {
         let (e, _) = mlsm::quality::post::relative_errors(&u, &exact);
         let (e_end, _) = mlsm::quality::post::relative_errors(u_end, &exact_at(*t_end));
         let Estimate::Done(est) = &sim.estimate else { panic!("h = {spacing}: no estimate: {:?}", sim.estimate) };
+        let expected = match (method, spacing) {
+            ("auto", 0.1) => "refined",
+            ("auto", _) => "richardson",
+            _ => method,
+        };
+        assert_eq!(est.method, expected, "h = {spacing} {integrator} {method}: {}", est.reference);
+        if (method, spacing) == ("auto", 0.1) {
+            assert!(est.reference.contains("auto took it because Richardson's estimate is unavailable"), "{}", est.reference);
+        }
         let eff = est.norms.e_inf_u / e;
         eprintln!(
-            "standing wave h = {spacing} {integrator}: {} nodes, {} steps, e_inf(u) over the history {e:.2e} (at the end {e_end:.2e}), estimated {:.2e} (effectivity {eff:.2}, largest at t = {:.3}), reference {} in {:.2} s",
+            "standing wave h = {spacing} {integrator} {method}: {} nodes, {} steps, e_inf(u) over the history {e:.2e} (at the end {e_end:.2e}), estimated {:.2e} (effectivity {eff:.2}, largest at t = {:.3}), reference {} in {:.2} s",
             sim.positions.len(),
             sim.report.steps,
             est.norms.e_inf_u,
@@ -169,7 +195,7 @@ fn refined_tracks_the_dynamic_error() {
             est.seconds
         );
         assert!(est.reference.contains(&format!("{} states", sim.history.len())), "{}", est.reference);
-        assert!((0.5..=2.0).contains(&eff), "h = {spacing} {integrator}: effectivity {eff}");
+        assert!((0.5..=2.0).contains(&eff), "h = {spacing} {integrator} {method}: effectivity {eff}");
     }
 }
 
@@ -179,4 +205,54 @@ fn a_dynamic_estimate_can_be_switched_off() {
     let p = scene("steel_plate_dynamic", &[("model", s("navier")), ("estimate.method", s("none")), ("dynamics.end_time", f(1e-5))]);
     let sim = mlsm::models::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
     assert!(matches!(sim.estimate, Estimate::Off));
+}
+
+/// The default (Richardson's) estimate of the shipped dynamic scenes run by the Navier
+/// model at spacing 0.02 (816 nodes), against their true space-time error over the
+/// history, taken from the same scene at a quarter of the spacing (12 261 nodes,
+/// interpolated to the run's nodes). That reference's own error is 1/16 of the run's
+/// for a second-order error and about 1/7 at the order 1.4 the steel plate's fronts
+/// show (e_inf(u) 1.97e-2 at h = 0.02, 7.55e-3 at 0.01 against h = 0.0025), so the
+/// measured effectivity is within 15 % of the true one. The divisor sqrt 3 keeps every
+/// order from 1 to 2 within [0.58, 1.73]: asserted in [0.5, 2]. Measured: steel plate
+/// 1.51, plate pulse 1.73.
+///
+/// `MLSM_DYNAMIC_TRUTH=0.0025` takes the true error from that spacing instead (48 521
+/// nodes, about a minute) and adds the runs at h = 0.01 and the `refined` estimate
+/// (docs/verification.md: 1.45 / 1.17 and 1.65 / 1.78 at h = 0.02 / 0.01; `refined`
+/// 0.78-0.82).
+#[test]
+fn richardson_tracks_the_shipped_dynamic_scenes() {
+    let truth_spacing: f64 = std::env::var("MLSM_DYNAMIC_TRUTH").map(|v| v.parse().expect("MLSM_DYNAMIC_TRUTH: a spacing")).unwrap_or(0.005);
+    let (spacings, methods): (&[f64], &[&str]) = if truth_spacing < 0.005 { (&[0.02, 0.01], &["auto", "refined"]) } else { (&[0.02], &["auto"]) };
+    for name in ["steel_plate_dynamic", "plate_pulse"] {
+        let at = |h: f64, method: &str| scene(name, &[("model", s("navier")), ("nodes.spacing", f(h)), ("estimate.method", s(method))]);
+        for &h in spacings {
+            for &method in methods {
+                let p = at(h, method);
+                let d = p.case.dynamics.as_ref().unwrap();
+                let sim = mlsm::models::navier::simulate(&p.case, &p.navier, d, &Silent, |_| Ok(())).unwrap_or_else(|e| panic!("{name}: {e}"));
+                let Estimate::Done(est) = &sim.estimate else { panic!("{name}: no estimate: {:?}", sim.estimate) };
+                assert_eq!(est.method, if method == "auto" { "richardson" } else { method }, "{name}: {}", est.reference);
+                let fine = at(truth_spacing, "none");
+                let times: Vec<f64> = sim.history.iter().map(|h| h.0).collect();
+                let mut timer = mlsm::stages::StageTimer::new(&Silent);
+                let sampling = mlsm::models::navier::Sampling::Times(&times);
+                let truth = mlsm::models::navier::simulate_sampled(&fine.case, &fine.navier, d, &mut timer, sampling, |_| Ok(()))
+                    .unwrap_or_else(|e| panic!("{name} at {truth_spacing}: {e}"));
+                let mut exact = Vec::new();
+                for (_, u) in &truth.history {
+                    exact.extend(mlsm::mlsm::interpolate::mls_values(&truth.positions, u, &sim.positions).unwrap());
+                }
+                let u: Vec<[f64; 2]> = sim.history.iter().flat_map(|(_, u)| u.iter().copied()).collect();
+                let (e, _) = mlsm::quality::post::relative_errors(&u, &exact);
+                let eff = est.norms.e_inf_u / e;
+                eprintln!(
+                    "{name} h = {h} {method}: e_inf(u) over the history {e:.3e} (against h = {truth_spacing}), estimated {:.3e}, effectivity {eff:.2}, in {:.2} s",
+                    est.norms.e_inf_u, est.seconds
+                );
+                assert!((0.5..=2.0).contains(&eff), "{name} h = {h} {method}: effectivity {eff}");
+            }
+        }
+    }
 }

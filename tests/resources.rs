@@ -37,7 +37,7 @@ fn peaks(args: &[&str]) -> (f64, f64) {
 /// Within 2x (the bar) on three sizes of the graded Kirsch plate (PHS p = 4,
 /// with its error estimate: 1.2e3 to 1.8e4 nodes, 70 MB to 2.6 GB), on
 /// manufactured_traction, on a peridynamic run (with the local-model estimate's Navier
-/// run) and on a dynamic Navier run (with the refined estimate's run on four times
+/// run) and on a dynamic Navier run (with Richardson's estimate's run on a quarter of
 /// the nodes). Measured ratios (estimate / peak)
 /// 1.01-1.95 (docs/verification.md, "The memory estimate against measured peaks"); the
 /// smallest Kirsch (57 MB measured) is

@@ -27,7 +27,8 @@
 use crate::physics::case::Case;
 use crate::linalg::{lu_factor_bytes, SolverKind};
 use crate::models::navier::discrete::keeps_gradient_shapes;
-use crate::models::navier::estimate::reference_approximation;
+use crate::models::navier::dynamic_estimate::richardson_applies;
+use crate::models::navier::estimate::{reference_approximation, EstimateMethod};
 use crate::models::navier::NavierParams;
 use crate::output::available_memory_bytes;
 use crate::models::peridynamics::PdParams;
@@ -105,9 +106,12 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
             bytes = bytes.max(one(reference.support, nodes).1);
         }
     }
-    if params.estimate.method.dynamic_navier_estimates() && dynamic {
-        // The refined reference: four times the nodes, while the run's system is held.
-        bytes += one(params.approximation.support, 4.0 * nodes).1;
+    if let Some(d) = case.dynamics.as_ref().filter(|_| params.estimate.method.dynamic_navier_estimates()) {
+        // The reference runs while the run's system is held: Richardson's a quarter of
+        // the nodes, the refined one four times them.
+        let method = params.estimate.method;
+        let richardson = method != EstimateMethod::Refined && richardson_applies(params, d.integrator).is_ok();
+        bytes += one(params.approximation.support, if richardson { 0.25 } else { 4.0 } * nodes).1;
     }
     let driver = if params.approximation.support > 100 { "approximation.support" } else { "nodes.spacing" };
     MemoryEstimate { nodes, unknowns: k * nodes, nonzeros, bonds: None, peak_bytes: bytes + BASE_BYTES, driver }

@@ -43,12 +43,14 @@ pub const MAX_REFERENCE_DEGREE: u32 = 8;
 choice! {
     /// How a static Navier run estimates its error (`estimate.method`).
     pub enum EstimateMethod("estimate.method", default Some(EstimateMethod::Auto), serde "kebab-case") {
-        /// `defect` for a static Navier run (`higher-degree` where it cannot be trusted), `refined` for a dynamic one, `local-model` for a peridynamic one.
-        Auto = "auto" => "defect for a static Navier run, and higher-degree where the defect estimate is unavailable, reaches the warning threshold (or 1e-2) or the scene has singular corners; refined for a dynamic run, local-model for a peridynamic run",
+        /// `defect` for a static Navier run (`higher-degree` where it cannot be trusted), `richardson` (else `refined`) for a dynamic one, `local-model` for a peridynamic one.
+        Auto = "auto" => "defect for a static Navier run, and higher-degree where the defect estimate is unavailable, reaches the warning threshold (or 1e-2) or the scene has singular corners; richardson for a dynamic run (refined where it does not apply), local-model for a peridynamic run",
         /// Difference to a solution two degrees higher on the same nodes.
         HigherDegree = "higher-degree" => "static Navier runs: difference to the solution with RBF-FD (PHS r^3 + monomials of degree p + 2) on the same nodes, solved afresh; the certificate, 0.5-3x the cost of the run (BENCHMARKS.md, \"What the error estimate costs\")",
         /// The run's truncation error on local fits of its solution, mapped by its own operator.
         Defect = "defect" => "static Navier runs: the run's truncation error measured on local fits of degree p + 2 of its own solution, mapped to an error by one loose solve with the run's own factors or preconditioner (no second discretisation or solver)",
+        /// Richardson's extrapolation from a run at twice the spacing and a longer step.
+        Richardson = "richardson" => "dynamic Navier runs of basis degree <= 2 and verlet or rk4: (u - u_2h) / sqrt 3, u_2h the run on nodes at twice the spacing with the time step doubled (x sqrt 2 for rk4); 1/8 of the run's nodes x steps (0.18 with rk4)",
         /// Difference to a run on nodes at half the spacing with a finer time step.
         Refined = "refined" => "dynamic Navier runs: difference to the run on nodes at half the spacing with the time step halved (quartered for emu); 8x the nodes x steps of the run (16x with emu): 3-4x its time on the shipped scenes, 6x at 1.2e4 nodes",
         /// Difference to the local (Navier) model's solution of the same scene.
@@ -90,9 +92,9 @@ impl EstimateMethod {
         matches!(self, EstimateMethod::Auto | EstimateMethod::Defect)
     }
 
-    /// Whether a dynamic Navier run estimates its error (`auto` or `refined`).
+    /// Whether a dynamic Navier run estimates its error (`auto`, `richardson` or `refined`).
     pub fn dynamic_navier_estimates(self) -> bool {
-        matches!(self, EstimateMethod::Auto | EstimateMethod::Refined)
+        matches!(self, EstimateMethod::Auto | EstimateMethod::Richardson | EstimateMethod::Refined)
     }
 
     /// Whether a peridynamic run estimates its error (`auto` or `local-model`).

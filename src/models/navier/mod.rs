@@ -20,13 +20,14 @@
 //!    balance of [`equilibrium`]);
 //! 4. [`dynamics`]: explicit elastodynamics `rho u_tt = Navier(u) + f` with the
 //!    boundary rows as constraints;
-//! 5. [`estimate`]: what an error estimate is and holds; [`run`]: a run with its
-//!    estimate (the reference run it compares with).
+//! 5. [`estimate`]: what an error estimate is and holds; [`dynamic_estimate`]: the
+//!    references of a dynamic run; [`run`]: a run with its estimate.
 
 pub mod cloud;
 pub mod corner_defect;
 pub mod defect;
 pub mod discrete;
+pub mod dynamic_estimate;
 pub mod dynamics;
 pub mod equations;
 pub mod equilibrium;

@@ -1,17 +1,17 @@
 //! A Navier run with its error estimate: the run's stages ([`super::solve`],
 //! [`super::dynamics`]), then the reference run the estimate compares it with
-//! ([`super::estimate`]: the same nodes at two degrees higher for a static run, half
-//! the spacing and a smaller time step for a dynamic one), timed as the `estimate`
-//! stage of the same run.
+//! ([`super::estimate`]: the same nodes at two degrees higher for a static run;
+//! [`super::dynamic_estimate`] for a dynamic one), timed as the `estimate` stage of
+//! the same run.
 
 use super::discrete::Discretisation;
+use super::dynamic_estimate::{self, Run};
 use super::dynamics::{simulate_sampled, Sampling, Simulation};
-use super::estimate::{compared_states, reference_approximation, stage, ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
+use super::estimate::{reference_approximation, stage, ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
 use super::solve::{assemble_and_solve, stages, Solution};
 use super::NavierParams;
-use crate::domain::{NodeSet, Point};
+use crate::domain::NodeSet;
 use crate::linalg::SolverParams;
-use crate::mlsm::interpolate::mls_values;
 use crate::models::dynamics::driver::Snapshot;
 use crate::models::dynamics::DynamicsParams;
 use crate::parallel::distributed;
@@ -103,7 +103,8 @@ pub fn simulate(
     let mut sim = simulate_sampled(case, params, dynamics, &mut timer, Sampling::Estimate, snapshot)?;
     let method = params.estimate.method;
     sim.estimate = stage(method, method.dynamic_navier_estimates(), &mut timer, || {
-        refined_dynamic(case, params, dynamics, sim.report.time_step, &sim.positions, &sim.history, progress)
+        let run = Run { case, params, dynamics, time_step: sim.report.time_step, positions: &sim.positions, history: &sim.history };
+        dynamic_estimate::estimate(&run, progress)
     })?;
     sim.timings = timer.finish();
     Ok(sim)
@@ -168,78 +169,3 @@ pub fn higher_degree(
     }))
 }
 
-/// The `refined` estimate of a dynamic run over its history: the scene integrated
-/// again with the run's approximation on nodes at half the spacing
-/// ([`crate::domain::FillParams::scaled`]) and the run's `time_step` divided by
-/// `2^ceil(2 / order)` (halved for Verlet and RK4, quartered for the first-order emu;
-/// the reference's own stable step when the finer nodes need a smaller one), so that
-/// both the reference's spatial error (order >= 2 in h) and its time error are at most
-/// a quarter of the run's. At each of the run's `history` states
-/// ([`crate::models::dynamics::driver::history_steps`]) the reference's state at the same time
-/// (its own step's, or interpolated between its two steps around it,
-/// [`crate::models::dynamics::history`]: only when it had to take its own stable step) is
-/// interpolated to the run's `positions` by moving least squares; the estimate is the
-/// space-time difference over those states ([`ErrorEstimate::over_history`]),
-///
-/// ```text
-/// est e_inf(u)  = max_{t,i,c} |u - u_ref| / max_{t,i,c} |u_ref|
-/// est rel_l2(u) = sqrt(sum_{t,i} |u - u_ref|^2 / sum_{t,i} |u_ref|^2)
-/// ```
-///
-/// which is 0.75 to 1 times the run's error (space and time together). The per-node
-/// indicator is the largest over the states.
-///
-/// Why not a higher degree on the same nodes as for static runs: the PHS stencils
-/// of the reference have growing modes in explicit elastodynamics (both shipped
-/// dynamic scenes diverged within 1500 steps), while the run's own basis on finer
-/// nodes keeps the stability the run had.
-pub fn refined_dynamic(
-    case: &Case,
-    params: &NavierParams,
-    dynamics: &DynamicsParams,
-    time_step: f64,
-    positions: &[Point],
-    history: &[(f64, Vec<[f64; 2]>)],
-    progress: &dyn Progress,
-) -> Estimate {
-    let t0 = Instant::now();
-    let unavailable = |why: String| Estimate::Unavailable(EstimateMethod::Refined.name(), why);
-    if history.is_empty() {
-        return unavailable("the run kept no state to compare".into());
-    }
-    let estimate = EstimateParams { method: EstimateMethod::None, ..params.estimate };
-    let reference_params = NavierParams { fill: params.fill.scaled(0.5), keep_system: false, estimate, ..params.clone() };
-    let divisor = f64::from(1u32 << 2u32.div_ceil(dynamics.integrator.order()));
-    let fine = DynamicsParams { time_step: Some(time_step / divisor), ..dynamics.clone() };
-    let times: Vec<f64> = history.iter().map(|h| h.0).collect();
-    let run = |d: &DynamicsParams| {
-        simulate_sampled(case, &reference_params, d, &mut StageTimer::new(&Within(progress)), Sampling::Times(&times), |_| Ok(()))
-    };
-    let simulated = match run(&fine) {
-        Err(RunError::UnstableTimeStep { .. }) => run(&DynamicsParams { time_step: None, ..fine.clone() }),
-        other => other,
-    };
-    let sim = match simulated {
-        Ok(s) => s,
-        Err(e) => return unavailable(format!("the reference at half the spacing failed: {e}")),
-    };
-    let r = &sim.report;
-    let description = format!(
-        "{} nodes at spacing {:.3e}, {} steps of {:.3e} s ({}); compared at {}",
-        sim.positions.len(),
-        reference_params.fill.spacing,
-        r.steps,
-        r.time_step,
-        dynamics.integrator.name(),
-        compared_states(history)
-    );
-    let interpolate = |u: &[[f64; 2]]| mls_values(&sim.positions, u, positions);
-    match ErrorEstimate::over_history(EstimateMethod::Refined, description, positions, history, &sim.history, interpolate, t0) {
-        Ok(e) => Estimate::Done(Box::new(ErrorEstimate {
-            reference_degree: params.approximation.basis.polynomial_degree(),
-            reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
-            ..e
-        })),
-        Err(e) => unavailable(format!("the reference could not be interpolated to the run's nodes: {e}")),
-    }
-}

@@ -64,7 +64,7 @@ pub fn estimate_mismatch(model: Model, dynamic: bool, method: crate::models::nav
         (Model::Peridynamics, _) => "a peridynamic run is estimated against the Navier model: \"local-model\" (or \"auto\", \"none\")",
         (Model::Navier, false) => "a static Navier run takes \"higher-degree\" or \"defect\" (or \"auto\", \"none\")",
         (Model::Navier, true) => {
-            "a dynamic Navier run takes \"refined\" (or \"auto\", \"none\"); higher-degree PHS stencils have growing modes in explicit dynamics"
+            "a dynamic Navier run takes \"richardson\" or \"refined\" (or \"auto\", \"none\"); higher-degree PHS stencils have growing modes in explicit dynamics"
         }
     })
 }
