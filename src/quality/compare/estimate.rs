@@ -12,9 +12,9 @@
 //! measure: the model difference of the finite horizon plus the bond quadrature's
 //! error. It holds while the Navier solution is much closer to the local solution
 //! than the peridynamic one (MLSM converges at order 2 to 4 in `h`, peridynamics at
-//! order 2 in `delta`); a static reference carries its own higher-degree estimate
-//! (`reference_estimated_e_inf_u`) so that this can be checked, and is refined until
-//! it holds ([`local_model`]).
+//! order 2 in `delta`); a static reference carries its own estimate (`auto`, the defect
+//! estimate where it can be trusted; `reference_estimated_e_inf_u`) so that this can
+//! be checked, and is refined until it holds ([`local_model`]).
 
 use crate::scene::choice::Choice;
 use crate::domain::Point;
