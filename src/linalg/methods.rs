@@ -4,6 +4,7 @@
 //! fallback. The original system's residual is measured from the solved one
 //! ([`Rhs::residuals`]), so the assembled matrix need not be kept.
 
+use std::sync::OnceLock;
 use std::borrow::Cow;
 use std::cell::RefCell;
 use std::time::Instant;
@@ -178,7 +179,7 @@ pub(super) fn solve_lu(a: SparseMatrix, rhs: &Rhs, start: &Start) -> Result<(Vec
         condition_estimate: Some(kappa),
         ..start.report(None, (setup_seconds, solve_seconds))
     };
-    start.retain(|| Retained { method: start.method.clone(), rows: None, columns: Some(a), inverse: Kept::Lu(lu) });
+    start.retain(|| Retained { method: start.method.clone(), rows: OnceLock::new(), columns: Some(a), inverse: Kept::Lu(lu) });
     Ok((x, report))
 }
 
@@ -221,7 +222,7 @@ pub(super) fn solve_krylov_bicgstab(
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(&pc, (setup_seconds, solve_seconds), counts);
             let report = with_own_error(report, product, &last_residual, &pc, &out.x, layout.as_ref());
-            start.retain(|| Retained { method: name, rows: None, columns: Some(a), inverse: Kept::Bicgstab(pc, max_iterations) });
+            start.retain(|| Retained { method: name, rows: OnceLock::new(), columns: Some(a), inverse: Kept::Bicgstab(pc, max_iterations) });
             Ok((out.x, report))
         }
         bicgstab::Status::NotConverged => Err(SolveError::NoConvergence {
@@ -290,7 +291,7 @@ pub(super) fn solve_gmres_multigrid(
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
     match run_gmres(rows, &pc, rhs, &start, settings, layout.as_ref()) {
         Ok(done) => {
-            start.retain(|| Retained { method: start.method.clone(), rows: system, columns: None, inverse: Kept::Gmres(pc, settings) });
+            start.retain(|| Retained { method: start.method.clone(), rows: system.map_or_else(OnceLock::new, OnceLock::from), columns: None, inverse: Kept::Gmres(pc, settings) });
             Ok(done)
         }
         Err(e) => {
@@ -332,7 +333,7 @@ pub(super) fn solve_gmres_saddle_point(
         pc = precond::BuiltPreconditioner::Bordered(Box::new(border::Bordered::build(&rows, layout.multipliers, Box::new(pc))?));
     }
     let done = run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))?;
-    start.retain(|| Retained { method: start.method.clone(), rows: Some(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
+    start.retain(|| Retained { method: start.method.clone(), rows: OnceLock::from(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
     Ok(done)
 }
 
@@ -347,7 +348,7 @@ pub(super) fn solve_krylov_gmres(
     let pc = precond::BuiltPreconditioner::build(a, settings.preconditioner, layout)?;
     let rows = csr::to_csr(a);
     let done = run_gmres(&rows, &pc, rhs, start, settings, layout.as_ref())?;
-    start.retain(|| Retained { method: start.method.clone(), rows: Some(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
+    start.retain(|| Retained { method: start.method.clone(), rows: OnceLock::from(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
     Ok(done)
 }
 

@@ -4,7 +4,7 @@
 //! preconditioned iterations instead of a second factorisation or multigrid setup
 //! (the `defect` error estimate's correction, `models::navier::defect`).
 
-use std::borrow::Cow;
+use std::sync::OnceLock;
 
 use super::gmres::GmresSettings;
 use super::inverse::Inverse as _;
@@ -57,8 +57,9 @@ pub struct Retained {
     /// The solver's label, for the note of a second solve.
     pub(super) method: String,
     /// The solved rows, unless the preconditioner holds them (the multigrid's finest
-    /// level) or the solver kept them in columns.
-    pub(super) rows: Option<Csr>,
+    /// level); made once from `columns` when the solver kept them in columns and a
+    /// second solve reads them.
+    pub(super) rows: OnceLock<Csr>,
     /// The solved operator in columns (LU, BiCGSTAB).
     pub(super) columns: Option<SparseMatrix>,
     pub(super) inverse: Inverse,
@@ -66,16 +67,16 @@ pub struct Retained {
 
 impl Retained {
     /// The solved rows `D A`: those the solver holds, or made from its columns.
-    pub fn rows(&self) -> Cow<'_, Csr> {
-        if let Some(rows) = &self.rows {
-            return Cow::Borrowed(rows);
+    pub fn rows(&self) -> &Csr {
+        if let Some(rows) = self.rows.get() {
+            return rows;
         }
         if let Inverse::Gmres(pc, _) | Inverse::Bicgstab(pc, _) = &self.inverse {
             if let Some(rows) = pc.fine_operator() {
-                return Cow::Borrowed(rows);
+                return rows;
             }
         }
-        Cow::Owned(csr::to_csr(self.columns.as_ref().expect("a retained solver keeps its operator in rows or in columns")))
+        self.rows.get_or_init(|| csr::to_csr(self.columns.as_ref().expect("a retained solver keeps its operator in rows or in columns")))
     }
 
     /// Solve `D A y = c` (`c` in the solved rows' scale, of any magnitude: it is
@@ -99,7 +100,7 @@ impl Retained {
             }
             Inverse::Gmres(pc, settings) => {
                 let ops = rows();
-                let apply = |x: &[f64], y: &mut [f64]| csr::product(ops.as_ref(), x, y);
+                let apply = |x: &[f64], y: &mut [f64]| csr::product(ops, x, y);
                 let limits = (tolerance, settings.max_iterations, settings.restart, settings.stall);
                 let out = gmres::solve_gmres_with(apply, &b, |v, z| pc.solve_into(v, z), limits, watch);
                 if !matches!(out.status, gmres::Status::Converged) {
@@ -149,7 +150,7 @@ impl Retained {
         };
         let ops = self.rows();
         let apply = |x: &[f64], y: &mut [f64]| {
-            csr::product(ops.as_ref(), x, y);
+            csr::product(ops, x, y);
             for (r, entries) in replaced {
                 y[*r] = entries.iter().map(|&(col, v)| v * x[col as usize]).sum();
             }

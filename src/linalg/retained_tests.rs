@@ -22,7 +22,7 @@ fn a_kept_solver_solves_with_rows_replaced() {
         let layout = Some(NodeLayout { per_node: 2, positions: &positions, multipliers: 0 });
         let (_, _, kept) = solve_nodal_retained(std::borrow::Cow::Borrowed(&a), &b, &params, layout, None, &()).unwrap();
         let kept = kept.expect("a kept solver");
-        let rows = kept.rows().into_owned();
+        let rows = kept.rows().clone();
         // Rows of the nodes of a central block, off-diagonals scaled by 1.5.
         let replaced: Vec<(usize, Vec<(u32, f64)>)> = (0..m * m)
             .filter(|k| (18..23).contains(&(k % m)) && (17..23).contains(&(k / m)))

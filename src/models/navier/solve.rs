@@ -364,18 +364,19 @@ fn correct(
 ) -> Result<Correction, String> {
     let p = params.approximation.basis.polynomial_degree();
     let fits = defect::Fits::of(disc, x, p, &|k, n| progress.advance(k as u64, n as u64, "fit centres"))?;
+    // The solved rows: held by the solver, or made once from its columns and kept
+    // for `solve_replaced`.
     let solved = solver.rows();
-    let mut rhs = defect::truncation_error(disc, &solved, &fits);
+    let mut rhs = defect::truncation_error(disc, solved, &fits);
     let (mut corner_gradients, mut replaced) = (Vec::new(), Vec::new());
     if let Some(rows) = corner_rows {
         let approximation = super::estimate::reference_approximation(&params.approximation, params.fill.kind, disc.nodes.len())?;
-        let measured = rows.measure(case, disc, &approximation, &solved, x)?;
+        let measured = rows.measure(case, disc, &approximation, solved, x)?;
         for &(r, t) in &measured.tau {
             rhs[r] = t;
         }
         (corner_gradients, replaced) = (measured.gradients, measured.rows);
     }
-    drop(solved);
     rhs.iter_mut().for_each(|t| *t = -*t);
     let (mut e, solve) = solver
         .solve_replaced(&rhs, &replaced, defect::CORRECTION_TOLERANCE, &SolveProgress(progress))
