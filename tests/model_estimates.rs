@@ -60,12 +60,15 @@ fn a_coarse_local_reference_is_refined() {
     assert!((0.5..=2.0).contains(&(est.norms.e_inf_u / e)), "effectivity {}", est.norms.e_inf_u / e);
 }
 
-/// A Navier scene with `local-model` and a peridynamic one with `higher-degree` are
+/// A static Navier scene with `local-model` or `richardson`, a peridynamic one with
+/// `higher-degree` or `richardson` and a dynamic Navier one with `higher-degree` are
 /// refused, naming `estimate.method`.
 #[test]
 fn an_estimate_of_the_other_model_is_refused() {
     for (name, edits) in [
         ("lame", vec![("estimate.method", s("local-model"))]),
+        ("lame", vec![("estimate.method", s("richardson"))]),
+        ("pd_trig", vec![("estimate.method", s("richardson"))]),
         ("pd_trig", vec![("estimate.method", s("higher-degree"))]),
         ("steel_plate_dynamic", vec![("model", s("navier")), ("estimate.method", s("higher-degree"))]),
     ] {

@@ -20,7 +20,7 @@
 //!   certain), unknowns that underflowed, and an iterative solver's own error above
 //!   [`SOLVER_ERROR_SHARE`] of the run's error in u (`solver-error`).
 //!
-//! Dynamic runs ([`dynamic`]): the `refined` estimate over the history (Navier) above
+//! Dynamic runs ([`dynamic`]): the `richardson` or `refined` estimate over the history (Navier) above
 //! the threshold, the drift of the total energy above the threshold.
 //!
 //! Peridynamic runs ([`peridynamics_static`], [`dynamic`]): `m < 3`; the `local-model`

@@ -48,7 +48,7 @@ choice! {
 }
 
 /// Why `method` cannot estimate a run of `model` (static, or `dynamic`), or `None`:
-/// `higher-degree` and `defect` estimate static Navier runs, `refined` dynamic Navier runs,
+/// `higher-degree` and `defect` estimate static Navier runs, `richardson` and `refined` dynamic Navier runs,
 /// `local-model` peridynamic runs.
 pub fn estimate_mismatch(model: Model, dynamic: bool, method: crate::models::navier::EstimateMethod) -> Option<&'static str> {
     use crate::models::navier::EstimateMethod as M;
