@@ -35,9 +35,8 @@ use super::dynamics::{simulate_sampled, Sampling, Simulation};
 use super::estimate::{compared_states, ErrorEstimate, Estimate, EstimateMethod, EstimateParams};
 use super::NavierParams;
 use crate::domain::Point;
-use crate::mlsm::interpolate::mls_values;
+use crate::mlsm::interpolate::mls_fields_of_degree;
 use crate::mlsm::ShapeError;
-use crate::models::dynamics::driver::HISTORY_SAMPLES;
 use crate::models::dynamics::{DynamicsParams, Integrator};
 use crate::physics::case::Case;
 use crate::scene::choice::Choice;
@@ -191,24 +190,11 @@ fn describe(run: &Run, sim: &Simulation, factor: f64) -> String {
     )
 }
 
-/// The reference states of `sim` (at most [`HISTORY_SAMPLES`], on its own nodes)
-/// brought to `targets` by moving least squares ([`mls_values`]), all states in one
-/// pass so that each target's shape functions are computed once.
+/// The reference states of `sim` (on its own nodes) brought to `targets` by moving
+/// least squares, all states in one pass ([`mls_fields_of_degree`], degree 2).
 fn interpolate_history(sim: &Simulation, targets: &[Point]) -> Result<Vec<Vec<[f64; 2]>>, ShapeError> {
-    const K: usize = 2 * HISTORY_SAMPLES;
-    let states = &sim.history;
-    debug_assert!(states.len() <= HISTORY_SAMPLES);
-    let packed: Vec<[f64; K]> = (0..sim.positions.len())
-        .map(|i| {
-            let mut v = [0.0; K];
-            for (s, (_, u)) in states.iter().enumerate() {
-                v[2 * s..2 * s + 2].copy_from_slice(&u[i]);
-            }
-            v
-        })
-        .collect();
-    let at = mls_values(&sim.positions, &packed, targets)?;
-    Ok((0..states.len()).map(|s| at.iter().map(|v| [v[2 * s], v[2 * s + 1]]).collect()).collect())
+    let states: Vec<&[[f64; 2]]> = sim.history.iter().map(|(_, u)| u.as_slice()).collect();
+    mls_fields_of_degree(&sim.positions, &states, targets, 2)
 }
 
 /// The estimate of `run` against the `reference` states (on the run's nodes), made by
