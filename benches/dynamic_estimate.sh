@@ -11,13 +11,7 @@
 # Usage: bash benches/dynamic_estimate.sh [SCENE[:SPACING]]...
 #   e.g. bash benches/dynamic_estimate.sh steel_plate_dynamic:0.005
 # Environment: PAIRS (default 3), MLSM (default target/release/mlsm).
-set -euo pipefail
-cd "$(dirname "$0")/.."
-[ -n "${MLSM:-}" ] || { cargo build --release --quiet; MLSM=target/release/mlsm; }
-PAIRS=${PAIRS:-3}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-scenes=("$@")
+source "$(dirname "$0")/paired.sh"
 [ ${#scenes[@]} -gt 0 ] || scenes=(steel_plate_dynamic plate_pulse)
 echo "| scene | nodes | auto took | run s (none) | estimate s: auto / refined | share of run: auto / refined | total auto / none | peak auto / none | e_inf(u): auto / refined (ratio) |"
 echo "|---|---|---|---|---|---|---|---|---|"

@@ -12,13 +12,7 @@
 #   e.g. bash benches/estimate.sh kirsch "cantilever:0.035@approximation.basis=tensor"
 # Environment: PAIRS (default 3), MLSM (default target/release/mlsm), METHODS (default
 # "none auto higher-degree"; leave higher-degree out at 1e6 nodes, where it takes minutes).
-set -euo pipefail
-cd "$(dirname "$0")/.."
-[ -n "${MLSM:-}" ] || { cargo build --release --quiet; MLSM=target/release/mlsm; }
-PAIRS=${PAIRS:-3}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-scenes=("$@")
+source "$(dirname "$0")/paired.sh"
 if [ ${#scenes[@]} -eq 0 ]; then
   scenes=(cantilever cantilever_traction manufactured_dirichlet manufactured_traction lame kirsch flamant gravity_dam steel_plate bracket)
 fi

@@ -8,13 +8,7 @@
 #
 # Usage: [BEFORE=path/to/old/mlsm] bash benches/pd_estimate.sh [SCENE[:HORIZON]]...
 # Environment: PAIRS (default 3), MLSM (default target/release/mlsm).
-set -euo pipefail
-cd "$(dirname "$0")/.."
-[ -n "${MLSM:-}" ] || { cargo build --release --quiet; MLSM=target/release/mlsm; }
-PAIRS=${PAIRS:-3}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-scenes=("$@")
+source "$(dirname "$0")/paired.sh"
 [ ${#scenes[@]} -gt 0 ] || scenes=(pd_manufactured pd_trig pd_tension steel_plate_dynamic plate_pulse)
 echo "| scene | nodes | run s (none) | estimate s: this / before | share: this / before | e_inf(u) est. | reference's own |"
 echo "|---|---|---|---|---|---|---|"

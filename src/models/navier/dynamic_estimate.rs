@@ -126,10 +126,10 @@ pub fn richardson(run: &Run, progress: &dyn Progress) -> Estimate {
         .history
         .iter()
         .zip(&coarse)
-        .map(|((t, u), c)| (*t, u.iter().zip(c).map(|(a, b)| [a[0] + (a[0] - b[0]) / SQRT_3, a[1] + (a[1] - b[1]) / SQRT_3]).collect()))
+        .map(|((_, u), c)| u.iter().zip(c).map(|(a, b)| [a[0] + (a[0] - b[0]) / SQRT_3, a[1] + (a[1] - b[1]) / SQRT_3]).collect())
         .collect();
     let description = format!("Richardson's extrapolation u + (u - u_2h) / sqrt 3 from {}", describe(run, &sim, 2.0));
-    finish(run, EstimateMethod::Richardson, description, &extrapolated, &sim, t0)
+    finish(run, EstimateMethod::Richardson, description, extrapolated, &sim, t0)
 }
 
 /// The `refined` estimate (module docs): the run on nodes at half the spacing with
@@ -147,10 +147,7 @@ pub fn refined(run: &Run, progress: &dyn Progress) -> Estimate {
     };
     let description = describe(run, &sim, 0.5);
     match interpolate_history(&sim, run.positions) {
-        Ok(fine) => {
-            let reference: Vec<_> = run.history.iter().zip(fine).map(|((t, _), u)| (*t, u)).collect();
-            finish(run, EstimateMethod::Refined, description, &reference, &sim, t0)
-        }
+        Ok(fine) => finish(run, EstimateMethod::Refined, description, fine, &sim, t0),
         Err(e) => Estimate::Unavailable(EstimateMethod::Refined.name(), format!("the reference could not be interpolated to the run's nodes: {e}")),
     }
 }
@@ -199,16 +196,13 @@ fn interpolate_history(sim: &Simulation, targets: &[Point]) -> Result<Vec<Vec<[f
 
 /// The estimate of `run` against the `reference` states (on the run's nodes), made by
 /// `sim`.
-fn finish(run: &Run, method: EstimateMethod, description: String, reference: &[(f64, Vec<[f64; 2]>)], sim: &Simulation, t0: Instant) -> Estimate {
-    let kept = |u: &[[f64; 2]]| Ok::<_, RunError>(u.to_vec());
-    match ErrorEstimate::over_history(method, description, run.positions, run.history, reference, kept, t0) {
-        Ok(e) => Estimate::Done(Box::new(ErrorEstimate {
-            reference_degree: run.params.approximation.basis.polynomial_degree(),
-            reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
-            ..e
-        })),
-        Err(e) => Estimate::Unavailable(method.name(), format!("the reference could not be compared: {e}")),
-    }
+fn finish(run: &Run, method: EstimateMethod, description: String, reference: Vec<Vec<[f64; 2]>>, sim: &Simulation, t0: Instant) -> Estimate {
+    let e = ErrorEstimate::over_history(method, description, run.positions, run.history, reference, t0);
+    Estimate::Done(Box::new(ErrorEstimate {
+        reference_degree: run.params.approximation.basis.polynomial_degree(),
+        reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
+        ..e
+    }))
 }
 
 /// Whether [`richardson`] applies to a run of `params` with `integrator`, or why not:

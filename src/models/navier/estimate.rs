@@ -251,24 +251,20 @@ pub fn compared_states(history: &[(f64, Vec<[f64; 2]>)]) -> String {
 
 impl ErrorEstimate {
     /// The estimate of a dynamic run's `history` against the `reference` states at the
-    /// same times (same order, on the reference's own nodes, brought to the run's by
-    /// `interpolate`): the space-time norms of the differences over all the states
-    /// together, the time of the largest, and each node's largest difference as its
-    /// indicator. The reference's degree, unknowns and nonzeros are left 0.
-    pub fn over_history<E>(
+    /// same times (same order, already on the run's `positions`): the space-time norms
+    /// of the differences over all the states together, the time of the largest, and
+    /// each node's largest difference as its indicator. The reference's degree,
+    /// unknowns and nonzeros are left 0.
+    pub fn over_history(
         method: EstimateMethod,
         reference_description: String,
         positions: &[Point],
         history: &[(f64, Vec<[f64; 2]>)],
-        reference: &[(f64, Vec<[f64; 2]>)],
-        interpolate: impl Fn(&[[f64; 2]]) -> Result<Vec<[f64; 2]>, E>,
+        reference: Vec<Vec<[f64; 2]>>,
         t0: Instant,
-    ) -> Result<ErrorEstimate, E> {
+    ) -> ErrorEstimate {
         debug_assert_eq!(history.len(), reference.len(), "a reference state per state of the run");
-        let mut u_ref = Vec::with_capacity(history.len() * positions.len());
-        for (_, r) in reference {
-            u_ref.extend(interpolate(r)?);
-        }
+        let u_ref: Vec<[f64; 2]> = reference.into_iter().flatten().collect();
         let u: Vec<[f64; 2]> = history.iter().flat_map(|(_, u)| u.iter().copied()).collect();
         let at: Vec<Point> = history.iter().flat_map(|_| positions.iter().copied()).collect();
         let reference = ExactFields { displacement: u_ref, stress: None };
@@ -276,7 +272,7 @@ impl ErrorEstimate {
         let n = positions.len();
         e.largest_u_time = Some(history[argmax(&e.per_node_u) / n].0);
         e.per_node_u = (0..n).map(|i| e.per_node_u.iter().skip(i).step_by(n).fold(0.0, |m: f64, &v| m.max(v))).collect();
-        Ok(e)
+        e
     }
 
     /// The estimate of the run `(displacement, stress)` at `positions` by its

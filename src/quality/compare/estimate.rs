@@ -98,12 +98,10 @@ fn over_history(
         navier::estimate::compared_states(history)
     );
     let degree = navier.navier.approximation.basis.polynomial_degree().max(2);
-    let not_interpolated = |e: crate::mlsm::ShapeError| format!("the Navier solution could not be interpolated to the peridynamic nodes: {e}");
     let states: Vec<&[[f64; 2]]> = sim.history.iter().map(|(_, u)| u.as_slice()).collect();
-    let at = mls_fields_of_degree(&sim.positions, &states, positions, degree).map_err(not_interpolated)?;
-    let reference: Vec<(f64, Vec<[f64; 2]>)> = sim.history.iter().map(|h| h.0).zip(at).collect();
-    let kept = |u: &[[f64; 2]]| Ok::<_, crate::mlsm::ShapeError>(u.to_vec());
-    let e = ErrorEstimate::over_history(EstimateMethod::LocalModel, description, positions, history, &reference, kept, t0).map_err(not_interpolated)?;
+    let reference = mls_fields_of_degree(&sim.positions, &states, positions, degree)
+        .map_err(|e| format!("the Navier solution could not be interpolated to the peridynamic nodes: {e}"))?;
+    let e = ErrorEstimate::over_history(EstimateMethod::LocalModel, description, positions, history, reference, t0);
     Ok(Box::new(ErrorEstimate {
         reference_degree: navier.navier.approximation.basis.polynomial_degree(),
         reference_unknowns: sim.unknowns.0 + sim.unknowns.1,
