@@ -125,6 +125,30 @@ fn binary_exponent(m: f64) -> i32 {
     }
 }
 
+/// `max_i |b_i| / max_j |a_ij|` when the rows are equilibrated (the largest entry of
+/// the right-hand side the solver sees, `D b`), else `max_i |b_i|`. Scaling by this
+/// and not by `max |b|` keeps the solved right-hand side near 1 whatever the moduli:
+/// with `E = 1e200` the equilibrated loads are ~1e-194 and their squared norm
+/// underflows to zero (the solver would return `x = 0`), with `E = 1e-200` it
+/// overflows. Rows with no stored entry are skipped (the solver refuses them).
+fn solved_rhs_max(a: &Csr, b: &[f64], equilibrate: bool) -> f64 {
+    if !equilibrate || a.nrows() != b.len() {
+        return b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    }
+    (0..a.nrows())
+        .filter(|&i| b[i] != 0.0)
+        .map(|i| {
+            let row_max = a.row(i).values().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if row_max > 0.0 && row_max.is_finite() {
+                b[i].abs() / row_max
+            } else {
+                b[i].abs()
+            }
+        })
+        .fold(0.0f64, f64::max)
+        .min(f64::MAX)
+}
+
 /// `x 2^e`, in two factors so that neither overflows for `|e|` up to 2 x 1023.
 fn times_power_of_two(x: f64, e: i32) -> f64 {
     x * 2f64.powi(e / 2) * 2f64.powi(e - e / 2)
@@ -151,11 +175,25 @@ pub(crate) fn norm2(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
+/// Euclidean norm of entries of any magnitude: `m sqrt(sum (v_i / m)^2)` with
+/// `m = max |v_i|`, so that entries of 1e-200 or 1e200 (rows of a matrix in the units of
+/// extreme moduli) neither underflow nor overflow when squared. Two passes: for
+/// setup, not for the inner loops of a solver.
+pub fn scaled_norm<'a>(v: impl IntoIterator<Item = &'a f64> + Clone) -> f64 {
+    let m = v.clone().into_iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if m == 0.0 || !m.is_finite() {
+        return m;
+    }
+    m * v.into_iter().map(|x| (x / m) * (x / m)).sum::<f64>().sqrt()
+}
+
 /// Solve `A x = b` in the scale of the loads: `b` is multiplied by the power of two
-/// `s = 2^-e` that brings `max |b_i|` into `[1, 2)` (exact in binary floating point),
-/// `A x' = s b` is solved by [`solve_with_memory`], and `x = x' / s`. Loads from 1e-300 to
-/// 1e300 then give the same digits (no overflow or underflow in the residual norms),
-/// and a solution beyond the double range is reported as [`SolveError::Overflow`].
+/// `s = 2^-e` that brings the largest entry of the right-hand side the solver sees
+/// (`D b` of the equilibrated rows, [`solved_rhs_max`]) into `[1, 2)` (exact in binary
+/// floating point), `A x' = s b` is solved by [`solve_with_memory`], and `x = x' / s`.
+/// Loads from 1e-300 to 1e300 and moduli from 1e-250 to 1e250 then give the same digits
+/// (no overflow or underflow in the residual norms), and a solution beyond the double
+/// range is reported as [`SolveError::Overflow`].
 pub fn solve(a: &SparseMatrix, b: &[f64], params: &SolverParams) -> Result<(Vec<f64>, SolveReport), SolveError> {
     solve_nodal(Cow::Owned(csr::to_csr(a)), b, params, None, None, &())
 }
@@ -214,8 +252,7 @@ fn solve_nodal_kept(
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
-    let b_max = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let exponent = binary_exponent(b_max);
+    let exponent = binary_exponent(solved_rhs_max(&a, b, params.equilibrate));
     let scaled: Vec<f64> = b.iter().map(|v| times_power_of_two(*v, -exponent)).collect();
     let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch, keep))?;
     if let Some(i) = x.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {

@@ -200,10 +200,10 @@ impl<'a> NavierDynamics<'a> {
         let mut lambda = 0.0;
         let (zero_d, zero_a) = (vec![0.0; n], vec![0.0; self.algebraic.len()]);
         for _ in 0..60 {
-            let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let norm = crate::linalg::scaled_norm(&x);
             x.iter_mut().for_each(|v| *v /= norm);
             self.operator(&x, &mut y, (&zero_d, &zero_a));
-            lambda = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+            lambda = crate::linalg::scaled_norm(&y);
             std::mem::swap(&mut x, &mut y);
         }
         0.9 * 2.0 / lambda.sqrt()

@@ -118,9 +118,14 @@ fn first_exit(inside: &dyn Fn(f64) -> bool, delta: f64) -> f64 {
     delta
 }
 
+/// Smallest squared pivot of the unit-diagonal Gram matrix of a compatible fit that
+/// determines its correction (the reciprocal of a condition number of about 1e12).
+const GRAM_PIVOT_LIMIT: f64 = 1e-12;
+
 /// Corrected coefficients for the bonds `xi` with base coefficients `base` so that the
 /// `moments` take the values `targets`, or `None` when the conditions cannot be met
-/// (to `1e-9` of `scale`, the size of the largest moment).
+/// (to `1e-9` of `scale`, the size of the largest moment) or do not determine the
+/// correction (the Gram matrix's pivots, [`GRAM_PIVOT_LIMIT`]).
 pub fn compatible_weights(xi: &[Point], base: &[f64], delta: f64, moments: &[(i32, i32)], targets: &[f64], scale: f64) -> Option<Vec<f64>> {
     let n = xi.len();
     let k = moments.len();
@@ -136,7 +141,23 @@ pub fn compatible_weights(xi: &[Point], base: &[f64], delta: f64, moments: &[(i3
     let residual = &target - &a * &c0;
     let a_s = DMatrix::from_fn(k, n, |r, j| a[(r, j)] * base[j]);
     let gram = &a_s * a.transpose();
-    let y = gram.cholesky()?.solve(&residual);
+    // Jacobi-scaled to a unit diagonal, the Gram matrix's pivots measure how well the
+    // bonds separate the moment conditions whatever the units of the micromodulus;
+    // below GRAM_PIVOT_LIMIT the correction is not determined (10 bonds for 9
+    // conditions can leave it numerically singular), and whether Cholesky happened
+    // to pass its rounding would decide the fit (it flipped with E from 1e-50 to 1e-230).
+    let d: Vec<f64> = gram.diagonal().iter().map(|g| if *g > 0.0 { 1.0 / g.sqrt() } else { 0.0 }).collect();
+    if d.iter().any(|v| *v == 0.0 || !v.is_finite()) {
+        return None;
+    }
+    let unit = DMatrix::from_fn(k, k, |r, s| gram[(r, s)] * d[r] * d[s]);
+    let chol = unit.cholesky()?;
+    if chol.l_dirty().diagonal().iter().take(k).any(|l| l * l < GRAM_PIVOT_LIMIT) {
+        return None;
+    }
+    let scaled_residual = DVector::from_fn(k, |r, _| residual[r] * d[r]);
+    let z = chol.solve(&scaled_residual);
+    let y = DVector::from_fn(k, |r, _| z[r] * d[r]);
     let c = c0 + a_s.transpose() * y;
     let err = (&a * &c - &target).amax();
     (err <= 1e-9 * scale && c.iter().all(|v| v.is_finite())).then(|| c.as_slice().to_vec())

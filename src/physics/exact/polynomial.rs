@@ -59,7 +59,8 @@ impl Polynomial {
     pub fn uniaxial_tension(tension: f64, material: Material) -> Result<Self, ParameterError> {
         Check("tension").finite("tension", tension)?;
         let l = material.lame();
-        let exx = tension * (l.lambda + 2.0 * l.mu) / (4.0 * l.mu * (l.lambda + l.mu));
+        // In this order no product of two moduli is formed: E = 1e250 would overflow it.
+        let exx = tension / (4.0 * l.mu) * ((l.lambda + 2.0 * l.mu) / (l.lambda + l.mu));
         let eyy = -l.lambda * exx / (l.lambda + 2.0 * l.mu);
         Polynomial::quadratic([0.0, exx, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, eyy, 0.0, 0.0, 0.0], material)
     }

@@ -344,7 +344,7 @@ fn injection((nodes, dofs): (&NodeSet, &DofMap), matrix: &Csr, c: Point, seeds: 
                 let perp = [-(p[1] - c[1]) / d, (p[0] - c[0]) / d];
                 for comp in 0..2 {
                     let row = dofs.dof(i, comp);
-                    let norm = matrix.row(row).values().iter().map(|v| v * v).sum::<f64>().sqrt();
+                    let norm = crate::linalg::scaled_norm(matrix.row(row).values());
                     let mut g = [0.0; 3];
                     g[comp] = norm;
                     g[2] = norm * perp[comp];
