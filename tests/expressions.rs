@@ -226,7 +226,8 @@ fn wrong_formulas_and_arrays_are_refused_with_the_field() {
         (edited(&[("min = [0.0, 0.0]", "min = [0.0, 0.0, 1.0]")]), vec!["domain.region[0].min", "exactly 2 numbers"]),
         (edited(&[("ux = \"sin(pi*x)*cos(pi*y)\"", "ux = \"abs(x)\"")]), vec!["exact.ux", "differentiated"]),
         (edited(&[(body, "body_force = \"exact\"\n[constants]\nE = 2")]), vec!["constants.E", "choose another name"]),
-        (edited(&[(body, "body_force = \"exact\"\n[constants]\na = \"b + 1\"\nb = \"a\"")]), vec!["constants.", "unknown name"]),
+        (edited(&[(body, "body_force = \"exact\"\n[constants]\na = \"b + 1\"\nb = \"a\"")]), vec!["constants.a", "cycle of 2: a -> b -> a"]),
+        (edited(&[(body, "body_force = \"exact\"\n[constants]\na = \"b + 1\"\nb = \"2e3 * zz\"")]), vec!["constants.b", "unknown name \"zz\""]),
     ];
     for (text, wanted) in cases {
         let (code, err) = run_scene(&text, "scene.toml");

@@ -3,7 +3,7 @@
 //!
 //! A point of an edge lies on the solid's boundary iff the solid's signed distance
 //! vanishes there (`|d| <= tol`). Edges are classified on a fine parameter sample
-//! (step `h / 8`); every change of class is located by bisection to `1e-13` of the
+//! (step `h(x) / 8`, at most [`MAX_PROBES`] per curve); every change of class is located by bisection to `1e-13` of the
 //! edge length, then to the zero of the signed distance, extrapolated from two
 //! points just past it, so the corners where two primitives meet are found to
 //! round-off and both edges produce the same corner point. Points closer than `1e-3 h` are
@@ -47,12 +47,39 @@ impl BoundarySample {
     }
 }
 
-/// Parameter intervals `[s0, s1]` of `curve` that lie on the solid's boundary.
-fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -> Vec<(f64, f64)> {
+/// Most probes of one curve when looking for where it lies on the boundary: a step of
+/// `len / 2^22` (2.4e-7 of the curve) resolves every feature a node set could carry, and
+/// the probing of a graded or tiny spacing stays in time proportional to the curve's
+/// nodes (a refinement spacing of 1e-8 probed every h/8 took 1e8 probes per metre).
+const MAX_PROBES: usize = 1 << 22;
+
+/// The probe parameters of [`on_boundary_intervals`] on `[0, len]`: every `h / 8` of a
+/// uniform spacing (equal steps), every `h(x) / 8` of a graded one, between
+/// `len / MAX_PROBES` and `len / 16`; the last is `len`.
+fn probe_parameters(c: &BoundaryCurve, field: &SpacingField) -> Vec<f64> {
     let len = c.curve.length();
+    if field.is_uniform() {
+        let samples = ((len / (field.max() / 8.0)).ceil() as usize).clamp(16, MAX_PROBES);
+        let ds = len / samples as f64;
+        return (1..=samples).map(|k| if k == samples { len } else { k as f64 * ds }).collect();
+    }
+    let (shortest, longest) = (len / MAX_PROBES as f64, len / 16.0);
+    let mut out = Vec::new();
+    let mut s = 0.0;
+    while s < len {
+        let step = (field.at(c.curve.at(s).0) / 8.0).clamp(shortest, longest);
+        s = if s + step >= len * (1.0 - 1e-12) { len } else { s + step };
+        out.push(s);
+    }
+    out
+}
+
+/// Parameter intervals `[s0, s1]` of `curve` that lie on the solid's boundary, probed
+/// every `h(x) / 8` ([`probe_parameters`]); `h` the smallest spacing.
+fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, field: &SpacingField, tol: f64) -> Vec<(f64, f64)> {
+    let len = c.curve.length();
+    let h = field.min();
     let on = |s: f64| domain.signed_distance(c.curve.at(s).0).abs() <= tol;
-    let samples = ((len / (h / 8.0)).ceil() as usize).max(16);
-    let ds = len / samples as f64;
     // The corner between an "on" and an "off" parameter (the off one a sample, so a
     // valid parameter): bisection to the last "on" point, which lies where |d|
     // reaches `tol`, up to `tol / sin(angle)` past the true corner; then the zero of
@@ -74,8 +101,7 @@ fn on_boundary_intervals(domain: &Domain, c: &BoundaryCurve, h: f64, tol: f64) -
     let mut intervals = Vec::new();
     let mut start = if on(0.0) { Some(0.0) } else { None };
     let mut prev = 0.0;
-    for k in 1..=samples {
-        let s = if k == samples { len } else { k as f64 * ds };
+    for s in probe_parameters(c, field) {
         match (start, on(s)) {
             (None, true) => start = Some(refine(s, prev)),
             (Some(s0), false) => {
@@ -118,16 +144,33 @@ fn exact_corner(s_on: f64, s_off: f64, s_sample_off: f64, d: &dyn Fn(f64) -> f64
 }
 
 /// Samples, every `h_min / 4` of `refinement`, of the boundary parts it refines
-/// towards (none when it names no part).
+/// towards (none when it names no part). Only the curves of those parts are sampled:
+/// the cost is their length over `h_min`, where sampling the whole boundary at
+/// `h_min / 4` (and probing it at `h_min / 32`) took minutes at `h_min = 1e-5`.
 pub fn refined_parts(domain: &Domain, refinement: &Refinement) -> Vec<Point> {
     if refinement.parts.is_empty() {
         return Vec::new();
     }
-    discretise_boundary(domain, refinement.spacing / 4.0)
+    discretise_curves(domain, &SpacingField::uniform(refinement.spacing / 4.0), |part| refinement.parts.contains(&part))
         .into_iter()
         .filter(|s| s.touches.iter().any(|(part, _)| refinement.parts.contains(part)))
         .map(|s| s.position)
         .collect()
+}
+
+/// Length of the boundary that the parts `parts` make, probed every `h / 8` (the
+/// intervals' ends are bisected to round-off): what a refinement towards them puts
+/// nodes along, known before any sampling at the refinement's spacing.
+pub fn parts_length(domain: &Domain, parts: &[usize], h: f64) -> f64 {
+    let field = SpacingField::uniform(h);
+    let tol = on_boundary_tolerance(domain, h);
+    domain
+        .boundary_curves()
+        .into_iter()
+        .filter(|c| parts.contains(&c.part))
+        .flat_map(|c| on_boundary_intervals(domain, &c, &field, tol))
+        .map(|(a, b)| b - a)
+        .sum()
 }
 
 /// Sample the boundary of `domain` at spacing about `h` (see module docs).
@@ -143,14 +186,30 @@ fn sample_parameters(curve: &BoundaryCurve, s0: f64, s1: f64, field: &SpacingFie
         let segments = (((s1 - s0) / field.max()).round() as usize).max(1);
         return (0..=segments).map(|k| s0 + (s1 - s0) * k as f64 / segments as f64).collect();
     }
-    // Cumulative int ds / h on a fine midpoint rule (32 cells per local spacing at least).
-    let cells = (((s1 - s0) / field.min() * 32.0).ceil() as usize).clamp(64, 1 << 22);
-    let ds = (s1 - s0) / cells as f64;
+    // Cumulative int ds / h on a fine midpoint rule (32 cells per local spacing at
+    // least): equal cells of the smallest spacing while they number at most
+    // MAX_PROBES, else cells of the local spacing (a tiny refinement spacing: equal
+    // cells would be too many, or too coarse where h is small once capped).
+    let equal_cells = ((s1 - s0) / field.min() * 32.0).ceil();
+    let edges: Vec<f64> = if equal_cells <= MAX_PROBES as f64 {
+        let cells = (equal_cells as usize).max(64);
+        (0..=cells).map(|k| s0 + (s1 - s0) * k as f64 / cells as f64).collect()
+    } else {
+        let mut edges = vec![s0];
+        let mut s = s0;
+        while s < s1 {
+            let step = (field.at(curve.curve.at(s).0) / 32.0).max((s1 - s0) / MAX_PROBES as f64);
+            s = if s + step >= s1 - 1e-12 * (s1 - s0) { s1 } else { s + step };
+            edges.push(s);
+        }
+        edges
+    };
+    let cells = edges.len() - 1;
     let mut cumulative = Vec::with_capacity(cells + 1);
     cumulative.push(0.0);
     for k in 0..cells {
-        let h = field.at(curve.curve.at(s0 + (k as f64 + 0.5) * ds).0);
-        cumulative.push(cumulative[k] + ds / h);
+        let h = field.at(curve.curve.at(0.5 * (edges[k] + edges[k + 1])).0);
+        cumulative.push(cumulative[k] + (edges[k + 1] - edges[k]) / h);
     }
     let total = cumulative[cells];
     let segments = (total.round() as usize).max(1);
@@ -163,19 +222,29 @@ fn sample_parameters(curve: &BoundaryCurve, s0: f64, s1: f64, field: &SpacingFie
         }
         let (a, b) = (cumulative[cell], cumulative[cell + 1]);
         let t = if b > a { ((target - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
-        out.push(if k == segments { s1 } else { s0 + (cell as f64 + t) * ds });
+        out.push(if k == segments { s1 } else { edges[cell] + t * (edges[cell + 1] - edges[cell]) });
     }
     out
 }
 
 /// Sample the boundary of `domain` with the spacing `field` (see module docs).
 pub fn discretise_boundary_graded(domain: &Domain, field: &SpacingField) -> Vec<BoundarySample> {
+    discretise_curves(domain, field, |_| true)
+}
+
+/// The on-boundary tolerance of the signed distance at the smallest spacing `h`.
+fn on_boundary_tolerance(domain: &Domain, h: f64) -> f64 {
+    (1e-9 * domain.scale()).min(1e-6 * h)
+}
+
+/// [`discretise_boundary_graded`] of the curves of the parts `keep` accepts.
+fn discretise_curves(domain: &Domain, field: &SpacingField, keep: impl Fn(usize) -> bool) -> Vec<BoundarySample> {
     let h = field.min();
-    let tol = (1e-9 * domain.scale()).min(1e-6 * h);
+    let tol = on_boundary_tolerance(domain, h);
     let mut raw: Vec<BoundarySample> = Vec::new();
-    for c in domain.boundary_curves() {
+    for c in domain.boundary_curves().into_iter().filter(|c| keep(c.part)) {
         let len = c.curve.length();
-        for (s0, s1) in on_boundary_intervals(domain, &c, h, tol) {
+        for (s0, s1) in on_boundary_intervals(domain, &c, field, tol) {
             let whole_closed = c.curve.is_closed() && s0 == 0.0 && s1 == len;
             let params = sample_parameters(&c, s0, s1, field);
             let mut lengths: Vec<f64> =

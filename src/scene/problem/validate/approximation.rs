@@ -218,12 +218,39 @@ pub(super) fn approximation(c: &Ctx, s: &ApproximationSpec, fill: FillKind, dyna
 
 /// About how many nodes a fill holds: `area / h^2` times the packing of the fill, or
 /// for a graded spacing the integral of `1 / h(x)^2` ([`crate::domain::SpacingField::node_estimate`]).
+///
+/// A refinement towards boundary parts whose samples (every `h_min / 4` along them)
+/// would number more than [`SAMPLED_REFINEMENT_LIMIT`] is estimated without them, by
+/// the strip along the parts ([`strip_nodes`]): the count comes before any sampling at
+/// the refinement's spacing, so that a tiny `[nodes.refine] spacing` is refused in
+/// time proportional to the scene, not to the nodes it asks for.
 pub fn expected_nodes(domain: &Domain, fill: &FillParams, area: f64) -> f64 {
     if fill.is_uniform() {
-        area / fill.spacing.powi(2) * packing(fill.kind)
-    } else {
-        fill.field(domain).node_estimate(domain, 2.0 * MAX_NODES) * packing(fill.kind)
+        return area / fill.spacing.powi(2) * packing(fill.kind);
     }
+    if let (Some(r), None) = (&fill.refine, &fill.adapted) {
+        if !r.parts.is_empty() {
+            let length = crate::domain::boundary::parts_length(domain, &r.parts, fill.spacing);
+            if length / (r.spacing / 4.0) > SAMPLED_REFINEMENT_LIMIT {
+                return strip_nodes(length, r.spacing, r.growth, fill.spacing, area) * packing(fill.kind);
+            }
+        }
+    }
+    fill.field(domain).node_estimate(domain, 2.0 * MAX_NODES) * packing(fill.kind)
+}
+
+/// Most samples of refined boundary parts that [`expected_nodes`] takes to integrate
+/// the graded spacing (a fraction of a second); above, [`strip_nodes`].
+const SAMPLED_REFINEMENT_LIMIT: f64 = 1e5;
+
+/// Nodes of a spacing graded from `h0` on boundary parts of total `length` with
+/// `growth` g up to `far` = H, in a solid of `area`: the strip on the solid's side of
+/// straight parts, `length int_0^((H - h0)/g) dt / (h0 + g t)^2 = length (1/h0 - 1/H) / g`,
+/// plus the rest at H, `area / H^2` (curvature and corners change it by a factor of
+/// order one; a refusal needs orders of magnitude).
+pub fn strip_nodes(length: f64, h0: f64, growth: f64, far: f64, area: f64) -> f64 {
+    let h0 = h0.min(far);
+    length * (1.0 / h0 - 1.0 / far) / growth.max(f64::MIN_POSITIVE) + area / far.powi(2)
 }
 
 /// The fill must give at least two supports' worth of nodes and at most [`MAX_NODES`].
@@ -239,10 +266,20 @@ pub(super) fn check_node_count(
         return Err(ProblemError { kind: crate::scene::problem::ProblemErrorKind::TooFewNodes, ..c.error("nodes.spacing", reason) });
     }
     if expected_nodes > MAX_NODES {
-        return c.err(
-            "nodes.spacing",
-            format!("spacing {} gives about {expected_nodes:.1e} nodes (over 5e7); this machine cannot hold the system", fill.spacing),
-        );
+        return match &fill.refine {
+            Some(r) if r.spacing < fill.spacing => c.err(
+                "nodes.refine.spacing",
+                format!(
+                    "spacing {} graded from {} at the refinement targets (growth {}) gives about {expected_nodes:.1e} nodes \
+                     (over 5e7); this machine cannot hold the system",
+                    fill.spacing, r.spacing, r.growth
+                ),
+            ),
+            _ => c.err(
+                "nodes.spacing",
+                format!("spacing {} gives about {expected_nodes:.1e} nodes (over 5e7); this machine cannot hold the system", fill.spacing),
+            ),
+        };
     }
     Ok(())
 }

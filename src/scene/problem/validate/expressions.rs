@@ -12,46 +12,103 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// `[constants]`: every name checked, every formula of other constants evaluated (in
-/// any order; a cycle or an unknown name is an error).
+/// any order; a cycle or an unknown name is an error). The constants are evaluated
+/// once each, in the order of their references (a depth-first topological sort of the
+/// names each formula mentions): linear in their number and length, where retrying the
+/// unresolved ones pass after pass took cubic time on a chain that refers forward
+/// (1 000 chained constants 12 s, 3 000 over a minute).
 pub(super) fn constants(c: &Ctx, spec: Option<&BTreeMap<String, NumberOrFormula>>) -> Result<Constants, ProblemError> {
     let mut out = Constants::default();
     let Some(spec) = spec else { return Ok(out) };
     for name in spec.keys() {
         Constants::check_name(name).map_err(|reason| c.error(format!("constants.{name}"), reason))?;
     }
-    let mut pending: Vec<(&String, &NumberOrFormula)> = spec.iter().collect();
-    while !pending.is_empty() {
-        let before = pending.len();
-        let mut last_error = None;
-        pending.retain(|&(name, v)| {
-            let field = format!("constants.{name}");
-            let value = match v {
-                NumberOrFormula::Number(x) => Ok(*x),
-                NumberOrFormula::Formula(text) => {
-                    Expression::parse(text, Scope::Constants, &out).map(|e| e.eval([0.0, 0.0])).map_err(|e| c.error(&field, e.to_string()))
+    let names: Vec<&String> = spec.keys().collect();
+    let index: BTreeMap<&str, usize> = names.iter().enumerate().map(|(k, n)| (n.as_str(), k)).collect();
+    let refers: Vec<Vec<usize>> = spec
+        .values()
+        .map(|v| match v {
+            NumberOrFormula::Number(_) => Vec::new(),
+            NumberOrFormula::Formula(text) => identifiers(text).filter_map(|w| index.get(w).copied()).collect(),
+        })
+        .collect();
+    // Iterative depth-first search: 0 unvisited, 1 on the path, 2 done.
+    let mut state = vec![0u8; names.len()];
+    let mut order = Vec::with_capacity(names.len());
+    for root in 0..names.len() {
+        if state[root] != 0 {
+            continue;
+        }
+        let mut stack = vec![(root, 0usize)];
+        state[root] = 1;
+        while let Some((node, next)) = stack.pop() {
+            if let Some(&dep) = refers[node].get(next) {
+                stack.push((node, next + 1));
+                match state[dep] {
+                    0 => {
+                        state[dep] = 1;
+                        stack.push((dep, 0));
+                    }
+                    1 => {
+                        let mut on_path: Vec<&str> =
+                            stack.iter().map(|&(k, _)| names[k].as_str()).skip_while(|n| *n != names[dep]).collect();
+                        let length = on_path.len();
+                        if length > 8 {
+                            on_path.splice(4..length - 2, ["..."]);
+                        }
+                        return c.err(
+                            format!("constants.{}", names[dep]),
+                            format!("the constants refer to each other in a cycle of {length}: {} -> {}", on_path.join(" -> "), names[dep]),
+                        );
+                    }
+                    _ => {}
                 }
-            };
-            match value {
-                Ok(x) if x.is_finite() => {
-                    out.insert(name, x);
-                    false
-                }
-                Ok(x) => {
-                    last_error = Some(c.error(&field, format!("evaluates to {x}; a constant must be finite")));
-                    true
-                }
-                Err(e) => {
-                    last_error = Some(e);
-                    true
-                }
+            } else {
+                state[node] = 2;
+                order.push(node);
             }
-        });
-        if pending.len() == before {
-            // No progress: an unknown name, a cycle, or a non-finite value.
-            return Err(last_error.expect("an entry failed"));
         }
     }
+    for k in order {
+        let (name, v) = (names[k], &spec[names[k]]);
+        let field = format!("constants.{name}");
+        let x = match v {
+            NumberOrFormula::Number(x) => *x,
+            NumberOrFormula::Formula(text) => {
+                Expression::parse(text, Scope::Constants, &out).map(|e| e.eval([0.0, 0.0])).map_err(|e| c.error(&field, e.to_string()))?
+            }
+        };
+        if !x.is_finite() {
+            return c.err(&field, format!("evaluates to {x}; a constant must be finite"));
+        }
+        out.insert(name, x);
+    }
     Ok(out)
+}
+
+/// The identifiers (`[A-Za-z_][A-Za-z0-9_]*`, not preceded by a digit or a dot: not
+/// the exponent of `1e5`) a formula mentions.
+fn identifiers(text: &str) -> impl Iterator<Item = &str> {
+    let bytes = text.as_bytes();
+    let mut k = 0;
+    std::iter::from_fn(move || {
+        while k < bytes.len() {
+            let b = bytes[k];
+            if b.is_ascii_alphabetic() || b == b'_' {
+                let start = k;
+                while k < bytes.len() && (bytes[k].is_ascii_alphanumeric() || bytes[k] == b'_') {
+                    k += 1;
+                }
+                let after_number = start > 0 && (bytes[start - 1].is_ascii_digit() || bytes[start - 1] == b'.');
+                if !after_number {
+                    return Some(&text[start..k]);
+                }
+            } else {
+                k += 1;
+            }
+        }
+        None
+    })
 }
 
 /// A formula or number as an expression of the variables of `scope` and the constants.
