@@ -434,3 +434,20 @@ fn peridynamic_moduli_across_the_double_range_give_the_same_solution() {
         }
     }
 }
+
+/// Messages that say what the rule is (issue 52, item 6): too few nodes names the
+/// two supports' worth the rule asks for; a horizon too large names the half extent
+/// it is compared with, not the extent; an exact cantilever of depth 5e-300 (whose
+/// D^3 underflows to 0: NaN at every node, exit 3 "overflowed" before) is refused as
+/// its parameter, in exponent form.
+#[test]
+fn refusals_say_the_rule_they_apply() {
+    let m = refusal("cantilever", &[("nodes.spacing", f(20.0))]);
+    assert!(m.contains("nodes.spacing") && m.contains("more than 1.521e1, half the domain size (3.041e1)"), "{m}");
+    let m = refusal("cantilever", &[("nodes.spacing", f(5.0))]);
+    assert!(m.contains("nodes.spacing") && m.contains("two supports' worth"), "{m}");
+    let m = refusal("pd_manufactured", &[("peridynamics.horizon", f(0.6))]);
+    assert!(m.contains("peridynamics.horizon") && m.contains("larger than 5.0000e-1, half the solid's smallest extent (1.0000e0)"), "{m}");
+    let m = refusal("cantilever", &[("exact.depth", f(5e-300))]);
+    assert!(m.contains("exact.depth") && m.contains("depth = 5e-300") && m.contains("D^3"), "{m}");
+}

@@ -66,7 +66,14 @@ impl Cantilever {
         check.positive("length", length)?;
         check.positive("depth", depth)?;
         check.material(&material)?;
-        Ok(Cantilever { load, length, depth, material })
+        let beam = Cantilever { load, length, depth, material };
+        // I = D^3 / 12 and C = P / (24 E I) must be representable: a depth of 5e-300
+        // has D^3 = 0 (the field would be NaN at every node).
+        let inertia = beam.inertia();
+        check.require("depth", depth, inertia.is_normal(), "must have a cube D^3 / 12 within the double range (1e-308 to 1e308)")?;
+        let c = beam.scale();
+        check.require("load", load, c.is_finite(), "must keep P / (24 E I) within the double range; rescale the units")?;
+        Ok(beam)
     }
 
     /// The published set-up: `L = 30`, `D = 5`, `E = 72.1e9`, `nu = 0.33`, `P = 1000`,

@@ -113,7 +113,10 @@ pub struct ParameterError {
 
 impl fmt::Display for ParameterError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "exact solution {}: parameter {} = {} {}", self.solution, self.parameter, self.value, self.requirement)
+        // Extreme values in exponent form (5e-300, not 300 digits).
+        let v = self.value;
+        let value = if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") };
+        write!(f, "exact solution {}: parameter {} = {value} {}", self.solution, self.parameter, self.requirement)
     }
 }
 

@@ -37,7 +37,7 @@ pub(super) fn nodes(c: &Ctx, s: &NodesSpec, domain: &Domain, area: f64) -> Resul
     };
     let size = domain.scale();
     if spacing > size / 2.0 {
-        return c.err("nodes.spacing", format!("spacing {spacing} is more than half the domain size {size:.3e}"));
+        return c.err("nodes.spacing", format!("spacing {spacing} is more than {:.3e}, half the domain size ({size:.3e})", size / 2.0));
     }
     let relax = s.relax.unwrap_or(0);
     if relax > 1000 {

@@ -46,7 +46,13 @@ pub const TOO_FEW_NODES: &str = "too few for supports";
 /// `support` nodes (fewer than two supports' worth).
 pub fn too_few_nodes(spacing: f64, expected: f64, support: usize) -> Option<String> {
     (expected < 2.0 * support as f64)
-        .then(|| format!("spacing {spacing} gives about {expected:.0} nodes, {TOO_FEW_NODES} of {support} nodes; use a smaller spacing"))
+        .then(|| {
+            format!(
+                "spacing {spacing} gives about {expected:.0} nodes, {TOO_FEW_NODES} of {support} nodes (at least two supports' worth, {}, \
+                 are needed); use a smaller spacing",
+                2 * support
+            )
+        })
 }
 
 /// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn

@@ -47,8 +47,9 @@ pub fn check_peridynamics(p: &PdParams, domain: &Domain) -> Result<(), (String, 
         return fail(
             "horizon",
             format!(
-                "horizon {} is larger than half the solid's smallest extent ({extent:.4e}): no node would have a complete family; use a smaller horizon",
-                p.horizon
+                "horizon {} is larger than {:.4e}, half the solid's smallest extent ({extent:.4e}): no node would have a complete family; use a smaller horizon",
+                p.horizon,
+                extent / 2.0
             ),
         );
     }
