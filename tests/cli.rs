@@ -652,7 +652,7 @@ fn invalid_scenes_exit_2_naming_the_field() {
         (
             "PD horizon larger than the domain",
             Some(pd(&[("horizon = 0.2", "horizon = 0.7")])),
-            &["peridynamics.horizon", "larger than half"],
+            &["peridynamics.horizon", "half the solid's smallest extent"],
         ),
         ("PD without horizon", Some(pd(&[("horizon = 0.2", "")])), &["peridynamics.horizon", "missing"]),
         ("PD unknown kernel", Some(pd(&[("horizon = 0.2", "horizon = 0.2\nkernel = \"gauss\"")])), &["peridynamics.kernel", "regularised"]),
