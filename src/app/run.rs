@@ -210,6 +210,19 @@ fn write_pd_static(
     let free = &sol.nodes.positions[..n];
     let fields = (&sol.displacement[..n], sol.stress.as_ref());
     let estimate = peridynamics_estimate(p, free, (fields, &[]), &mut sol.timings, term);
+    if p.navier.estimate.method.peridynamics_estimates() {
+        let t = Instant::now();
+        let params = *p.model.peridynamics().expect("a peridynamic scene has [peridynamics]");
+        let d = crate::models::peridynamics::discretisation::estimate(&p.case, &params, &sol);
+        let seconds = t.elapsed().as_secs_f64();
+        sol.timings.record(ESTIMATE, seconds);
+        let note = match &d {
+            Ok(d) => format!("discretisation at this horizon: e_inf(u) ~ {:.1e} ({})", d.e_inf_u, d.reference),
+            Err(why) => format!("no discretisation estimate: {why}"),
+        };
+        term.line(ESTIMATE, seconds, &note);
+        sol.discretisation = Some(d);
+    }
     let output = OutputStage::start();
     let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
     checks.warnings.extend(warnings::memory(p));

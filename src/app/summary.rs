@@ -183,6 +183,9 @@ pub(super) struct PdSummary<'a> {
     errors: Option<ErrorNorms>,
     errors_interior: Option<ErrorNorms>,
     estimated_errors: &'a navier::Estimate,
+    /// The estimated discretisation error at this horizon (`null` when not asked for,
+    /// `{"unavailable": why}` when it failed).
+    discretisation_estimate: Option<DiscretisationField<'a>>,
     /// The largest displacement and von Mises stress of the free nodes, and where they are.
     extremes: Option<Extremes>,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
@@ -190,6 +193,14 @@ pub(super) struct PdSummary<'a> {
     #[serde(flatten)]
     checks: &'a Checks,
     outputs: Outputs,
+}
+
+/// `summary.json`'s `discretisation_estimate` of a static peridynamic run.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum DiscretisationField<'a> {
+    Done(&'a crate::models::peridynamics::discretisation::DiscretisationEstimate),
+    Unavailable { unavailable: &'a str },
 }
 
 impl<'a> PdSummary<'a> {
@@ -213,6 +224,10 @@ impl<'a> PdSummary<'a> {
             errors: sol.errors.map(|e| e.0),
             errors_interior: sol.errors.and_then(|e| e.1),
             estimated_errors: estimate,
+            discretisation_estimate: sol.discretisation.as_ref().map(|d| match d {
+                Ok(d) => DiscretisationField::Done(d),
+                Err(why) => DiscretisationField::Unavailable { unavailable: why },
+            }),
             extremes: pd_extremes(sol),
             probes: &sol.probes,
             checks,

@@ -18,10 +18,12 @@
 //! volume surface correction and the asymptotically compatible weights of
 //! [`compatible`]), [`loads`] (body force and tractions as a boundary-layer body
 //! force), [`operator`] (internal force and stiffness), [`strain`] (nonlocal strain
-//! for output), [`solve`] (the static run) and [`dynamics`] (bond forces, energies,
+//! for output), [`solve`] (the static run), [`discretisation`] (its estimated
+//! discretisation error at the same horizon) and [`dynamics`] (bond forces, energies,
 //! stable step and the time-dependent run).
 
 pub mod compatible;
+pub mod discretisation;
 pub mod dynamics;
 pub mod family;
 pub mod kernel;

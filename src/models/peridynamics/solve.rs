@@ -66,6 +66,10 @@ pub struct PdSolution {
     pub solver: SolveReport,
     /// Stage timings.
     pub timings: StageTimings,
+    /// The estimated discretisation error at this horizon
+    /// ([`super::discretisation::estimate`]), when the run asked for it: `Err` says why
+    /// there is none.
+    pub discretisation: Option<Result<super::discretisation::DiscretisationEstimate, String>>,
 }
 
 /// Counts from the weighting stage.
@@ -303,5 +307,6 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         micromodulus,
         solver: report,
         timings,
+        discretisation: None,
     })
 }

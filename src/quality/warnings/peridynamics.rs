@@ -1,6 +1,7 @@
-//! The checks of a peridynamic run: a horizon spanning too few nodes (`m < 3`), and the
-//! `local-model` estimate (a note above the threshold: the model difference of the
-//! horizon; a Navier reference too coarse to judge it is warned).
+//! The checks of a peridynamic run: a horizon spanning too few nodes (`m < 3`), the
+//! estimated discretisation error at its horizon (a warning above the threshold, as for
+//! a Navier run), and the `local-model` estimate (a note above the threshold: the model
+//! difference of the horizon; a Navier reference too coarse to judge it is warned).
 
 use super::{exceeds, linear_solve, unestimated, Checks, Warning};
 use crate::models::navier::Estimate;
@@ -38,7 +39,31 @@ pub fn peridynamics_static(sol: &PdSolution, estimate: &Estimate, threshold: f64
     }
     // With an exact solution, its note above says what the estimate's would.
     estimate_of_peridynamics(estimate, threshold, sol.params.horizon, sol.errors.is_none(), &mut checks);
+    discretisation(sol, threshold, &mut checks);
     checks
+}
+
+/// The estimated discretisation error at the run's horizon above `threshold` is warned
+/// (`pd-discretisation`), like a Navier run's estimate: the run is not resolved at its
+/// own horizon, whatever its difference to the local model. An estimate that failed is
+/// warned (`no-discretisation-estimate`).
+fn discretisation(sol: &PdSolution, threshold: f64, checks: &mut Checks) {
+    match &sol.discretisation {
+        Some(Ok(d)) if exceeds(d.e_inf_u, threshold) => checks.warnings.push(Warning {
+            check: "pd-discretisation",
+            message: format!(
+                "the discretisation error at the horizon {:.3e} is estimated at e_inf(u) ~ {:.1e} (largest at ({:.4e}, {:.4e})), above \
+                 the threshold {threshold:.0e}: the run is not resolved at its own horizon ({}); use a larger peridynamics.m (now {}) \
+                 at this horizon",
+                sol.params.horizon, d.e_inf_u, d.largest_at[0], d.largest_at[1], d.reference, sol.params.ratio
+            ),
+        }),
+        Some(Err(why)) => checks.warnings.push(Warning {
+            check: "no-discretisation-estimate",
+            message: format!("the discretisation error at this horizon could not be estimated: {why}"),
+        }),
+        _ => {}
+    }
 }
 
 /// How much closer to the local solution than the peridynamic run the Navier reference
