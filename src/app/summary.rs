@@ -199,7 +199,7 @@ pub(super) struct PdSummary<'a> {
 #[derive(Serialize)]
 #[serde(untagged)]
 enum DiscretisationField<'a> {
-    Done(&'a crate::models::peridynamics::discretisation::DiscretisationEstimate),
+    Done(&'a crate::models::peridynamics::solve::DiscretisationEstimate),
     Unavailable { unavailable: &'a str },
 }
 

@@ -21,39 +21,17 @@
 //! It costs one run with four times the nodes and four times the bonds per node
 //! (about 10x the run measured on the shipped scenes: 0.004 s -> 0.045 s of solve).
 
-use crate::domain::Point;
 use crate::mlsm::interpolate::mls_values_of_degree;
 use crate::physics::case::Case;
 use crate::quality::post::relative_errors;
 use crate::stages::Silent;
-use serde::Serialize;
 use std::time::Instant;
 
+use super::solve::DiscretisationEstimate;
 use super::{solve, PdParams, PdSolution};
 
 /// `sqrt((1 - 1/2)(1 - 1/4))`: the divisor of the difference (module docs).
 pub const DIVISOR: f64 = 0.612_372_435_695_794_5;
-
-/// The estimated discretisation error of a static peridynamic run.
-#[derive(Debug, Clone, Serialize)]
-pub struct DiscretisationEstimate {
-    /// `"fixed-horizon"`.
-    pub method: &'static str,
-    /// What the reference is.
-    pub reference: String,
-    /// Estimated relative max-norm error of the displacement, `max |e| / max |u|`.
-    pub e_inf_u: f64,
-    /// Estimated relative discrete L2 error of the displacement.
-    pub rel_l2_u: f64,
-    /// Where the estimated error is largest.
-    pub largest_at: Point,
-    /// The reference's `m` (twice the run's).
-    pub reference_ratio: f64,
-    /// The reference's free nodes.
-    pub reference_nodes: usize,
-    /// Wall-clock seconds of the estimate.
-    pub seconds: f64,
-}
 
 /// The discretisation error of `sol` (a static run of `case` with `params`) against the
 /// run at `m -> 2m` with the same horizon (module docs); `Err` says why there is none

@@ -69,7 +69,29 @@ pub struct PdSolution {
     /// The estimated discretisation error at this horizon
     /// ([`super::discretisation::estimate`]), when the run asked for it: `Err` says why
     /// there is none.
-    pub discretisation: Option<Result<super::discretisation::DiscretisationEstimate, String>>,
+    pub discretisation: Option<Result<DiscretisationEstimate, String>>,
+}
+
+/// The estimated discretisation error of a static peridynamic run at its horizon
+/// ([`super::discretisation::estimate`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct DiscretisationEstimate {
+    /// `"fixed-horizon"`.
+    pub method: &'static str,
+    /// What the reference is.
+    pub reference: String,
+    /// Estimated relative max-norm error of the displacement, `max |e| / max |u|`.
+    pub e_inf_u: f64,
+    /// Estimated relative discrete L2 error of the displacement.
+    pub rel_l2_u: f64,
+    /// Where the estimated error is largest.
+    pub largest_at: Point,
+    /// The reference's `m` (twice the run's).
+    pub reference_ratio: f64,
+    /// The reference's free nodes.
+    pub reference_nodes: usize,
+    /// Wall-clock seconds of the estimate.
+    pub seconds: f64,
 }
 
 /// Counts from the weighting stage.
