@@ -30,12 +30,16 @@ fn main() -> ExitCode {
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
-    // Ctrl-C, SIGTERM (a job scheduler's stop) and SIGHUP (ctrlc's `termination`): a
-    // time loop stops between steps and its staged results are removed (exit 130);
-    // anywhere else the process removes its staged results and ends at once.
-    let _ = ctrlc::set_handler(|| {
-        if !mlsm::stages::interrupt::request() {
+    // Ctrl-C, SIGTERM (a job scheduler's stop) and SIGHUP: a time loop stops between
+    // steps and its staged results are removed (exit 130); anywhere else the process
+    // removes its staged results and ends at once (exit 130). Either way the message
+    // names the signal.
+    #[cfg(unix)]
+    let _ = mlsm::stages::interrupt::on_signals(|signal| {
+        if !mlsm::stages::interrupt::request(signal) {
             mlsm::output::remove_uncommitted();
+            let name = mlsm::stages::interrupt::name(signal);
+            eprintln!("error: interrupted by {name}; the partial results were removed, earlier results are untouched");
             std::process::exit(130);
         }
     });

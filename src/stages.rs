@@ -13,23 +13,107 @@ use serde::ser::SerializeMap;
 use serde::Serialize;
 use std::time::Instant;
 
-/// Interruption (Ctrl-C) of a time loop: while an [`interrupt::Interruptible`] guard
-/// lives, an interrupt only raises a flag that the loop polls once per step, so the run
-/// ends as [`RunError::Interrupted`] and its writer can remove what it staged; outside a
-/// time loop the command line removes the staged results
-/// ([`output::remove_uncommitted`](crate::output::remove_uncommitted)) and ends the
-/// process at once.
+/// Interruption (Ctrl-C, SIGTERM, SIGHUP) of a time loop: while an
+/// [`interrupt::Interruptible`] guard lives, an interrupt only raises a flag that the
+/// loop polls once per step, so the run ends as [`RunError::Interrupted`] and its
+/// writer can remove what it staged; outside a time loop the command line removes the
+/// staged results ([`output::remove_uncommitted`](crate::output::remove_uncommitted))
+/// and ends the process at once. [`interrupt::on_signals`] delivers the signals to
+/// such a handler, with the signal's number, so that the message can name it.
 pub mod interrupt {
-    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 
     static LISTENING: AtomicBool = AtomicBool::new(false);
     static REQUESTED: AtomicBool = AtomicBool::new(false);
+    /// The signal of the last request (0: none).
+    static SIGNAL: AtomicI32 = AtomicI32::new(0);
 
-    /// Ask the running time loop to stop; `false` when no loop listens (the caller
-    /// should then end the process itself).
-    pub fn request() -> bool {
+    /// Ask the running time loop to stop because of `signal` (its number); `false`
+    /// when no loop listens (the caller should then end the process itself).
+    pub fn request(signal: i32) -> bool {
+        SIGNAL.store(signal, Ordering::SeqCst);
         REQUESTED.store(true, Ordering::SeqCst);
         LISTENING.load(Ordering::SeqCst)
+    }
+
+    /// The name of the signal of the last request (`SIGINT`, `SIGTERM`, `SIGHUP`, or
+    /// `signal N`), "an interrupt" when none was named.
+    pub fn signal() -> String {
+        name(SIGNAL.load(Ordering::SeqCst))
+    }
+
+    /// The name of signal number `signal`.
+    pub fn name(signal: i32) -> String {
+        #[cfg(unix)]
+        match signal {
+            libc::SIGINT => return "SIGINT".into(),
+            libc::SIGTERM => return "SIGTERM".into(),
+            libc::SIGHUP => return "SIGHUP".into(),
+            _ => {}
+        }
+        if signal > 0 {
+            format!("signal {signal}")
+        } else {
+            "an interrupt".into()
+        }
+    }
+
+    /// The write end of the pipe [`on_signals`] forwards signals through (-1: none).
+    #[cfg(unix)]
+    static PIPE: AtomicI32 = AtomicI32::new(-1);
+
+    /// The signal handler: one byte, the signal's number, into the pipe (`write` is
+    /// async-signal-safe; the handler does nothing else).
+    #[cfg(unix)]
+    extern "C" fn forward(signal: libc::c_int) {
+        let byte = signal as u8;
+        // SAFETY: writes one byte from a live local to a descriptor this module opened.
+        unsafe {
+            libc::write(PIPE.load(Ordering::Relaxed), (&byte as *const u8).cast(), 1);
+        }
+    }
+
+    /// Call `handler` with the signal's number on a thread of its own whenever the
+    /// process receives SIGINT (Ctrl-C), SIGTERM (a job scheduler's stop) or SIGHUP
+    /// (the terminal closed). Call it once, before other threads start.
+    #[cfg(unix)]
+    pub fn on_signals(handler: fn(i32)) -> std::io::Result<()> {
+        let mut fds = [0 as libc::c_int; 2];
+        // SAFETY: `pipe` fills the two descriptors of the array it is given; close-on-exec
+        // keeps them out of child processes.
+        unsafe {
+            if libc::pipe(fds.as_mut_ptr()) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            for fd in fds {
+                libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC);
+            }
+        }
+        let [read, write] = fds;
+        PIPE.store(write, Ordering::SeqCst);
+        std::thread::Builder::new().name("signals".into()).spawn(move || loop {
+            let mut byte = 0u8;
+            // SAFETY: reads one byte into a live local from the pipe's read end.
+            match unsafe { libc::read(read, (&mut byte as *mut u8).cast(), 1) } {
+                1 => handler(i32::from(byte)),
+                n if n < 0 && std::io::Error::last_os_error().kind() == std::io::ErrorKind::Interrupted => {}
+                _ => break,
+            }
+        })?;
+        for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+            // SAFETY: installs `forward` (async-signal-safe) with an empty mask; the
+            // struct is zeroed, then its fields set.
+            unsafe {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                action.sa_sigaction = forward as extern "C" fn(libc::c_int) as libc::sighandler_t;
+                action.sa_flags = libc::SA_RESTART;
+                libc::sigemptyset(&mut action.sa_mask);
+                if libc::sigaction(signal, &action, std::ptr::null_mut()) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Whether a stop was requested since the guard was made.
@@ -297,9 +381,9 @@ pub enum RunError {
     /// An error target was set, but the run's error could not be estimated.
     #[error("--target-error needs the error estimate, which is unavailable: {reason}")]
     Estimate { reason: String },
-    /// The user interrupted the time loop (Ctrl-C).
-    #[error("interrupted at step {step} (t = {t:.4e} s); the partial results were removed, earlier results are untouched")]
-    Interrupted { step: usize, t: f64 },
+    /// A signal (Ctrl-C, SIGTERM, SIGHUP; named by `signal`) interrupted the time loop.
+    #[error("interrupted at step {step} (t = {t:.4e} s) by {signal}; the partial results were removed, earlier results are untouched")]
+    Interrupted { step: usize, t: f64, signal: String },
 }
 
 impl RunError {

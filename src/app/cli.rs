@@ -173,7 +173,10 @@ pub enum Command {
         #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         m: Option<f64>,
         /// Horizons, comma-separated, each once (default: the scene's horizon and --levels halvings).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive)]
+        // A list that starts with a minus (`-0.1,0.05`) is not one number, which is all
+        // `allow_negative_numbers` takes: hyphen values reach `positive`, which names
+        // --deltas in its refusal.
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = positive)]
         deltas: Option<Vec<f64>>,
         /// Halvings of the scene's horizon when --deltas is not given.
         #[arg(long, default_value_t = 3)]

@@ -14,7 +14,7 @@ use crate::models::peridynamics::solve::interior_flags;
 use crate::models::peridynamics::{PdParams, Quadrature};
 use crate::stages::{Stage, StageTimings, OUTPUT};
 use crate::quality::post::{masked_errors, observed_order};
-use crate::scene::problem::{ModelParams, Problem};
+use crate::scene::problem::{Model, ModelParams, Problem};
 use serde::Serialize;
 use std::ffi::OsStr;
 use std::path::Path;
@@ -122,10 +122,26 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
     for &q in &quadratures {
         for &delta in &deltas {
             let params = PdParams { horizon: delta, ratio: m, quadrature: q, ..base };
-            runs.push(Problem { model: ModelParams::Peridynamics(params), ..p.with_peridynamics(params)? });
+            let run = Problem { model: ModelParams::Peridynamics(params), ..p.with_peridynamics(params)? };
+            affordable(&run, &format!("delta = {delta:e} ({})", q.name()))?;
+            runs.push(run);
         }
     }
     Ok(Plan { quadratures, deltas, m, runs })
+}
+
+/// Refuse `run` up front, like `mlsm run` does, when its memory estimate exceeds the
+/// available memory; `what` names the run in the refusal. A compared peridynamic run
+/// has no error estimate of its own, so its estimate is left out of the check (the
+/// local reference runs with its own).
+fn affordable(run: &Problem, what: &str) -> Result<(), AppError> {
+    let mut checked = run.clone();
+    if checked.model.kind() == Model::Peridynamics {
+        checked.navier.estimate.method = crate::models::navier::EstimateMethod::None;
+    }
+    crate::models::resources::check(&checked).map(|_| ()).map_err(|e| {
+        AppError::Problem(crate::scene::problem::ProblemError { reason: format!("compare, {what}: {}", e.reason), ..e })
+    })
 }
 
 /// Solve run `k` and compare it with the reference; writes its .vtu.
@@ -210,12 +226,18 @@ fn compare_owns(name: &OsStr) -> bool {
 /// Run the comparison of `p` and write its tables, plot and fields into a staged
 /// folder that replaces `out` when everything is written.
 pub(super) fn compare(p: &Problem, req: CompareRequest, out: &Path, term: &Terminal, quiet: bool) -> Result<(), AppError> {
+    // Every run (and below, the local reference) is refused up front when it would not
+    // fit, before any folder is made.
     let Plan { quadratures, deltas, m, runs } = planned_runs(p, &req)?;
     let base = p.model.peridynamics().copied().expect("checked");
     let reference_problem = match req.reference_spacing {
         Some(h) if p.case.exact.is_none() => p.with_spacing(h)?,
         _ => p.clone(),
     };
+    if reference_problem.case.dynamics.is_some() || reference_problem.case.exact.is_none() {
+        let local = reference_problem.model.running(Model::Navier).expect("the Navier model always runs");
+        affordable(&Problem { model: local, ..reference_problem.clone() }, "the local reference")?;
+    }
     let staged = StagedDir::create(out, compare_owns)?;
     let dir_buf = staged.path().to_path_buf();
     let dir = dir_buf.as_path();

@@ -12,18 +12,21 @@
 //!   levels by Richardson with a GCI error bar (`post::richardson`).
 //!
 //! `convergence.csv` and `convergence.json` are rewritten after every level
-//! (atomically, `complete: false` until the last), so a failure or a kill at a fine
-//! level loses nothing that finished; so is the plot of the errors against the
-//! spacing, `convergence.svg` and `convergence.png` (log-log).
+//! (atomically, `complete: false` until the last), and so is the plot of the errors
+//! against the spacing, `convergence.svg` and `convergence.png` (log-log), all in a
+//! staged folder beside the result folder ([`StagedDir`]) that replaces the study's
+//! files in it when the last level is written: an interrupt (Ctrl-C, SIGTERM, SIGHUP)
+//! or a kill leaves an earlier study complete. A level that fails ends the study with
+//! the levels that finished (`complete: false`), which then replace the earlier study.
 
 use super::summary::Header;
 use super::terminal::Terminal;
-use super::{create_dir, AppError};
+use super::AppError;
 use crate::scene::choice::Choice;
 use crate::domain::Point;
 use crate::mlsm::interpolate::mls_values;
 use crate::models::navier::{self, EstimateMethod};
-use crate::output;
+use crate::output::{self, StagedDir};
 use crate::stages::{RunError, Stage, StageTimings, OUTPUT};
 use crate::quality::post::observed_order;
 use crate::quality::post::probe::ProbeQuantity;
@@ -32,6 +35,7 @@ use crate::quality::post::richardson::{extrapolate, Extrapolation};
 use crate::scene::problem::Problem;
 use crate::quality::warnings::{displacement_estimate_factor, singular_corners, singular_estimate_note};
 use serde::Serialize;
+use std::ffi::OsStr;
 use std::path::Path;
 use std::time::Instant;
 
@@ -135,18 +139,29 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
             eprintln!("note: {n}");
         }
     }
-    // Refuse an unaffordable finest level before solving the coarse ones.
-    crate::models::resources::check(&p.with_spacing(p.navier.fill.spacing / 2f64.powi(levels as i32))?)?;
-    create_dir(dir)?;
+    // Refuse an unaffordable finest level before solving the coarse ones, and at once:
+    // its node count is the first level's times 4 per halving (the whole spacing field
+    // is scaled), not integrated again at the finest spacing (16 s on the Kirsch plate
+    // at --levels 5, before the refusal). Its node-count range is checked after that.
+    let factor = 2f64.powi(levels as i32);
+    let mut finest = p.clone();
+    finest.navier.fill = p.navier.fill.scaled(1.0 / factor);
+    let first = crate::scene::problem::validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
+    crate::models::resources::check_navier_nodes(&finest, first * factor * factor)?;
+    p.with_spacing(p.navier.fill.spacing / factor)?;
+    let staged = StagedDir::create(dir, convergence_owns)?;
+    let staged_dir = staged.path().to_path_buf();
     let t0 = Instant::now();
     let area = p.case.domain.area_estimate(400);
     let mut rows: Vec<Level> = Vec::new();
     let mut coarser: Option<LevelFields> = None;
+    let mut table = None;
     for k in 0..=levels {
         let (level, fields) = match solve_level(&p, (k, levels), rows.last(), area, term, quiet) {
             Ok(done) => done,
             Err(e) => {
-                if !rows.is_empty() {
+                // The finished levels are the study's result: they replace the earlier one.
+                if !rows.is_empty() && staged.commit().is_ok() {
                     eprintln!("level {k} failed; the {} finished level(s) are in {}", rows.len(), dir.join("convergence.csv").display());
                 }
                 return Err(e);
@@ -176,15 +191,37 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
         }
         rows.push(level);
         coarser = Some(fields);
-        let warnings = write_tables(&p, &rows, (levels + 1, &notes), dir, t0, k == levels && !quiet)?;
-        if k == levels {
-            // Also under --quiet: a doubtful study is never silent.
-            for w in warnings {
-                eprintln!("warning [estimate]: {w}");
-            }
+        table = Some(write_tables(&p, &rows, (levels + 1, &notes), (&staged_dir, dir), t0)?);
+    }
+    staged.commit()?;
+    let written = table.expect("at least two levels");
+    if !quiet {
+        print!("{}", written.table);
+        if let Some(n) = written.plot_note {
+            eprintln!("note: {n}");
         }
     }
+    // Also under --quiet: a doubtful study is never silent.
+    for w in &written.warnings {
+        eprintln!("warning [estimate]: {w}");
+    }
     Ok(())
+}
+
+/// What [`write_tables`] wrote, for the terminal once the study is in place.
+struct Written {
+    /// The table as printed.
+    table: String,
+    /// The plot's note (no system font for the PNG).
+    plot_note: Option<String>,
+    /// The study's warnings.
+    warnings: Vec<String>,
+}
+
+/// Whether `name` is a file `convergence` writes: a new study replaces those of the
+/// earlier one and keeps anything else in the folder (a run's results, the user's files).
+fn convergence_owns(name: &OsStr) -> bool {
+    FILES.split(", ").any(|f| name == f)
 }
 
 /// `ln(a / b) / ln(h_a / h_b)` for two positive values.
@@ -212,16 +249,16 @@ fn difference(coarse: &LevelFields, fine: &LevelFields) -> Result<(f64, Option<f
     Ok((du, ds))
 }
 
-/// Write `convergence.csv` and `convergence.json` for the levels finished so far (and
-/// print the table when `print`); returns the study's warnings.
+/// Write `convergence.csv` and `convergence.json` for the levels finished so far into
+/// `dir`; returns the table as printed (naming the result folder `target`), the plot's
+/// note and the study's warnings.
 fn write_tables(
     p: &Problem,
     rows: &[Level],
     (requested, notes): (usize, &[String]),
-    dir: &Path,
+    (dir, target): (&Path, &Path),
     t0: Instant,
-    print: bool,
-) -> Result<Vec<String>, AppError> {
+) -> Result<Written, AppError> {
     let mut timings = StageTimings::default();
     timings.record(LEVELS, rows.iter().map(|r| r.seconds).sum());
     let h: Vec<f64> = rows.iter().map(|r| r.h).collect();
@@ -282,13 +319,7 @@ fn write_tables(
         warnings,
     };
     output::write_json(&dir.join("convergence.json"), &table)?;
-    if print {
-        print_table(&table, dir);
-        if let Some(n) = plot_note {
-            eprintln!("note: {n}");
-        }
-    }
-    Ok(table.warnings)
+    Ok(Written { table: render_table(&table, target), plot_note, warnings: table.warnings })
 }
 
 /// Solve level `k` of `0..=last` (spacing halved `k` times); its orders against the
@@ -422,15 +453,20 @@ fn write_csv(p: &Problem, rows: &[Level], dir: &Path) -> Result<(), AppError> {
     Ok(())
 }
 
-fn print_table(table: &ConvergenceTable, dir: &Path) {
+/// The table as the terminal shows it, ending with the folder it was written to.
+fn render_table(table: &ConvergenceTable, dir: &Path) -> String {
+    use std::fmt::Write;
+    let mut out = String::new();
     let e = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2e}"));
     let f = |o: Option<f64>| o.map_or("-".to_string(), |v| format!("{v:.2}"));
-    println!(
+    let _ = writeln!(
+        out,
         "{:>9} {:>10} {:>9} {:>9} {:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>6} {:>6}",
         "nodes", "h", "e_inf_u", "e_inf_sig", "p_u", "p_sig", "est_u", "est_sig", "diff_u", "diff_sig", "pd_u", "pd_sig"
     );
     for l in &table.levels {
-        println!(
+        let _ = writeln!(
+            out,
             "{:>9} {:>10.3e} {:>9} {:>9} {:>6} {:>6} {:>9} {:>9} {:>9} {:>9} {:>6} {:>6}",
             l.nodes,
             l.h,
@@ -446,7 +482,8 @@ fn print_table(table: &ConvergenceTable, dir: &Path) {
             f(l.order_difference_sigma)
         );
     }
-    println!(
+    let _ = writeln!(
+        out,
         "fitted order: e_inf(u) {}  e_inf(sigma) {}  level differences: u {}  sigma {}",
         f(table.fitted_order_e_inf_u),
         f(table.fitted_order_e_inf_sigma),
@@ -455,18 +492,19 @@ fn print_table(table: &ConvergenceTable, dir: &Path) {
     );
     for s in &table.probes {
         let values: Vec<String> = s.values.iter().map(|v| format!("{v:.6e}")).collect();
-        print!("probe {} ({} at [{}, {}]): {}", s.name, s.quantity.name(), s.at[0], s.at[1], values.join(", "));
+        let _ = write!(out, "probe {} ({} at [{}, {}]): {}", s.name, s.quantity.name(), s.at[0], s.at[1], values.join(", "));
         if let Some(x) = &s.extrapolation {
-            print!("; extrapolated {:.6e} +- {:.1e} ({}", x.value, x.error_bar, x.behaviour.name());
+            let _ = write!(out, "; extrapolated {:.6e} +- {:.1e} ({}", x.value, x.error_bar, x.behaviour.name());
             if let Some(q) = x.observed_order {
-                print!(", observed order {q:.2}");
+                let _ = write!(out, ", observed order {q:.2}");
             }
-            print!(")");
+            let _ = write!(out, ")");
         }
         if let Some(x) = s.exact {
-            print!("; exact {x:.6e}");
+            let _ = write!(out, "; exact {x:.6e}");
         }
-        println!();
+        out.push('\n');
     }
-    println!("written: {} ({FILES})", dir.display());
+    let _ = writeln!(out, "written: {} ({FILES})", dir.display());
+    out
 }

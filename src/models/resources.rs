@@ -30,7 +30,7 @@ use crate::models::navier::discrete::keeps_gradient_shapes;
 use crate::models::navier::dynamic_estimate::richardson_applies;
 use crate::models::navier::estimate::{reference_approximation, EstimateMethod};
 use crate::models::navier::NavierParams;
-use crate::output::available_memory_bytes;
+use crate::output::{available_memory, available_memory_bytes};
 use crate::models::peridynamics::PdParams;
 use crate::scene::problem::{validate, Problem, ProblemError};
 use serde::Serialize;
@@ -146,10 +146,25 @@ pub fn of(p: &Problem) -> MemoryEstimate {
     }
 }
 
-/// The estimate of `p`, or a refusal naming the setting that drives it when it
-/// exceeds the available memory (or naming `MLSM_MEMORY_LIMIT` when it is set to
-/// something other than a positive number of bytes).
+/// The estimate of `p`, or a refusal naming the setting that drives it and the limit
+/// that is the smallest ([`available_memory`]: `MLSM_MEMORY_LIMIT`, `MemAvailable`,
+/// the cgroup's, `ulimit -v`) when it exceeds the available memory (or naming
+/// `MLSM_MEMORY_LIMIT` when it is set to something other than a positive number of
+/// bytes).
 pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
+    check_estimate(p, || of(p))
+}
+
+/// [`check`] of the Navier run of `p` on about `nodes` nodes, a count the caller already
+/// has (`convergence`: its first level's times 4 per halving), so that a graded fill's
+/// node count is not integrated again at the finest spacing (16 s for Kirsch at 1/32 of
+/// its spacing).
+pub fn check_navier_nodes(p: &Problem, nodes: f64) -> Result<MemoryEstimate, ProblemError> {
+    check_estimate(p, || navier(&p.case, &p.navier, nodes))
+}
+
+/// The refusal of [`check`] for the estimate `estimate` makes.
+fn check_estimate(p: &Problem, estimate: impl FnOnce() -> MemoryEstimate) -> Result<MemoryEstimate, ProblemError> {
     if let Ok(v) = std::env::var("MLSM_MEMORY_LIMIT") {
         if !v.trim().parse::<f64>().is_ok_and(|x| x > 0.0 && x.is_finite()) {
             return Err(ProblemError {
@@ -160,16 +175,17 @@ pub fn check(p: &Problem) -> Result<MemoryEstimate, ProblemError> {
             });
         }
     }
-    let e = of(p);
-    match available_memory_bytes() {
-        Some(available) if e.peak_bytes > available => Err(ProblemError {
+    let e = estimate();
+    match available_memory() {
+        Some(limit) if e.peak_bytes > limit.bytes => Err(ProblemError {
             file: p.source.clone(),
             field: e.driver.into(),
             reason: format!(
-                "the run needs about {} ({}), more than the {} available; {}",
+                "the run needs about {} ({}), more than the {} available ({}); {}",
                 gigabytes(e.peak_bytes),
                 describe(&e),
-                gigabytes(available),
+                gigabytes(limit.bytes),
+                limit.source.describe(),
                 match e.driver {
                     "approximation.support" => "use a smaller support",
                     "peridynamics.horizon" => "use a larger horizon or a smaller m",

@@ -8,6 +8,10 @@
 //! the largest of the current `VmHWM` and what was folded after the mark (nested
 //! stretches stay correct). Where the reset is not allowed, `VmHWM` keeps growing and
 //! [`peak_since`] is the process peak so far (an upper bound).
+//!
+//! The memory a run may still use ([`available_memory`]) is the smallest of the limits
+//! that apply to the process: `MLSM_MEMORY_LIMIT`, `MemAvailable`, its cgroup's (v2 or
+//! v1, at every level up to the root) and `ulimit -v`.
 
 use std::sync::Mutex;
 
@@ -31,16 +35,189 @@ pub fn peak_memory_bytes() -> Option<u64> {
     Some(now.max(folded))
 }
 
-/// Memory available to a run, bytes: `MLSM_MEMORY_LIMIT` if set (a number of bytes,
-/// e.g. `4e9`), else Linux's `MemAvailable`; `None` when neither is known.
+/// Memory available to a run, bytes: the smallest of the limits that apply
+/// ([`available_memory`]); `None` when none is known.
 pub fn available_memory_bytes() -> Option<f64> {
-    if let Ok(v) = std::env::var("MLSM_MEMORY_LIMIT") {
-        return v.trim().parse::<f64>().ok().filter(|x| *x > 0.0);
+    available_memory().map(|l| l.bytes)
+}
+
+/// Where a [`MemoryLimit`] comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LimitSource {
+    /// The environment variable `MLSM_MEMORY_LIMIT` (bytes).
+    Environment,
+    /// Linux's `MemAvailable` (/proc/meminfo).
+    MemAvailable,
+    /// The cgroup v2 `memory.max` minus `memory.current` (plus the reclaimable
+    /// `inactive_file` of `memory.stat`) of the process's cgroup or an ancestor.
+    CgroupV2,
+    /// The cgroup v1 `memory.limit_in_bytes` minus `memory.usage_in_bytes` (plus the
+    /// reclaimable `total_inactive_file` of `memory.stat`).
+    CgroupV1,
+    /// `ulimit -v` (`RLIMIT_AS`) minus the address space the process already maps.
+    AddressSpace,
+}
+
+impl LimitSource {
+    /// How a refusal names the limit.
+    pub fn describe(self) -> &'static str {
+        match self {
+            LimitSource::Environment => "MLSM_MEMORY_LIMIT",
+            LimitSource::MemAvailable => "MemAvailable of /proc/meminfo",
+            LimitSource::CgroupV2 => "the cgroup's memory.max minus memory.current (cgroup v2)",
+            LimitSource::CgroupV1 => "the cgroup's memory.limit_in_bytes minus memory.usage_in_bytes (cgroup v1)",
+            LimitSource::AddressSpace => "ulimit -v (RLIMIT_AS) minus the address space in use",
+        }
     }
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0)
+}
+
+/// The memory a run may still use, bytes, and the limit that sets it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MemoryLimit {
+    /// Bytes.
+    pub bytes: f64,
+    /// The limit that is the smallest.
+    pub source: LimitSource,
+}
+
+/// The texts a memory limit is read from (each `None` where the file or setting does
+/// not exist): the input of [`smallest_limit`], so that it can be tested on any text.
+#[derive(Debug, Clone, Default)]
+pub struct LimitTexts {
+    /// `MLSM_MEMORY_LIMIT`.
+    pub environment: Option<String>,
+    /// /proc/meminfo.
+    pub meminfo: Option<String>,
+    /// `(memory.max, memory.current, memory.stat)` of the process's cgroup v2 and of
+    /// each of its ancestors.
+    pub cgroup_v2: Vec<(String, String, Option<String>)>,
+    /// `(memory.limit_in_bytes, memory.usage_in_bytes, memory.stat)` of the process's
+    /// cgroup v1 memory controller and of each of its ancestors.
+    pub cgroup_v1: Vec<(String, String, Option<String>)>,
+    /// The soft `RLIMIT_AS` in bytes (`None`: unlimited).
+    pub address_space_limit: Option<u64>,
+    /// /proc/self/status (its `VmSize`, the address space in use).
+    pub status: Option<String>,
+}
+
+/// cgroup v1 reports "no limit" as a number near 2^63: anything above 2^60 bytes is no limit.
+const NO_LIMIT: f64 = (1u64 << 60) as f64;
+
+/// The smallest of the limits in `texts` that apply: `MLSM_MEMORY_LIMIT` (a positive
+/// number of bytes; it can lower the limit, never raise it), `MemAvailable`, every
+/// cgroup level's limit less its usage (the reclaimable page cache counted as free),
+/// `RLIMIT_AS` less `VmSize`. A malformed value is ignored here (`MLSM_MEMORY_LIMIT`
+/// is refused by the memory check).
+pub fn smallest_limit(texts: &LimitTexts) -> Option<MemoryLimit> {
+    let number = |t: &str| t.trim().parse::<f64>().ok().filter(|x| x.is_finite() && *x >= 0.0);
+    let field = |text: &str, key: &str| {
+        text.lines().find_map(|l| {
+            let mut w = l.split_whitespace();
+            (w.next()?.trim_end_matches(':') == key).then(|| w.next().and_then(number)).flatten()
+        })
+    };
+    let cgroup = |levels: &[(String, String, Option<String>)], inactive: &str| {
+        levels
+            .iter()
+            .filter_map(|(limit, usage, stat)| {
+                let limit = number(limit).filter(|l| *l < NO_LIMIT)?;
+                let cache = stat.as_deref().and_then(|s| field(s, inactive)).unwrap_or(0.0);
+                Some((limit - number(usage)? + cache).clamp(0.0, limit))
+            })
+            .reduce(f64::min)
+    };
+    let candidates = [
+        (texts.environment.as_deref().and_then(number).filter(|x| *x > 0.0), LimitSource::Environment),
+        (texts.meminfo.as_deref().and_then(|m| field(m, "MemAvailable")).map(|kb| kb * 1024.0), LimitSource::MemAvailable),
+        (cgroup(&texts.cgroup_v2, "inactive_file"), LimitSource::CgroupV2),
+        (cgroup(&texts.cgroup_v1, "total_inactive_file"), LimitSource::CgroupV1),
+        (
+            texts.address_space_limit.map(|l| l as f64).filter(|l| *l < NO_LIMIT).map(|l| {
+                let used = texts.status.as_deref().and_then(|s| field(s, "VmSize")).map_or(0.0, |kb| kb * 1024.0);
+                (l - used).max(0.0)
+            }),
+            LimitSource::AddressSpace,
+        ),
+    ];
+    candidates.into_iter().filter_map(|(bytes, source)| bytes.map(|bytes| MemoryLimit { bytes, source })).reduce(|a, b| {
+        if b.bytes < a.bytes {
+            b
+        } else {
+            a
+        }
+    })
+}
+
+/// The cgroup directories of this process under the controller mount `root`, from its
+/// own up to the root: `(hierarchy path, directory)` for the line of /proc/self/cgroup
+/// that `line_matches`.
+fn cgroup_dirs(cgroup: &str, root: &str, line_matches: impl Fn(&str) -> bool) -> Vec<std::path::PathBuf> {
+    let Some(path) = cgroup.lines().find_map(|l| {
+        let mut parts = l.splitn(3, ':');
+        let (_, controllers, path) = (parts.next()?, parts.next()?, parts.next()?);
+        line_matches(controllers).then_some(path)
+    }) else {
+        return Vec::new();
+    };
+    let mut dirs = Vec::new();
+    let mut p = std::path::Path::new(path.trim());
+    loop {
+        dirs.push(std::path::Path::new(root).join(p.strip_prefix("/").unwrap_or(p)));
+        match p.parent() {
+            Some(parent) => p = parent,
+            None => break,
+        }
+    }
+    dirs
+}
+
+/// The limit files of each directory of `dirs` that has them.
+fn cgroup_levels(dirs: &[std::path::PathBuf], limit: &str, usage: &str) -> Vec<(String, String, Option<String>)> {
+    let read = |p: std::path::PathBuf| std::fs::read_to_string(p).ok();
+    dirs.iter().filter_map(|d| Some((read(d.join(limit))?, read(d.join(usage))?, read(d.join("memory.stat"))))).collect()
+}
+
+/// The texts of this process's limits ([`LimitTexts`]).
+fn limit_texts() -> LimitTexts {
+    let cgroup = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    // cgroup v2: the unified hierarchy at /sys/fs/cgroup, or /sys/fs/cgroup/unified on
+    // a hybrid system; v1: the memory controller's own hierarchy.
+    let mut v2 = Vec::new();
+    for root in ["/sys/fs/cgroup", "/sys/fs/cgroup/unified"] {
+        v2 = cgroup_levels(&cgroup_dirs(&cgroup, root, |c| c.is_empty()), "memory.max", "memory.current");
+        if !v2.is_empty() {
+            break;
+        }
+    }
+    let v1_dirs = cgroup_dirs(&cgroup, "/sys/fs/cgroup/memory", |c| c.split(',').any(|c| c == "memory"));
+    LimitTexts {
+        environment: std::env::var("MLSM_MEMORY_LIMIT").ok(),
+        meminfo: std::fs::read_to_string("/proc/meminfo").ok(),
+        cgroup_v2: v2,
+        cgroup_v1: cgroup_levels(&v1_dirs, "memory.limit_in_bytes", "memory.usage_in_bytes"),
+        address_space_limit: address_space_limit(),
+        status: std::fs::read_to_string("/proc/self/status").ok(),
+    }
+}
+
+/// The soft `RLIMIT_AS` (`ulimit -v`) in bytes, `None` when unlimited.
+fn address_space_limit() -> Option<u64> {
+    #[cfg(unix)]
+    {
+        let mut r = libc::rlimit { rlim_cur: 0, rlim_max: 0 };
+        // SAFETY: getrlimit writes into the struct it is given.
+        if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0 && r.rlim_cur != libc::RLIM_INFINITY {
+            return Some(r.rlim_cur as u64);
+        }
+    }
+    None
+}
+
+/// The memory a run may still use and the limit that sets it: the smallest of
+/// `MLSM_MEMORY_LIMIT`, `MemAvailable`, the cgroup's (v2 or v1, every level up to the
+/// root) and `ulimit -v` ([`smallest_limit`]); `None` when none is known.
+pub fn available_memory() -> Option<MemoryLimit> {
+    smallest_limit(&limit_texts())
 }
 
 /// A point from which [`peak_since`] measures.

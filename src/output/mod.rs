@@ -15,6 +15,9 @@
 //!   `nalgebra-sparse`, PETSc binary).
 //! * [`peak_memory_bytes`], [`restart_peak`], [`peak_since`]: peak resident memory of
 //!   the process and of one stage (Linux `VmHWM`, reset through `clear_refs`).
+//! * [`available_memory`]: the memory a run may still use, the smallest of
+//!   `MLSM_MEMORY_LIMIT`, `MemAvailable`, the cgroup's limit and `ulimit -v`
+//!   ([`smallest_limit`] reads them from their texts).
 //!
 //! Errors are reported as [`OutputError`]; every variant names the file or field concerned.
 //! I/O and JSON errors end their message with the underlying reason (for I/O the
@@ -31,7 +34,10 @@ mod system;
 mod vtk;
 
 pub use atomic::{write_atomic, write_csv, write_json};
-pub use memory::{available_memory_bytes, peak_memory_bytes, peak_since, restart_peak, PeakMark};
+pub use memory::{
+    available_memory, available_memory_bytes, peak_memory_bytes, peak_since, restart_peak, smallest_limit, LimitSource, LimitTexts,
+    MemoryLimit, PeakMark,
+};
 pub use plot::{svg_to_png, write_front_plot, write_loglog_plot, write_loglog_svg, FrontPanel, PointGroup, Series};
 pub use staged::{remove_uncommitted, Owns, StagedDir};
 pub use system::{write_system, ColumnMatrix, PETSC_MAT_CLASSID, PETSC_VEC_CLASSID};

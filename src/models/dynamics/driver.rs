@@ -153,7 +153,7 @@ pub fn integrate(
         let mut looped = 0.0;
         for step in 1..=steps {
             if interrupt::requested() {
-                return Err(RunError::Interrupted { step, t: state.t });
+                return Err(RunError::Interrupted { step, t: state.t, signal: interrupt::signal() });
             }
             let ts = std::time::Instant::now();
             let t0 = state.t;
