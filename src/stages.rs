@@ -58,61 +58,19 @@ pub mod interrupt {
         }
     }
 
-    /// The write end of the pipe [`on_signals`] forwards signals through (-1: none).
-    #[cfg(unix)]
-    static PIPE: AtomicI32 = AtomicI32::new(-1);
-
-    /// The signal handler: one byte, the signal's number, into the pipe (`write` is
-    /// async-signal-safe; the handler does nothing else).
-    #[cfg(unix)]
-    extern "C" fn forward(signal: libc::c_int) {
-        let byte = signal as u8;
-        // SAFETY: writes one byte from a live local to a descriptor this module opened.
-        unsafe {
-            libc::write(PIPE.load(Ordering::Relaxed), (&byte as *const u8).cast(), 1);
-        }
-    }
-
     /// Call `handler` with the signal's number on a thread of its own whenever the
     /// process receives SIGINT (Ctrl-C), SIGTERM (a job scheduler's stop) or SIGHUP
-    /// (the terminal closed). Call it once, before other threads start.
+    /// (the terminal closed): `signal-hook`'s iterator, which does the
+    /// async-signal-safe part (a self-pipe) and names the signal, where `ctrlc` cannot.
+    /// Call it once, before other threads start.
     #[cfg(unix)]
     pub fn on_signals(handler: fn(i32)) -> std::io::Result<()> {
-        let mut fds = [0 as libc::c_int; 2];
-        // SAFETY: `pipe` fills the two descriptors of the array it is given; close-on-exec
-        // keeps them out of child processes.
-        unsafe {
-            if libc::pipe(fds.as_mut_ptr()) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            for fd in fds {
-                libc::fcntl(fd, libc::F_SETFD, libc::FD_CLOEXEC);
-            }
-        }
-        let [read, write] = fds;
-        PIPE.store(write, Ordering::SeqCst);
-        std::thread::Builder::new().name("signals".into()).spawn(move || loop {
-            let mut byte = 0u8;
-            // SAFETY: reads one byte into a live local from the pipe's read end.
-            match unsafe { libc::read(read, (&mut byte as *mut u8).cast(), 1) } {
-                1 => handler(i32::from(byte)),
-                n if n < 0 && std::io::Error::last_os_error().kind() == std::io::ErrorKind::Interrupted => {}
-                _ => break,
+        let mut signals = signal_hook::iterator::Signals::new([libc::SIGINT, libc::SIGTERM, libc::SIGHUP])?;
+        std::thread::Builder::new().name("signals".into()).spawn(move || {
+            for signal in signals.forever() {
+                handler(signal);
             }
         })?;
-        for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
-            // SAFETY: installs `forward` (async-signal-safe) with an empty mask; the
-            // struct is zeroed, then its fields set.
-            unsafe {
-                let mut action: libc::sigaction = std::mem::zeroed();
-                action.sa_sigaction = forward as extern "C" fn(libc::c_int) as libc::sighandler_t;
-                action.sa_flags = libc::SA_RESTART;
-                libc::sigemptyset(&mut action.sa_mask);
-                if libc::sigaction(signal, &action, std::ptr::null_mut()) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-            }
-        }
         Ok(())
     }
 

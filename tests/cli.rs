@@ -540,7 +540,7 @@ fn invalid_scenes_exit_2_naming_the_field() {
                 "fill = \"grid\"",
                 "fill = \"scattered\"\n[nodes.refine]\npoints = [[0.5, 0.5]]\nspacing = 1e-9\ngrowth = 0.0002",
             )])),
-            &["nodes.spacing", "cannot hold"],
+            &["nodes.refine.spacing", "graded from 1e-9", "cannot hold"],
         ),
         (
             "polygon edge_names count",

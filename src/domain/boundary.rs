@@ -3,7 +3,8 @@
 //!
 //! A point of an edge lies on the solid's boundary iff the solid's signed distance
 //! vanishes there (`|d| <= tol`). Edges are classified on a fine parameter sample
-//! (step `h(x) / 8`, at most [`MAX_PROBES`] per curve); every change of class is located by bisection to `1e-13` of the
+//! (step `h / 8`, or `h(x) / 8` where that would take more than [`MAX_PROBES`] probes a
+//! curve); every change of class is located by bisection to `1e-13` of the
 //! edge length, then to the zero of the signed distance, extrapolated from two
 //! points just past it, so the corners where two primitives meet are found to
 //! round-off and both edges produce the same corner point. Points closer than `1e-3 h` are
@@ -53,13 +54,15 @@ impl BoundarySample {
 /// nodes (a refinement spacing of 1e-8 probed every h/8 took 1e8 probes per metre).
 const MAX_PROBES: usize = 1 << 22;
 
-/// The probe parameters of [`on_boundary_intervals`] on `[0, len]`: every `h / 8` of a
-/// uniform spacing (equal steps), every `h(x) / 8` of a graded one, between
-/// `len / MAX_PROBES` and `len / 16`; the last is `len`.
+/// The probe parameters of [`on_boundary_intervals`] on `[0, len]`: equal steps of the
+/// smallest spacing over 8 while they number at most [`MAX_PROBES`] (a change of units
+/// then scales every probe exactly, and so every corner found), else every `h(x) / 8` of
+/// a graded spacing, between `len / MAX_PROBES` and `len / 16`; the last is `len`.
 fn probe_parameters(c: &BoundaryCurve, field: &SpacingField) -> Vec<f64> {
     let len = c.curve.length();
-    if field.is_uniform() {
-        let samples = ((len / (field.max() / 8.0)).ceil() as usize).clamp(16, MAX_PROBES);
+    let equal = (len / (field.min() / 8.0)).ceil();
+    if field.is_uniform() || equal <= MAX_PROBES as f64 {
+        let samples = (equal as usize).clamp(16, MAX_PROBES);
         let ds = len / samples as f64;
         return (1..=samples).map(|k| if k == samples { len } else { k as f64 * ds }).collect();
     }
@@ -188,12 +191,13 @@ fn sample_parameters(curve: &BoundaryCurve, s0: f64, s1: f64, field: &SpacingFie
     }
     // Cumulative int ds / h on a fine midpoint rule (32 cells per local spacing at
     // least): equal cells of the smallest spacing while they number at most
-    // MAX_PROBES, else cells of the local spacing (a tiny refinement spacing: equal
-    // cells would be too many, or too coarse where h is small once capped).
+    // MAX_PROBES (a change of units then scales every sample exactly), else cells of the
+    // local spacing (a tiny refinement spacing: equal cells would be too many).
     let equal_cells = ((s1 - s0) / field.min() * 32.0).ceil();
-    let edges: Vec<f64> = if equal_cells <= MAX_PROBES as f64 {
+    let (cells, at): (usize, Box<dyn Fn(f64) -> f64>) = if equal_cells <= MAX_PROBES as f64 {
         let cells = (equal_cells as usize).max(64);
-        (0..=cells).map(|k| s0 + (s1 - s0) * k as f64 / cells as f64).collect()
+        let ds = (s1 - s0) / cells as f64;
+        (cells, Box::new(move |x: f64| s0 + x * ds))
     } else {
         let mut edges = vec![s0];
         let mut s = s0;
@@ -202,14 +206,19 @@ fn sample_parameters(curve: &BoundaryCurve, s0: f64, s1: f64, field: &SpacingFie
             s = if s + step >= s1 - 1e-12 * (s1 - s0) { s1 } else { s + step };
             edges.push(s);
         }
-        edges
+        // Parameter at `x` cells: linear within a cell.
+        let cells = edges.len() - 1;
+        (cells, Box::new(move |x: f64| {
+            let k = (x.floor() as usize).min(cells - 1);
+            edges[k] + (x - k as f64) * (edges[k + 1] - edges[k])
+        }))
     };
-    let cells = edges.len() - 1;
     let mut cumulative = Vec::with_capacity(cells + 1);
     cumulative.push(0.0);
     for k in 0..cells {
-        let h = field.at(curve.curve.at(0.5 * (edges[k] + edges[k + 1])).0);
-        cumulative.push(cumulative[k] + (edges[k + 1] - edges[k]) / h);
+        let h = field.at(curve.curve.at(at(k as f64 + 0.5)).0);
+        let width = if equal_cells <= MAX_PROBES as f64 { (s1 - s0) / cells as f64 } else { at(k as f64 + 1.0) - at(k as f64) };
+        cumulative.push(cumulative[k] + width / h);
     }
     let total = cumulative[cells];
     let segments = (total.round() as usize).max(1);
@@ -222,7 +231,7 @@ fn sample_parameters(curve: &BoundaryCurve, s0: f64, s1: f64, field: &SpacingFie
         }
         let (a, b) = (cumulative[cell], cumulative[cell + 1]);
         let t = if b > a { ((target - a) / (b - a)).clamp(0.0, 1.0) } else { 0.0 };
-        out.push(if k == segments { s1 } else { edges[cell] + t * (edges[cell + 1] - edges[cell]) });
+        out.push(if k == segments { s1 } else { at(cell as f64 + t) });
     }
     out
 }

@@ -270,7 +270,7 @@ pub(super) fn check_node_count(
             Some(r) if r.spacing < fill.spacing => c.err(
                 "nodes.refine.spacing",
                 format!(
-                    "spacing {} graded from {} at the refinement targets (growth {}) gives about {expected_nodes:.1e} nodes \
+                    "spacing {} graded from {:e} at the refinement targets (growth {}) gives about {expected_nodes:.1e} nodes \
                      (over 5e7); this machine cannot hold the system",
                     fill.spacing, r.spacing, r.growth
                 ),
