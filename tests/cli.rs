@@ -1104,13 +1104,15 @@ fn an_interrupted_dynamic_run_leaves_no_partial_series() {
 }
 
 /// Dynamic runs are checked by their energy balance: the shipped steel_plate_dynamic
-/// (rk4, total energy conserved to 6.0e-4) has no warning; with the seed's first-order
-/// `emu` scheme the total wanders by 4.3e-2 and `--strict` exits 4 with an
-/// `energy-drift` warning in summary.json.
+/// (rk4, total energy conserved to 6.0e-4) has no energy warning; with the seed's
+/// first-order `emu` scheme the total wanders by 4.3e-2 and `--strict` exits 4 with an
+/// `energy-drift` warning in summary.json. The estimates are off here: the shipped
+/// plate's discretisation at its horizon is warned on its own (`pd-discretisation`,
+/// tests/pd_discretisation.rs).
 #[test]
 fn dynamic_runs_warn_about_energy_drift() {
     let tmp = TempDir::new().unwrap();
-    let text = shipped("steel_plate_dynamic");
+    let text = shipped("steel_plate_dynamic") + "\n[estimate]\nmethod = \"none\"\n";
     assert!(text.contains("integrator = \"rk4\""));
     write(tmp.path(), "rk4.toml", &text);
     write(tmp.path(), "emu.toml", &text.replace("integrator = \"rk4\"", "integrator = \"emu\""));

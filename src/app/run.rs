@@ -168,12 +168,26 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             let output = OutputStage::start();
             series.finish(&sim.energies, &sim.positions, (&sim.u, &sim.v), &sim.estimate)?;
             output.record(&mut sim.timings);
-            write_dynamic(&p, staged, navier_dynamic(&sim), NavierDynamicPart::of(&p, &sim), t0, &req, quiet)?;
+            write_dynamic(&p, staged, navier_dynamic(&sim), (NavierDynamicPart::of(&p, &sim), None), t0, &req, quiet)?;
         }
         Outcome::PdDynamic(mut sim) => {
             let nodes = &sim.discretisation.nodes;
             let run = ((sim.u.as_slice(), None), sim.history.as_slice());
             let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], run, &mut sim.timings, term);
+            let discretisation = p.navier.estimate.method.peridynamics_estimates().then(|| {
+                let t = Instant::now();
+                let params = *p.model.peridynamics().expect("a peridynamic scene has [peridynamics]");
+                let dynamics = p.case.dynamics.as_ref().expect("a dynamic run has [dynamics]");
+                let d = crate::models::peridynamics::discretisation::estimate_dynamic(&p.case, &params, dynamics, &sim);
+                let seconds = t.elapsed().as_secs_f64();
+                term.line(ESTIMATE, seconds, &discretisation_note(&d));
+                (d, seconds)
+            });
+            let discretisation = discretisation.map(|(d, seconds)| {
+                sim.timings.record(ESTIMATE, seconds);
+                d
+            });
+            let nodes = &sim.discretisation.nodes;
             let output = OutputStage::start();
             series.finish(&sim.energies, &nodes.positions[..nodes.free], (&sim.u, &sim.v), &estimate)?;
             output.record(&mut sim.timings);
@@ -189,7 +203,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
                 unbalanced: &[],
                 extremes: final_extremes(&nodes.positions[..nodes.free], &sim.u, &sim.energies),
             };
-            write_dynamic(&p, staged, dynamic, PdDynamicPart::of(&p, &sim), t0, &req, quiet)?;
+            write_dynamic(&p, staged, dynamic, (PdDynamicPart::of(&p, &sim, discretisation.as_ref()), discretisation.as_ref()), t0, &req, quiet)?;
         }
     }
     Ok(())
@@ -216,11 +230,7 @@ fn write_pd_static(
         let d = crate::models::peridynamics::discretisation::estimate(&p.case, &params, &sol);
         let seconds = t.elapsed().as_secs_f64();
         sol.timings.record(ESTIMATE, seconds);
-        let note = match &d {
-            Ok(d) => format!("discretisation at this horizon: e_inf(u) ~ {:.1e} ({})", d.e_inf_u, d.reference),
-            Err(why) => format!("no discretisation estimate: {why}"),
-        };
-        term.line(ESTIMATE, seconds, &note);
+        term.line(ESTIMATE, seconds, &discretisation_note(&d));
         sol.discretisation = Some(d);
     }
     let output = OutputStage::start();
@@ -235,6 +245,14 @@ fn write_pd_static(
         print_estimate(&estimate);
     }
     report_checks(&checks, req.strict, quiet)
+}
+
+/// The terminal's line of a peridynamic run's discretisation estimate.
+fn discretisation_note(d: &Result<crate::models::peridynamics::solve::DiscretisationEstimate, String>) -> String {
+    match d {
+        Ok(d) => format!("discretisation at this horizon: e_inf(u) ~ {:.1e} ({})", d.e_inf_u, d.reference),
+        Err(why) => format!("no discretisation estimate: {why}"),
+    }
 }
 
 /// What a dynamic Navier run reports.
@@ -356,11 +374,13 @@ fn report_checks(checks: &Checks, strict: bool, quiet: bool) -> Result<(), AppEr
 
 /// `summary.json` of a time-dependent run with its checks, the replacement of the
 /// result folder, and its terminal lines.
+/// `discretisation`: a peridynamic run's estimate at its horizon, warned above the
+/// threshold like the static one's.
 fn write_dynamic<M: Serialize>(
     p: &Problem,
     staged: StagedDir,
     d: Dynamic,
-    model: M,
+    (model, discretisation): (M, Option<&Result<crate::models::peridynamics::solve::DiscretisationEstimate, String>>),
     t0: Instant,
     req: &RunRequest,
     quiet: bool,
@@ -381,6 +401,9 @@ fn write_dynamic<M: Serialize>(
         let resolution =
             warnings::load_time_resolution(&p.case, spacing, d.report.time_step, dynamics.end_time, dynamics.integrator, threshold);
         checks.warnings.extend(resolution);
+    }
+    if let Some(pd) = peridynamics {
+        warnings::pd_discretisation(discretisation, (pd.horizon, pd.ratio), threshold, &mut checks);
     }
     checks.warnings.extend(warnings::memory(p));
     checks.notes.extend(warnings::unbalanced_note(d.unbalanced));

@@ -246,10 +246,17 @@ pub(super) struct PdDynamicPart {
     peridynamics: PdParams,
     micromodulus: Micromodulus,
     bond_updates_per_second_per_thread: f64,
+    /// The estimated discretisation error at the horizon over the history (`null` when
+    /// not asked for, `{"unavailable": why}` when it failed).
+    discretisation_estimate: Option<serde_json::Value>,
 }
 
 impl PdDynamicPart {
-    pub(super) fn of(p: &Problem, sim: &crate::models::peridynamics::Simulation) -> Self {
+    pub(super) fn of(
+        p: &Problem,
+        sim: &crate::models::peridynamics::Simulation,
+        discretisation: Option<&Result<crate::models::peridynamics::solve::DiscretisationEstimate, String>>,
+    ) -> Self {
         let disc = &sim.discretisation;
         PdDynamicPart {
             model: "peridynamics",
@@ -259,6 +266,10 @@ impl PdDynamicPart {
             peridynamics: p.model.peridynamics().copied().expect("peridynamic run"),
             micromodulus: disc.micromodulus,
             bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
+            discretisation_estimate: discretisation.map(|d| match d {
+                Ok(d) => serde_json::to_value(d).unwrap_or(serde_json::Value::Null),
+                Err(why) => serde_json::json!({ "unavailable": why }),
+            }),
         }
     }
 }

@@ -136,9 +136,10 @@ pub fn of(p: &Problem) -> MemoryEstimate {
             // The local-model estimate's Navier run comes after the nonlocal one.
             if p.navier.estimate.method.peridynamics_estimates() {
                 e.peak_bytes = e.peak_bytes.max(of(&p.local_reference()).peak_bytes);
-                // A static run's discretisation estimate: the run at twice m (four times
-                // the nodes and the bonds per node), after the run.
-                if p.case.dynamics.is_none() {
+                // The discretisation estimate: the run at twice m (four times the nodes
+                // and the bonds per node), after the run: a static run's, and a dynamic
+                // one's below m = 6 (from m = 6 it takes the run at m / 2).
+                if p.case.dynamics.is_none() || pd.ratio < 6.0 {
                     let fine = PdParams { ratio: 2.0 * pd.ratio, ..*pd };
                     e.peak_bytes = e.peak_bytes.max(peridynamics(&p.case, &fine).peak_bytes);
                 }

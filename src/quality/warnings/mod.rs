@@ -45,7 +45,7 @@
 mod peridynamics;
 mod time;
 
-pub use peridynamics::{peridynamics_static, LOCAL_REFERENCE_MARGIN, PD_MIN_RATIO};
+pub use peridynamics::{discretisation as pd_discretisation, peridynamics_static, LOCAL_REFERENCE_MARGIN, PD_MIN_RATIO};
 pub use time::{dynamic, energy_drift, load_time_resolution};
 
 use crate::domain::Point;

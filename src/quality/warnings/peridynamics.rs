@@ -5,6 +5,7 @@
 
 use super::{exceeds, linear_solve, unestimated, Checks, Warning};
 use crate::models::navier::Estimate;
+use crate::models::peridynamics::solve::DiscretisationEstimate;
 use crate::models::peridynamics::PdSolution;
 
 /// Horizon-to-spacing ratio `m = delta / h` below which the bond-based quadrature
@@ -39,23 +40,29 @@ pub fn peridynamics_static(sol: &PdSolution, estimate: &Estimate, threshold: f64
     }
     // With an exact solution, its note above says what the estimate's would.
     estimate_of_peridynamics(estimate, threshold, sol.params.horizon, sol.errors.is_none(), &mut checks);
-    discretisation(sol, threshold, &mut checks);
+    discretisation(sol.discretisation.as_ref(), (sol.params.horizon, sol.params.ratio), threshold, &mut checks);
     checks
 }
 
-/// The estimated discretisation error at the run's horizon above `threshold` is warned
+/// The estimated discretisation error at a static or dynamic peridynamic run's horizon
+/// (with its `m`, `ratio`) above `threshold` is warned
 /// (`pd-discretisation`), like a Navier run's estimate: the run is not resolved at its
 /// own horizon, whatever its difference to the local model. An estimate that failed is
 /// warned (`no-discretisation-estimate`).
-fn discretisation(sol: &PdSolution, threshold: f64, checks: &mut Checks) {
-    match &sol.discretisation {
+pub fn discretisation(
+    estimate: Option<&Result<DiscretisationEstimate, String>>,
+    (horizon, ratio): (f64, f64),
+    threshold: f64,
+    checks: &mut Checks,
+) {
+    match estimate {
         Some(Ok(d)) if exceeds(d.e_inf_u, threshold) => checks.warnings.push(Warning {
             check: "pd-discretisation",
             message: format!(
                 "the discretisation error at the horizon {:.3e} is estimated at e_inf(u) ~ {:.1e} (largest at ({:.4e}, {:.4e})), above \
                  the threshold {threshold:.0e}: the run is not resolved at its own horizon ({}); use a larger peridynamics.m (now {}) \
                  at this horizon",
-                sol.params.horizon, d.e_inf_u, d.largest_at[0], d.largest_at[1], d.reference, sol.params.ratio
+                horizon, d.e_inf_u, d.largest_at[0], d.largest_at[1], d.reference, ratio
             ),
         }),
         Some(Err(why)) => checks.warnings.push(Warning {
