@@ -195,12 +195,22 @@ pub(super) struct PdSummary<'a> {
     outputs: Outputs,
 }
 
-/// `summary.json`'s `discretisation_estimate` of a static peridynamic run.
+/// `summary.json`'s `discretisation_estimate` of a static or dynamic peridynamic run.
 #[derive(Serialize)]
 #[serde(untagged)]
 enum DiscretisationField<'a> {
     Done(&'a crate::models::peridynamics::solve::DiscretisationEstimate),
     Unavailable { unavailable: &'a str },
+}
+
+impl<'a> DiscretisationField<'a> {
+    /// The estimate, or why there is none.
+    fn of(d: &'a Result<crate::models::peridynamics::solve::DiscretisationEstimate, String>) -> Self {
+        match d {
+            Ok(d) => DiscretisationField::Done(d),
+            Err(why) => DiscretisationField::Unavailable { unavailable: why },
+        }
+    }
 }
 
 impl<'a> PdSummary<'a> {
@@ -224,10 +234,7 @@ impl<'a> PdSummary<'a> {
             errors: sol.errors.map(|e| e.0),
             errors_interior: sol.errors.and_then(|e| e.1),
             estimated_errors: estimate,
-            discretisation_estimate: sol.discretisation.as_ref().map(|d| match d {
-                Ok(d) => DiscretisationField::Done(d),
-                Err(why) => DiscretisationField::Unavailable { unavailable: why },
-            }),
+            discretisation_estimate: sol.discretisation.as_ref().map(DiscretisationField::of),
             extremes: pd_extremes(sol),
             probes: &sol.probes,
             checks,
@@ -238,7 +245,7 @@ impl<'a> PdSummary<'a> {
 
 /// What the peridynamic model adds to a dynamic summary.
 #[derive(Serialize)]
-pub(super) struct PdDynamicPart {
+pub(super) struct PdDynamicPart<'a> {
     model: &'static str,
     constrained_nodes: usize,
     bonds: usize,
@@ -248,14 +255,14 @@ pub(super) struct PdDynamicPart {
     bond_updates_per_second_per_thread: f64,
     /// The estimated discretisation error at the horizon over the history (`null` when
     /// not asked for, `{"unavailable": why}` when it failed).
-    discretisation_estimate: Option<serde_json::Value>,
+    discretisation_estimate: Option<DiscretisationField<'a>>,
 }
 
-impl PdDynamicPart {
+impl<'a> PdDynamicPart<'a> {
     pub(super) fn of(
         p: &Problem,
         sim: &crate::models::peridynamics::Simulation,
-        discretisation: Option<&Result<crate::models::peridynamics::solve::DiscretisationEstimate, String>>,
+        discretisation: Option<&'a Result<crate::models::peridynamics::solve::DiscretisationEstimate, String>>,
     ) -> Self {
         let disc = &sim.discretisation;
         PdDynamicPart {
@@ -266,10 +273,7 @@ impl PdDynamicPart {
             peridynamics: p.model.peridynamics().copied().expect("peridynamic run"),
             micromodulus: disc.micromodulus,
             bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
-            discretisation_estimate: discretisation.map(|d| match d {
-                Ok(d) => serde_json::to_value(d).unwrap_or(serde_json::Value::Null),
-                Err(why) => serde_json::json!({ "unavailable": why }),
-            }),
+            discretisation_estimate: discretisation.map(DiscretisationField::of),
         }
     }
 }
