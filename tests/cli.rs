@@ -1241,9 +1241,9 @@ fn run_with_memory_limit(scene: &Path, args: &[&str], limit: Option<&str>, out: 
 /// GMRES + AMG for time when they fit but exceed 40 MB (with LU as the fallback), and
 /// GMRES + AMG for memory when they take more than half the available memory; it says
 /// which and why in summary.json. manufactured_dirichlet at h = 0.025 (1681 nodes):
-/// factors estimated at 16 MB, LU; at h = 0.0125 (6561 nodes): about 90 MB, GMRES for
-/// time; under a 150 MB limit (MLSM_MEMORY_LIMIT), GMRES for memory while the whole run
-/// still fits. The solutions agree to the iterative tolerance's level.
+/// factors estimated at about 10 MB, LU; at h = 0.0125 (6561 nodes): 69 MB, GMRES for
+/// time; under a 100 MB limit (MLSM_MEMORY_LIMIT), GMRES for memory while the whole run
+/// (21 MB estimated) still fits. The solutions agree to the iterative tolerance's level.
 #[test]
 fn auto_solver_chooses_lu_or_gmres_by_size_and_memory() {
     let tmp = TempDir::new().unwrap();
@@ -1257,7 +1257,7 @@ fn auto_solver_chooses_lu_or_gmres_by_size_and_memory() {
     let larger = run("0.0125", None, "larger");
     assert!(larger["solver"]["method"].as_str().unwrap().starts_with("gmres(30)+amg"), "{larger}");
     assert!(larger["solver"]["choice"].as_str().unwrap().contains("where GMRES+AMG is faster"), "{larger}");
-    let tight = run("0.0125", Some("150e6"), "tight");
+    let tight = run("0.0125", Some("100e6"), "tight");
     assert!(tight["solver"]["method"].as_str().unwrap().starts_with("gmres(30)+amg"), "{tight}");
     assert!(tight["solver"]["choice"].as_str().unwrap().contains("more than 0.5"), "{tight}");
     write(tmp.path(), "lu.toml", &scene_plus("[estimate]\nmethod = \"none\"\n[solver]\nkind = \"lu\"\n"));
@@ -1318,7 +1318,7 @@ fn the_bracket_under_its_weight_is_balanced_and_solved_by_the_multigrid() {
 /// GMRES(100) with the block-triangular preconditioner of the saddle point (the
 /// multigrid on the displacement block, the Schur complement by its SIMPLE diagonal),
 /// which reaches LU's solution. manufactured_dirichlet in the u-p form at nu = 0.4999,
-/// h = 0.025 (1681 nodes): LU factors estimated at 38 MB, above half of a 60 MB limit;
+/// h = 0.025 (1681 nodes): LU factors estimated at 30 MB, above half of a 45 MB limit;
 /// 545 iterations, e_inf(u) 1.3e-7 apart relative (the 1e-10 tolerance on the
 /// equilibrated rows of a saddle point; the bound 1e-6 allows some growth).
 #[test]
@@ -1336,7 +1336,7 @@ fn auto_solves_the_displacement_pressure_form_iteratively_when_lu_does_not_fit()
     let scene = tmp.path().join("scene.toml");
     let roomy = run_with_memory_limit(&scene, &[], None, &tmp.path().join("roomy"));
     assert_eq!(roomy["solver"]["method"], "lu", "{roomy}");
-    let tight = run_with_memory_limit(&scene, &[], Some("60e6"), &tmp.path().join("tight"));
+    let tight = run_with_memory_limit(&scene, &[], Some("45e6"), &tmp.path().join("tight"));
     let method = tight["solver"]["method"].as_str().unwrap();
     assert!(method.starts_with("gmres(100)+amg on the displacement block"), "{tight}");
     let choice = tight["solver"]["choice"].as_str().unwrap();

@@ -1,7 +1,7 @@
-//! The memory estimate made before a run (`mlsm::models::resources`) against the peak the
-//! run measured (`summary.json`: `estimated_peak_memory_bytes`, `peak_memory_bytes`,
-//! Linux VmHWM), and the refusals it drives. Each run is its own process, so each
-//! peak is that run's.
+//! The memory estimate (`mlsm::models::resources`) against the peak the kernel
+//! reports for the run (its maximum resident set, as `wait4` gives it to the parent,
+//! and `summary.json`'s `peak_memory_bytes`), and the refusals it drives. Each run is
+//! its own process, so each peak is that run's.
 
 mod common;
 
@@ -21,43 +21,147 @@ fn mlsm(args: &[&str], limit: Option<&str>) -> Output {
     c.output().expect("cannot start the mlsm binary")
 }
 
-/// `(estimated, measured)` peak bytes of `mlsm run args...`.
-fn peaks(args: &[&str]) -> (f64, f64) {
+/// What one run reported and what the kernel saw, bytes.
+struct Peaks {
+    /// `estimated_peak_memory_bytes`: the model of the run as it went.
+    estimated: f64,
+    /// `peak_memory_bytes`: VmHWM as the run read it at its end.
+    summary: f64,
+    /// The child's maximum resident set as the kernel reports it to its parent
+    /// (`wait4`'s rusage, what /usr/bin/time prints).
+    outside: f64,
+}
+
+/// [`Peaks`] of `mlsm run args...` (exit 0 asserted).
+fn peaks(args: &[&str]) -> Peaks {
     let tmp = TempDir::new().unwrap();
     let out = tmp.path().join("res");
+    let err = tmp.path().join("stderr");
     let mut all = vec!["--quiet", "run"];
     all.extend_from_slice(args);
     all.extend(["--out", out.to_str().unwrap()]);
-    let o = mlsm(&all, None);
-    assert_eq!(o.status.code(), Some(0), "{}", describe(&o));
+    let mut command = Command::new(env!("CARGO_BIN_EXE_mlsm"));
+    // A `pre_exec` makes std fork rather than `posix_spawn`. With the vfork-style
+    // spawn, which runs the child on this process's memory until its exec, `wait4`
+    // reported 143-167 MB for runs of 22-80 MB while other tests of this binary ran
+    // (never with one test thread); with fork it matched the run's own VmHWM.
+    // SAFETY: the closure does nothing, so it is async-signal-safe.
+    unsafe {
+        std::os::unix::process::CommandExt::pre_exec(&mut command, || Ok(()));
+    }
+    let child = command
+        .args(&all)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .expect("cannot start the mlsm binary");
+    let pid = child.id() as libc::pid_t;
+    let mut status = 0;
+    // SAFETY: an all-zero rusage is a valid value; wait4 writes into both out-parameters.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let waited = unsafe { libc::wait4(pid, &mut status, 0, &mut usage) };
+    assert_eq!(waited, pid, "wait4 failed");
+    let stderr = std::fs::read_to_string(&err).unwrap_or_default();
+    assert!(libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0, "{args:?}: status {status}: {stderr}");
     let s: Value = serde_json::from_slice(&std::fs::read(Path::new(&out).join("summary.json")).unwrap()).unwrap();
-    (s["estimated_peak_memory_bytes"].as_f64().unwrap(), s["peak_memory_bytes"].as_f64().unwrap())
+    Peaks {
+        estimated: s["estimated_peak_memory_bytes"].as_f64().unwrap(),
+        summary: s["peak_memory_bytes"].as_f64().unwrap(),
+        outside: usage.ru_maxrss as f64 * 1024.0,
+    }
 }
 
-/// Within 2x (the bar) on three sizes of the graded Kirsch plate (PHS p = 4,
-/// with its error estimate: 1.2e3 to 1.8e4 nodes, 70 MB to 2.6 GB), on
-/// manufactured_traction, on a peridynamic run (with the local-model estimate's Navier
-/// run) and on a dynamic Navier run (with Richardson's estimate's run on a quarter of
-/// the nodes). Measured ratios (estimate / peak)
-/// 1.01-1.95 (docs/verification.md, "The memory estimate against measured peaks"); the
-/// smallest Kirsch (57 MB measured) is
-/// the closest to the bar.
+/// The bar: the estimate within 1.5x of the peak either way.
+const WITHIN: f64 = 1.5;
+
+/// Every case of `cases`: the peak an outside tool sees is the run's own (mlsm does
+/// not reset the kernel's high-water mark: within 5 %, the pages the output stage
+/// touches after its reading), and the estimate is within [`WITHIN`] of it.
+fn assert_within(cases: &[Vec<String>]) {
+    let mut failed = Vec::new();
+    for args in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let p = peaks(&args);
+        let ratio = p.estimated / p.outside;
+        eprintln!("{args:?}: estimated {:.0} MB, peak {:.0} MB (summary {:.0} MB), ratio {ratio:.2}", p.estimated / 1e6, p.outside / 1e6, p.summary / 1e6);
+        assert!((p.summary / p.outside - 1.0).abs() <= 0.05, "{args:?}: the summary's peak {:.3e} B is not the kernel's {:.3e} B", p.summary, p.outside);
+        if !(1.0 / WITHIN..=WITHIN).contains(&ratio) {
+            failed.push(format!("{args:?}: estimate {:.3e} B against a peak of {:.3e} B ({ratio:.2})", p.estimated, p.outside));
+        }
+    }
+    assert!(failed.is_empty(), "outside 1/{WITHIN}..{WITHIN}:\n{}", failed.join("\n"));
+}
+
+fn case(args: &[&str]) -> Vec<String> {
+    args.iter().map(|a| a.to_string()).collect()
+}
+
+/// Every shipped scene as shipped, and every static one with each preset (solver
+/// `auto`, the default estimate). Measured ratios 0.77-1.28 (benches/memory_estimate.sh,
+/// BENCHMARKS.md "What the memory estimate misses"). Not here: the bracket with
+/// `balanced` (44 193 nodes, a 9 GB, 150 s run: its GMRES fails and LU takes over,
+/// measured by the bench at 1.06) and `accurate` (its solve fails, exit 3: docs/limits.md).
+#[test]
+fn memory_estimate_bounds_the_peak_on_every_shipped_scene_and_preset() {
+    let statics = ["cantilever", "cantilever_traction", "manufactured_dirichlet", "manufactured_traction", "lame", "kirsch", "flamant", "bracket", "gravity_dam"];
+    let mut cases = Vec::new();
+    for scene in statics {
+        let file = format!("problems/{scene}.toml");
+        cases.push(case(&[&file]));
+        for preset in ["fast", "balanced", "accurate"] {
+            if scene == "bracket" && preset != "fast" {
+                continue;
+            }
+            cases.push(case(&[&file, "--preset", preset]));
+        }
+    }
+    for scene in ["steel_plate", "steel_plate_dynamic", "plate_pulse"] {
+        cases.push(case(&[&format!("problems/{scene}.toml")]));
+    }
+    for scene in ["pd_manufactured", "pd_trig", "pd_tension"] {
+        cases.push(case(&[&format!("problems/{scene}.toml"), "--model", "peridynamics"]));
+    }
+    assert_within(&cases);
+}
+
+/// Every solver path, with the default estimate and without: LU, GMRES and BiCGSTAB
+/// set in the scene on Kirsch, Lame and the bracket. On the bracket the default
+/// estimate takes the higher-degree reference, whose GMRES fails and falls back to LU
+/// (250 MB against 23 MB without the estimate); the model follows the path the run
+/// took (`resources::of_static_run`). Measured ratios 0.77-1.27.
+#[test]
+fn memory_estimate_bounds_the_peak_on_every_solver_path() {
+    let tmp = TempDir::new().unwrap();
+    let mut cases = Vec::new();
+    for scene in ["kirsch", "lame", "bracket"] {
+        let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("problems/{scene}.toml"))).unwrap();
+        assert!(!text.contains("[solver]") && !text.contains("[estimate]"), "{scene} sets its own solver or estimate");
+        for kind in ["lu", "gmres", "bicgstab"] {
+            for estimate in ["auto", "none"] {
+                let file = tmp.path().join(format!("{scene}-{kind}-{estimate}.toml"));
+                std::fs::write(&file, format!("{text}\n[solver]\nkind = \"{kind}\"\n\n[estimate]\nmethod = \"{estimate}\"\n")).unwrap();
+                cases.push(case(&[file.to_str().unwrap()]));
+            }
+        }
+    }
+    assert_within(&cases);
+}
+
+/// Three sizes of the graded Kirsch plate (PHS p = 4, with its error estimate: 1.2e3
+/// to 1.8e4 nodes), manufactured_traction, a peridynamic run with a smaller horizon
+/// (with the local-model estimate's Navier run) and a dynamic Navier run (with
+/// Richardson's estimate's run on a quarter of the nodes).
 #[test]
 fn memory_estimate_tracks_the_measured_peak() {
-    let cases: [&[&str]; 6] = [
-        &["problems/kirsch.toml", "--spacing", "0.16"],
-        &["problems/kirsch.toml", "--spacing", "0.08"],
-        &["problems/kirsch.toml", "--spacing", "0.04"],
-        &["problems/manufactured_traction.toml"],
-        &["problems/pd_manufactured.toml", "--model", "peridynamics", "--horizon", "0.05"],
-        &["problems/steel_plate_dynamic.toml", "--model", "navier"],
+    let cases = [
+        case(&["problems/kirsch.toml", "--spacing", "0.16"]),
+        case(&["problems/kirsch.toml", "--spacing", "0.08"]),
+        case(&["problems/kirsch.toml", "--spacing", "0.04"]),
+        case(&["problems/pd_manufactured.toml", "--model", "peridynamics", "--horizon", "0.05"]),
+        case(&["problems/steel_plate_dynamic.toml", "--model", "navier"]),
     ];
-    for args in cases {
-        let (estimated, measured) = peaks(args);
-        let ratio = estimated / measured;
-        eprintln!("{args:?}: estimated {:.0} MB, measured {:.0} MB, ratio {ratio:.2}", estimated / 1e6, measured / 1e6);
-        assert!((0.5..=2.0).contains(&ratio), "{args:?}: estimate {estimated:.3e} B against a peak of {measured:.3e} B");
-    }
+    assert_within(&cases);
 }
 
 /// What cannot fit is refused up front (exit 2, naming the setting that drives it and

@@ -11,6 +11,7 @@ use crate::physics::elasticity::material::{Material, PlaneModel};
 use crate::linalg::SolveReport;
 use crate::mlsm::Approximation;
 use crate::models::navier;
+use crate::models::resources::MemoryEstimate;
 use crate::output;
 use crate::models::peridynamics::solve::WeightsSummary;
 use crate::models::peridynamics::{Micromodulus, PdParams, PdSolution};
@@ -32,8 +33,14 @@ pub(super) struct Header<'a> {
     seed: u64,
     threads: usize,
     peak_memory_bytes: Option<u64>,
-    /// The estimate made before the run (`resources`), for comparison with the peak.
+    /// The memory model (`resources`) of the run as it went (the solvers it took,
+    /// after any fallback), for comparison with the peak.
     estimated_peak_memory_bytes: f64,
+    /// The estimate the memory check made before the run (the expected path).
+    checked_peak_memory_bytes: f64,
+    /// The node count both estimates assume (the Navier run's, or the peridynamic
+    /// grid's), predicted from the scene before any node is placed.
+    estimated_nodes: f64,
     /// Peak resident memory of each stage.
     peak_memory_by_stage_bytes: StagePeaks<'a>,
     timings_s: Timings<'a>,
@@ -50,6 +57,13 @@ struct Timings<'a> {
 impl<'a> Header<'a> {
     /// The header of a command on `p` that started at `t0`, with its stage timings.
     pub(super) fn new(p: &'a Problem, timings: &'a StageTimings, t0: Instant) -> Self {
+        let checked = crate::models::resources::of(p);
+        Header::taken(p, timings, t0, checked.peak_bytes.round(), &checked)
+    }
+
+    /// [`Header::new`] with the memory model of the path the run took (`taken`) and of
+    /// the one the check expected (`checked`), bytes.
+    fn taken(p: &'a Problem, timings: &'a StageTimings, t0: Instant, taken: f64, checked: &MemoryEstimate) -> Self {
         Header {
             scene: &p.name,
             source: p.source.display().to_string(),
@@ -57,7 +71,9 @@ impl<'a> Header<'a> {
             seed: p.navier.fill.seed,
             threads: rayon::current_num_threads(),
             peak_memory_bytes: output::peak_memory_bytes(),
-            estimated_peak_memory_bytes: crate::models::resources::of(p).peak_bytes.round(),
+            estimated_peak_memory_bytes: taken,
+            checked_peak_memory_bytes: checked.peak_bytes.round(),
+            estimated_nodes: checked.nodes.round(),
             peak_memory_by_stage_bytes: timings.peaks(),
             timings_s: Timings { stages: timings, total: t0.elapsed().as_secs_f64() },
         }
@@ -130,8 +146,10 @@ pub(super) struct NavierSummary<'a> {
 
 impl<'a> NavierSummary<'a> {
     pub(super) fn new(p: &'a Problem, sol: &'a navier::Solution, checks: &'a Checks, t0: Instant) -> Self {
+        let checked = crate::models::resources::of(p);
+        let taken = crate::models::resources::of_static_run(p, sol).map_or(checked.peak_bytes, |e| e.peak_bytes).round();
         NavierSummary {
-            header: Header::new(p, &sol.timings, t0),
+            header: Header::taken(p, &sol.timings, t0, taken, &checked),
             nodes: sol.nodes.len(),
             boundary_nodes: sol.nodes.boundary.len(),
             ghost_nodes: sol.ghost_nodes,

@@ -117,11 +117,16 @@ impl Krylov {
     }
 }
 
-/// Estimated bytes of faer's sparse-LU factors of a matrix with `nonzeros` entries and
-/// `unknowns` rows: `34 N^0.26` per nonzero, fitted on the Kirsch plate (PHS p = 4; see
-/// `resources`).
+/// Estimated bytes of faer's sparse-LU factors of a matrix with `nonzeros` entries `Z`
+/// and `unknowns` rows `N`: `5.5 Z^1.2 N^0.164`, a least-squares fit in logarithms
+/// over 11 measured factorisations (shipped scenes and their references, 3e3 to 9e4
+/// unknowns, 5e4 to 1.6e7 entries: each within 0.72-1.22x of the fit, whose constant
+/// 4.65 is raised to 5.5 so that none is underestimated by more than 0.85x; the fill
+/// of COLAMD's ordering depends on the geometry as well, so no fit in `Z` and `N`
+/// alone does much better; benches/memory_estimate.sh,
+/// docs/notebook/2026-11-29-memory-estimate.md).
 pub fn lu_factor_bytes(nonzeros: f64, unknowns: f64) -> f64 {
-    nonzeros * 34.0 * unknowns.max(1.0).powf(0.26)
+    5.5 * nonzeros.max(1.0).powf(1.2) * unknowns.max(1.0).powf(0.164)
 }
 
 /// Krylov vectors GMRES keeps by default (30 vectors of the unknowns: 0.5 GB at

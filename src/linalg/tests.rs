@@ -423,7 +423,19 @@ fn auto_leaves_lu_for_gmres_above_a_size_when_the_factors_fit() {
         restart: GMRES_RESTART,
     };
     let n = 1e4;
-    let nnz = |bytes: f64| bytes / lu_factor_bytes(1.0, n);
+    // The nonzeros whose factors are estimated at `bytes` (the estimate grows with them).
+    let nnz = |bytes: f64| {
+        let (mut low, mut high): (f64, f64) = (1.0, 1e15);
+        for _ in 0..200 {
+            let middle = (low * high).sqrt();
+            if lu_factor_bytes(middle, n) < bytes {
+                low = middle
+            } else {
+                high = middle
+            }
+        }
+        high
+    };
     let roomy = Some(1e12);
     let (kind, why) = auto.resolve_system(n, nnz(0.9 * AUTO_KRYLOV_BYTES), false, roomy);
     assert_eq!(kind, SolverKind::Lu, "{why:?}");

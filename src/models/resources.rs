@@ -1,28 +1,40 @@
 //! Memory a run will need, estimated from the scene before any heavy stage, against
 //! the memory the machine has available.
 //!
-//! The model (bytes), with `n` nodes, `k` unknowns per node, support `s`:
+//! The model (bytes), with `n` nodes (the fill's prediction,
+//! `validate::expected_nodes`), `k` unknowns per node, support `s`, `N = k n`:
 //!
 //! ```text
 //! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
-//! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32; a static
-//!                                          run frees them after assembly: max(shapes + 12 Z, solve),
-//!                                          RBF-FD keeps the gradient's 16 n s through the solve)
-//! solve, LU    = Z (16 + 34 N^0.26)       (the equilibrated columns, 16 B per nonzero, which
-//!                                          replace the rows; the LU factors of faer, fitted: see below)
-//! solve, BiCGSTAB = Z (24 + 48)           (the equilibrated matrix, which replaces the
-//!                                          assembled one, and an ILU of about three times its size)
-//! solve, GMRES = 24 Z + (restart + 6) 8 N  (the rows as assembled, 12 B, equilibrated in
-//!                                          place, the AMG levels and the Krylov basis)
-//! solve, auto  = LU or GMRES as `SolverKind::resolve` will choose
-//! peak         = max(run, error-estimate reference) + 16 MB
+//! shapes       = n s (5 * 8 + 4)          (five operators of f64 and the support of u32)
+//! assembly     = shapes + 12 Z + min(12 Z, 24 MB)   (the rows, and the fragments in flight)
+//! solve, LU    = 16 Z + 5.5 Z^1.2 N^0.164 (the equilibrated columns, which replace the
+//!                                          rows, and faer's factors: `linalg::lu_factor_bytes`)
+//! solve, BiCGSTAB = 84 Z                  (the equilibrated matrix and its ILUT)
+//! solve, GMRES = 12 Z + 12 Z_mg + (restart + 6) 8 N   (the rows, the multigrid's levels,
+//!                                          the Krylov basis; Z_mg = Z, or 2 Z 12 / s on the
+//!                                          low-order operator of large stencils)
+//! static run   = max(assembly, solve + 16 n s if RBF-FD keeps the gradient's shapes)
+//! peak         = max(run, higher-degree reference run) + 12 MB
 //! ```
 //!
-//! and for peridynamics `n = area / h^2`, `pi m^2` bonds per node (32 B each),
-//! `Z = 4 n (pi m^2 + 1)`, the same solver terms with `N = 2 n`. The LU term was fitted
-//! on the Kirsch plate (PHS p = 4) at two sizes (docs/notebook/2026-11-27-auto-by-time.md,
-//! "From the code comments"); the test `memory_estimate_tracks_the_measured_peak`
-//! checks the whole model within 2x on three sizes.
+//! A run is estimated twice. Before it, for the memory check ([`check`], [`of`]):
+//! the solver `auto` will choose, no fallback, and the estimate `estimate.method`
+//! asks for (`auto`: the defect estimate, which reuses the run's solver and adds no
+//! peak; `higher-degree`: the reference run). After it, for the summary
+//! ([`of_static_run`]): the path it took ([`StaticPath`]: LU after a GMRES that failed,
+//! the reference that `auto` took where the defect estimate cannot be trusted, and
+//! that reference's own solver). A fallback is checked when it is chosen: LU only
+//! where its factors take at most half the available memory
+//! (`SolverKind::auto_fallback`).
+//!
+//! For peridynamics `n = area / h^2`, `pi m^2` bonds per node (32 B each),
+//! `Z = 4 n (pi m^2 + 1)`, the same solver terms with `N = 2 n`; a static run's
+//! families and rows are released before its solve.
+//!
+//! Measured against the peak the kernel reports (`/usr/bin/time`) on every shipped
+//! scene, preset and solver path: 0.77-1.28 (benches/memory_estimate.sh,
+//! BENCHMARKS.md "What the memory estimate misses"; tests/resources.rs checks 1.5x).
 
 use crate::physics::case::Case;
 use crate::linalg::{lu_factor_bytes, SolverKind};
@@ -53,35 +65,115 @@ pub struct MemoryEstimate {
     pub driver: &'static str,
 }
 
+/// How a system is solved, as far as its memory goes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SolverPath {
+    /// Sparse LU (faer): the equilibrated columns and the factors.
+    Lu,
+    /// BiCGSTAB with an incomplete factorisation.
+    Bicgstab,
+    /// GMRES (in process or PETSc) keeping `restart` Krylov vectors, with multigrid.
+    Gmres(usize),
+}
+
+impl SolverPath {
+    /// The path of the solver `kind` resolves to for `unknowns` and `nonzeros` (`auto`
+    /// as `SolverKind::choose` will choose, before any fallback).
+    fn chosen(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: bool) -> SolverPath {
+        match kind.choose(unknowns, nonzeros, saddle_point, available_memory_bytes()).primary {
+            SolverKind::Bicgstab(..) => SolverPath::Bicgstab,
+            SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => SolverPath::Gmres(restart),
+            _ => SolverPath::Lu,
+        }
+    }
+
+    /// The path of a solve that reported `method` (`SolverKind::label`, e.g. `"lu"`
+    /// after a GMRES that failed, `"bicgstab+ilu0"`, `"gmres(30)+amg [...]"`).
+    pub fn of_method(method: &str) -> SolverPath {
+        let restart = |m: &str| m.split_once('(').and_then(|(_, r)| r.split(')').next()?.parse().ok()).unwrap_or(crate::linalg::GMRES_RESTART);
+        match method.strip_prefix("petsc:").unwrap_or(method) {
+            m if m.starts_with("lu") || m.contains("mumps") => SolverPath::Lu,
+            m if m.starts_with("bicgstab") => SolverPath::Bicgstab,
+            m => SolverPath::Gmres(restart(m)),
+        }
+    }
+
+    /// Bytes of the solve of a system of `nonzeros` entries and `unknowns` rows: the
+    /// matrix and the factors or preconditioner; `low_order` the share of `nonzeros`
+    /// that a multigrid built on the low-order operator holds (`None`: built on the
+    /// system itself).
+    fn bytes(self, unknowns: f64, nonzeros: f64, low_order: Option<f64>) -> f64 {
+        match self {
+            // The equilibrated matrix, which replaces the assembled one
+            // (`linalg::solve_nodal`), and an ILUT of about four times its size
+            // (0.74-1.3x of the measured peaks at 72 B: benches/memory_estimate.sh).
+            SolverPath::Bicgstab => 84.0 * nonzeros,
+            // The rows as assembled (12 B per entry), equilibrated in place and kept as the
+            // multigrid's finest level, the coarse levels and single-precision transfers
+            // (about 9 B per fine entry), slack, and the Krylov basis (checked at 1e6 nodes:
+            // docs/notebook/round2-target-error.md, "Rows assembled in node order").
+            // On the low-order operator the finest level is its own rows (12 B per
+            // entry) and the levels are 12 B per entry of those.
+            SolverPath::Gmres(restart) => {
+                let multigrid = low_order.map_or(12.0 * nonzeros, |share| 24.0 * share * nonzeros);
+                12.0 * nonzeros + multigrid + (restart as f64 + 6.0) * 8.0 * unknowns
+            }
+            // The rows (12 B per entry) become the equilibrated columns (16 B) and are freed;
+            // then the columns and the factors.
+            SolverPath::Lu => 16.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
+        }
+    }
+}
+
+/// The solvers a static Navier run took, as far as its memory goes: the run's own
+/// and, when its estimate solved the higher-degree reference, the reference's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticPath {
+    /// The run's solve (after any fallback).
+    pub run: SolverPath,
+    /// The higher-degree reference's solve, when the estimate made one.
+    pub reference: Option<SolverPath>,
+}
+
 /// Bytes of the solver for `nonzeros` and `unknowns`: assembly and matrix, plus
 /// factors or preconditioner (`auto` resolved as the solve will resolve it, with its
 /// longer GMRES on the saddle point of the displacement-pressure form).
 fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: bool) -> f64 {
-    match kind.choose(unknowns, nonzeros, saddle_point, available_memory_bytes()).primary {
-        // The assembled matrix is freed once equilibrated (`linalg::solve_nodal`).
-        SolverKind::Bicgstab(..) => 72.0 * nonzeros,
-        // The rows as assembled (12 B per entry), equilibrated in place and kept as the
-        // multigrid's finest level, the coarse levels and single-precision transfers
-        // (about 9 B per fine entry), slack, and the Krylov basis (checked at 1e6 nodes:
-        // docs/notebook/round2-target-error.md, "Rows assembled in node order").
-        SolverKind::Gmres { restart, .. } | SolverKind::Petsc { restart, .. } => 24.0 * nonzeros + (restart as f64 + 6.0) * 8.0 * unknowns,
-        // The rows (12 B per entry) become the equilibrated columns (16 B) and are freed;
-        // then the columns and the factors.
-        _ => 16.0 * nonzeros + lu_factor_bytes(nonzeros, unknowns),
-    }
+    SolverPath::chosen(kind, unknowns, nonzeros, saddle_point).bytes(unknowns, nonzeros, None)
 }
 
-/// Process, code and small arrays.
-const BASE_BYTES: f64 = 16e6;
+/// Process, code and small arrays: the peak of the smallest shipped runs (13-16 MB,
+/// benches/memory_estimate.sh) less their arrays.
+const BASE_BYTES: f64 = 12e6;
+
+/// The most that the assembly holds beside its rows and shapes ([`navier`]).
+const ASSEMBLY_IN_FLIGHT_BYTES: f64 = 24e6;
+
+/// Nodes of a stencil of the low-order operator (`low_order::approximation`).
+const LOW_ORDER_SUPPORT: f64 = 12.0;
 
 /// Bytes per matrix entry of a dynamic Navier run (measured, see [`navier`]).
 const DYNAMIC_BYTES_PER_NONZERO: f64 = 100.0;
 
-/// A static or dynamic Navier run of `case` with `params` on about `nodes` nodes.
+/// A static or dynamic Navier run of `case` with `params` on about `nodes` nodes, as
+/// it is expected to go: its solver as `auto` chooses it (no fallback), and a static
+/// run's estimate as `estimate.method` asks (`auto`: the defect estimate, made with
+/// the run's own solver).
 pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate {
+    navier_on(case, params, nodes, None)
+}
+
+/// [`navier`] for the solvers a static run took ([`StaticPath`]): the estimate of
+/// the memory of the run as it went, for comparison with its measured peak.
+pub fn navier_taken(case: &Case, params: &NavierParams, nodes: f64, path: StaticPath) -> MemoryEstimate {
+    navier_on(case, params, nodes, Some(path))
+}
+
+/// [`navier`] and [`navier_taken`].
+fn navier_on(case: &Case, params: &NavierParams, nodes: f64, taken: Option<StaticPath>) -> MemoryEstimate {
     let k = params.formulation.unknowns(&case.material).per_node() as f64;
     let dynamic = case.dynamics.is_some();
-    let one = |support: usize, nodes: f64| {
+    let one = |support: usize, nodes: f64, path: Option<SolverPath>| {
         let s = support as f64;
         // Navier rows couple k unknowns of s nodes (u-p: the continuity row only 2; its
         // stabilisation's pressure Laplacian, s more, is not counted: it adds little to
@@ -91,19 +183,32 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         // Dynamic: the triplets, the matrix, its split into dynamic and algebraic
         // blocks and the boundary block's factors, 100 B per entry (chosen from the
         // measured peaks of steel_plate_dynamic: docs/notebook/round1-explicit-dynamics-1e5.md).
-        let solve =
-            if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { solver_bytes(&params.solver.kind, k * nodes, nonzeros, k > 2.0) };
+        let path = path.unwrap_or_else(|| SolverPath::chosen(&params.solver.kind, k * nodes, nonzeros, k > 2.0));
+        // A multigrid on the low-order operator holds its 12-node stencils' share.
+        let low_order = params.multigrid.low_order(support).then(|| LOW_ORDER_SUPPORT / s);
+        let solve = if dynamic { DYNAMIC_BYTES_PER_NONZERO * nonzeros } else { path.bytes(k * nodes, nonzeros, low_order) };
         // A static run releases its shapes once the rows are assembled (they and the
         // rows, 12 B per entry, are the assembly's peak), except the gradient's under
         // RBF-FD (two operators of f64); a dynamic one keeps them all.
         let shapes = nodes * s * 44.0;
         let kept = if case.outputs.needs_gradient() && keeps_gradient_shapes(&params.approximation.basis) { nodes * s * 16.0 } else { 0.0 };
-        (nonzeros, if dynamic { shapes + solve } else { (shapes + 12.0 * nonzeros).max(solve + kept) })
+        // The assembly holds the shapes, the rows (12 B per entry) and the fragments
+        // of rows in flight with the threads' allocator arenas: up to about 24 MB
+        // measured (mt, md, flamant, Kirsch, the dam with PHS degree 6;
+        // docs/notebook/2026-11-29-memory-estimate.md).
+        let assembly = shapes + 12.0 * nonzeros + (12.0 * nonzeros).min(ASSEMBLY_IN_FLIGHT_BYTES);
+        (nonzeros, if dynamic { shapes + solve } else { assembly.max(solve + kept) })
     };
-    let (nonzeros, mut bytes) = one(params.approximation.support, nodes);
-    if params.estimate.method.static_navier_estimates() && !dynamic {
+    let (nonzeros, mut bytes) = one(params.approximation.support, nodes, taken.map(|t| t.run));
+    // The higher-degree reference runs after the run's solver is released: asked for,
+    // or taken by `auto` where the defect estimate cannot be trusted.
+    let reference = match taken {
+        Some(t) => t.reference.map(Some),
+        None => (params.estimate.method == EstimateMethod::HigherDegree).then_some(None),
+    };
+    if let (Some(path), false) = (reference, dynamic) {
         if let Ok(reference) = reference_approximation(&params.approximation, params.fill.kind, nodes as usize) {
-            bytes = bytes.max(one(reference.support, nodes).1);
+            bytes = bytes.max(one(reference.support, nodes, path).1);
         }
     }
     if let Some(d) = case.dynamics.as_ref().filter(|_| params.estimate.method.dynamic_navier_estimates()) {
@@ -111,7 +216,7 @@ pub fn navier(case: &Case, params: &NavierParams, nodes: f64) -> MemoryEstimate 
         // the nodes, the refined one four times them.
         let method = params.estimate.method;
         let richardson = method != EstimateMethod::Refined && richardson_applies(params, d.integrator).is_ok();
-        bytes += one(params.approximation.support, if richardson { 0.25 } else { 4.0 } * nodes).1;
+        bytes += one(params.approximation.support, if richardson { 0.25 } else { 4.0 } * nodes, None).1;
     }
     let driver = if params.approximation.support > 100 { "approximation.support" } else { "nodes.spacing" };
     MemoryEstimate { nodes, unknowns: k * nodes, nonzeros, bonds: None, peak_bytes: bytes + BASE_BYTES, driver }
@@ -124,7 +229,13 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     let per_node = std::f64::consts::PI * params.ratio * params.ratio;
     let bonds = nodes * per_node;
     let nonzeros = 4.0 * nodes * (per_node + 1.0);
-    let peak_bytes = bonds * 32.0 + solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros, false) + BASE_BYTES;
+    let solve = solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros, false);
+    // A static run's families (32 B per bond) and rows (12 B per entry) are the
+    // assembly's peak and are released before the solve (the run at twice m of
+    // pd_manufactured: 152 MB measured, 230 MB when they were counted with the
+    // solver); a dynamic run keeps its families through the time loop.
+    let run = if case.dynamics.is_some() { bonds * 32.0 + solve } else { (bonds * 32.0 + 12.0 * nonzeros).max(solve) };
+    let peak_bytes = run + BASE_BYTES;
     MemoryEstimate { nodes, unknowns: 2.0 * nodes, nonzeros, bonds: Some(bonds), peak_bytes, driver: "peridynamics.horizon" }
 }
 
@@ -151,6 +262,22 @@ pub fn of(p: &Problem) -> MemoryEstimate {
             navier(&p.case, &p.navier, nodes)
         }
     }
+}
+
+/// The estimate of the static Navier run `p` as it went ([`navier_taken`]): the
+/// solver it took, and the higher-degree reference's when its estimate made one;
+/// `None` for another kind of run.
+pub fn of_static_run(p: &Problem, solution: &crate::models::navier::Solution) -> Option<MemoryEstimate> {
+    if p.case.dynamics.is_some() || !matches!(p.model, crate::scene::problem::ModelParams::Navier { .. }) {
+        return None;
+    }
+    let reference = match &solution.estimate {
+        crate::models::navier::estimate::Estimate::Done(e) => e.reference_solver.as_deref().map(SolverPath::of_method),
+        _ => None,
+    };
+    let path = StaticPath { run: SolverPath::of_method(&solution.solver.method), reference };
+    let nodes = validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
+    Some(navier_taken(&p.case, &p.navier, nodes, path))
 }
 
 /// The estimate of `p`, or a refusal naming the setting that drives it and the limit

@@ -14,7 +14,8 @@
 //! * [`write_system`]: an assembled linear system for other solvers (MatrixMarket by
 //!   `nalgebra-sparse`, PETSc binary).
 //! * [`peak_memory_bytes`], [`restart_peak`], [`peak_since`]: peak resident memory of
-//!   the process and of one stage (Linux `VmHWM`, reset through `clear_refs`).
+//!   the process (Linux `VmHWM`, never reset) and of one stage (the resident size at its
+//!   start plus the heap's peak growth, counted by the global allocator).
 //! * [`available_memory`]: the memory a run may still use, the smallest of
 //!   `MLSM_MEMORY_LIMIT`, `MemAvailable`, the cgroup's limit and `ulimit -v`
 //!   ([`smallest_limit`] reads them from their texts).

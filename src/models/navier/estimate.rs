@@ -133,6 +133,10 @@ pub struct ErrorEstimate {
     pub reference_unknowns: usize,
     /// Nonzeros of the reference matrix.
     pub reference_nonzeros: usize,
+    /// The solver that solved the reference system (`higher-degree`: e.g. `"lu"`
+    /// after a failed GMRES), for the memory the run took (`resources::navier_taken`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_solver: Option<String>,
     /// Per-node displacement indicator `max_c |u_h - u_ref| / max |u_ref|`.
     #[serde(skip)]
     pub per_node_u: Vec<f64>,
@@ -303,6 +307,7 @@ impl ErrorEstimate {
             seconds: t0.elapsed().as_secs_f64(),
             reference_unknowns: 0,
             reference_nonzeros: 0,
+            reference_solver: None,
             per_node_u,
             per_node_sigma,
         }

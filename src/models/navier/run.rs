@@ -47,7 +47,12 @@ pub fn solve(case: &Case, params: &NavierParams, progress: &dyn Progress) -> Res
                 e.reference = format!("{}; auto took it because {why}", e.reference);
                 Estimate::Done(e)
             }
-            (Estimate::Unavailable(..), defect @ Estimate::Done(_)) => defect,
+            // The reference failed: the defect estimate stands, saying that auto did
+            // not trust it and why the reference is missing.
+            (Estimate::Unavailable(_, failed), Estimate::Done(mut defect)) => {
+                defect.reference = format!("{}; auto did not trust it ({why}), but the higher-degree reference is unavailable: {failed}", defect.reference);
+                Estimate::Done(defect)
+            }
             (made, _) => made,
         };
     }
@@ -157,6 +162,7 @@ pub fn higher_degree(
         reference_degree: approximation.basis.polynomial_degree(),
         reference_unknowns: disc.dofs.len(),
         reference_nonzeros: solved.nonzeros,
+        reference_solver: Some(solved.report.method.clone()),
         ..ErrorEstimate::between(
             EstimateMethod::HigherDegree,
             format!("{}, {} nodes per stencil", approximation.basis.describe(), approximation.support),

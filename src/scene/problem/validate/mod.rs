@@ -56,11 +56,14 @@ pub fn too_few_nodes(spacing: f64, expected: f64, support: usize) -> Option<Stri
 }
 
 /// Nodes per unit area of a fill at spacing `h`, relative to `1/h^2`: used to turn
-/// `nodes.count` into a spacing (the scattered fill packs about 1.1 nodes per h^2).
+/// `nodes.count` into a spacing and to predict node counts (the scattered fill packs
+/// about 0.9 nodes per h^2: 0.79-0.84 of the 1.1 assumed before on the 7 shipped
+/// scattered scenes and their presets, 1e3 to 1.5e5 nodes;
+/// docs/notebook/2026-11-29-memory-estimate.md).
 pub(crate) fn packing(kind: FillKind) -> f64 {
     match kind {
         FillKind::Grid => 1.0,
-        FillKind::Scattered => 1.1,
+        FillKind::Scattered => 0.9,
     }
 }
 
