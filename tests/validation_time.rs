@@ -74,6 +74,17 @@ fn a_tiny_refinement_spacing_towards_a_hole_is_refused_at_once() {
     assert!(stderr.contains("nodes.refine.spacing") && stderr.contains("over 5e7"), "{stderr}");
 }
 
+/// Kirsch's plate stretched to 4e54 m (a strip 1e54 spacings long; found by
+/// benches/fuzz.sh, where `mlsm check` ran for over 120 s): refused by its node count
+/// within the bound (about 0.5 s), naming `nodes.refine.spacing`.
+#[test]
+fn a_plate_stretched_beyond_any_count_is_refused_at_once() {
+    let text = edited("kirsch", &[("max = [4.0, 4.0]", "max = [4.0e54, 4.0]")]);
+    let (out, stderr) = timed(&["check"], &text, &[]);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("nodes.refine.spacing") && stderr.contains("inf nodes"), "{stderr}");
+}
+
 /// 5 000 constants, each the next one plus 1 (every reference forward in the order of
 /// the names): validated; closed into a cycle they are refused naming it.
 #[test]
