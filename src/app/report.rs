@@ -59,6 +59,16 @@ pub(super) fn print_pd(sol: &crate::models::peridynamics::PdSolution, extremes: 
         }
         println!();
     }
+    // The run's own error at its horizon (what warns), apart from its difference to
+    // the local model ([`print_estimate`]).
+    match &sol.discretisation {
+        Some(Ok(d)) => println!(
+            "estimated (discretisation at this horizon): e_inf(u) ~ {:.2e}  rel_l2(u) ~ {:.2e}  ({}: {})",
+            d.e_inf_u, d.rel_l2_u, d.method, d.reference
+        ),
+        Some(Err(why)) => println!("estimated (discretisation at this horizon): unavailable ({why})"),
+        None => {}
+    }
     print_extremes(extremes);
     print_probes(&sol.probes);
 }
@@ -116,7 +126,11 @@ fn print_extremes(extremes: Option<&Extremes>) {
 pub(super) fn print_estimate(estimate: &Estimate) {
     match estimate {
         Estimate::Done(e) => {
-            print!("estimated: e_inf(u) ~ {:.2e}", e.norms.e_inf_u);
+            // A peridynamic run's difference to the local model is the horizon's model
+            // difference (its convergence in delta is `mlsm compare`'s result), not its
+            // error: its own estimate is the discretisation line of [`print_pd`].
+            let label = if e.method == "local-model" { "difference to the local model" } else { "estimated" };
+            print!("{label}: e_inf(u) ~ {:.2e}", e.norms.e_inf_u);
             if let Some(t) = e.largest_u_time {
                 print!(" (largest at t = {t:.3e} s)");
             }
