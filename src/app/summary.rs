@@ -147,7 +147,7 @@ pub(super) struct NavierSummary<'a> {
 impl<'a> NavierSummary<'a> {
     pub(super) fn new(p: &'a Problem, sol: &'a navier::Solution, checks: &'a Checks, t0: Instant) -> Self {
         let checked = crate::models::resources::of(p);
-        let taken = crate::models::resources::of_static_run(p, sol).map_or(checked.peak_bytes, |e| e.peak_bytes).round();
+        let taken = crate::models::resources::of_static_run(p, sol, checked.nodes).map_or(checked.peak_bytes, |e| e.peak_bytes).round();
         NavierSummary {
             header: Header::taken(p, &sol.timings, t0, taken, &checked),
             nodes: sol.nodes.len(),

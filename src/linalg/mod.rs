@@ -55,6 +55,8 @@ pub mod watch;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod auto_tests;
 
 use std::borrow::Cow;
 use std::time::Instant;

@@ -264,10 +264,10 @@ pub fn of(p: &Problem) -> MemoryEstimate {
     }
 }
 
-/// The estimate of the static Navier run `p` as it went ([`navier_taken`]): the
-/// solver it took, and the higher-degree reference's when its estimate made one;
-/// `None` for another kind of run.
-pub fn of_static_run(p: &Problem, solution: &crate::models::navier::Solution) -> Option<MemoryEstimate> {
+/// The estimate of the static Navier run `p` on `nodes` (the check's prediction,
+/// [`of`]) as it went ([`navier_taken`]): the solver it took, and the higher-degree
+/// reference's when its estimate made one; `None` for another kind of run.
+pub fn of_static_run(p: &Problem, solution: &crate::models::navier::Solution, nodes: f64) -> Option<MemoryEstimate> {
     if p.case.dynamics.is_some() || !matches!(p.model, crate::scene::problem::ModelParams::Navier { .. }) {
         return None;
     }
@@ -276,7 +276,6 @@ pub fn of_static_run(p: &Problem, solution: &crate::models::navier::Solution) ->
         _ => None,
     };
     let path = StaticPath { run: SolverPath::of_method(&solution.solver.method), reference };
-    let nodes = validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
     Some(navier_taken(&p.case, &p.navier, nodes, path))
 }
 
