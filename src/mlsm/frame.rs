@@ -16,15 +16,30 @@ pub struct RankDeficient {
 /// The monomials of `local` at the local coordinates `z`: the column-major
 /// `z.len() x m` matrix `P_jk = b_k(z_j)`.
 pub fn monomial_matrix(local: &LocalBasis, z: &[[f64; 2]]) -> Vec<f64> {
+    let mut p = Vec::new();
+    monomial_matrix_into(local, z, &mut p);
+    p
+}
+
+/// [`monomial_matrix`] written to `p` (resized; a stencil loop keeps one buffer).
+pub fn monomial_matrix_into(local: &LocalBasis, z: &[[f64; 2]], p: &mut Vec<f64>) {
+    const MOST: usize = 136; // degree 15: (15 + 1)(15 + 2) / 2
     let (n, m) = (z.len(), local.len());
-    let (mut p, mut row) = (vec![0.0; n * m], vec![0.0; m]);
+    p.resize(n * m, 0.0);
+    let mut row_buffer = [0.0; MOST];
+    let mut row_vec = Vec::new();
+    let row: &mut [f64] = if m <= MOST {
+        &mut row_buffer[..m]
+    } else {
+        row_vec.resize(m, 0.0);
+        &mut row_vec
+    };
     for (j, &zj) in z.iter().enumerate() {
-        local.values(zj, &mut row);
-        for k in 0..m {
-            p[k * n + j] = row[k];
+        local.values(zj, row);
+        for (k, &v) in row.iter().enumerate() {
+            p[k * n + j] = v;
         }
     }
-    p
 }
 
 /// A stencil in local coordinates: `z_j = (x_j - centre) / radius`, `radius` the

@@ -13,6 +13,7 @@ pub mod basis;
 pub mod fit;
 pub mod frame;
 pub mod interpolate;
+pub mod null_space;
 pub mod ops;
 pub mod radial;
 pub mod rbffd;

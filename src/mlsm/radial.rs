@@ -75,11 +75,55 @@ impl Radial {
         }
     }
 
-    /// `(L phi(|z - zj|))` at `z = 0`.
-    pub(super) fn operator_at_centre(&self, op: Op, zj: [f64; 2], c: f64) -> f64 {
+    /// `phi(|z_i - zj|)` for every `z_i` of `z`, into `out` (one column of the
+    /// stencil's matrix; local coordinates within the unit disc, so `sqrt` needs no
+    /// guard against overflow). The kind is matched once for the column, so the loop
+    /// over the points is straight-line arithmetic (`r^3 = r^2 sqrt(r^2)` for the
+    /// usual PHS).
+    pub(super) fn column(&self, z: &[[f64; 2]], zj: [f64; 2], c: f64, out: &mut [f64]) {
+        let r2 = |zi: &[f64; 2]| {
+            let (dx, dy) = (zi[0] - zj[0], zi[1] - zj[1]);
+            dx * dx + dy * dy
+        };
+        match *self {
+            Radial::Phs { order: 3 } => z.iter().zip(out).for_each(|(zi, o)| {
+                let s = r2(zi);
+                *o = s * s.sqrt();
+            }),
+            Radial::Phs { order } => {
+                let half = (order / 2) as i32;
+                z.iter().zip(out).for_each(|(zi, o)| {
+                    let s = r2(zi);
+                    *o = s.powi(half) * s.sqrt();
+                })
+            }
+            _ => z.iter().zip(out).for_each(|(zi, o)| *o = self.profile(r2(zi).sqrt(), c).0),
+        }
+    }
+
+    /// The radial function about `zj` and its derivatives at `z = 0`, from which
+    /// [`AtCentre::apply`] takes `L phi(|z - zj|)` at `z = 0` for each operator.
+    pub(super) fn at_centre(&self, zj: [f64; 2], c: f64) -> AtCentre {
         let d = [-zj[0], -zj[1]];
         // Local coordinates (within the unit disc): no overflow for `sqrt` to guard against.
         let (f, f1, f2) = self.profile((d[0] * d[0] + d[1] * d[1]).sqrt(), c);
+        AtCentre { d, f, f1, f2 }
+    }
+}
+
+/// A radial function about a stencil node `zj`, at the centre `z = 0`: `d = -zj` and
+/// the profile `(phi, phi'/r, (phi'' - phi'/r)/r^2)` there ([`Radial::profile`]).
+pub(super) struct AtCentre {
+    d: [f64; 2],
+    f: f64,
+    f1: f64,
+    f2: f64,
+}
+
+impl AtCentre {
+    /// `L phi` at the centre: `d phi / dz_a = f1 d_a`, `d2 phi / dz_a dz_b = f2 d_a d_b + f1 delta_ab`.
+    pub(super) fn apply(&self, op: Op) -> f64 {
+        let AtCentre { d, f, f1, f2 } = *self;
         match op {
             Op::Value => f,
             Op::Dx => f1 * d[0],

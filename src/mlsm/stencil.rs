@@ -41,3 +41,20 @@ fn lattice_ring(count: f64) -> usize {
         r2 += 1;
     }
 }
+
+/// The `n` nodes nearest to the origin of a unit lattice jittered by up to `jitter / 2`
+/// in each coordinate (a scattered fill's local regularity), the origin first: a
+/// reproducible scattered stencil (`seed` picks the jitter) for the weights' tests
+/// and `benches/stencil_weights.rs`.
+pub fn jittered_lattice(n: usize, jitter: f64, seed: u64) -> Vec<[f64; 2]> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let reach = (n as f64).sqrt().ceil() as i32 + 1;
+    let mut around: Vec<[f64; 2]> = (-reach..=reach)
+        .flat_map(|i| (-reach..=reach).map(move |j| (i, j)))
+        .filter(|&ij| ij != (0, 0))
+        .map(|(i, j)| [i as f64 + jitter * (rng.random::<f64>() - 0.5), j as f64 + jitter * (rng.random::<f64>() - 0.5)])
+        .collect();
+    around.sort_by(|a, b| a[0].hypot(a[1]).total_cmp(&b[0].hypot(b[1])));
+    std::iter::once([0.0, 0.0]).chain(around.into_iter().take(n.saturating_sub(1))).collect()
+}
