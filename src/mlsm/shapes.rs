@@ -4,8 +4,8 @@
 use super::basis::{Basis, LocalBasis};
 use super::ops::{Op, OpSet};
 use super::fit::shape_functions;
-use super::frame::{monomial_matrix, LocalFrame};
-use super::wls::{rank_ratio, RANK_TOLERANCE};
+use super::frame::{monomial_matrix_into, LocalFrame};
+use super::wls::{rank_ratio_in, RANK_TOLERANCE};
 use super::Approximation;
 use crate::domain::neighbors::Supports;
 use crate::domain::Point;
@@ -110,9 +110,11 @@ impl Shapes {
 /// only rank test: the discretisation runs it on every support before the shapes.
 pub fn degenerate_supports(positions: &[Point], supports: &Supports, basis: &Basis, needs: &[OpSet]) -> Vec<(usize, f64)> {
     let local = LocalBasis::new(basis);
+    // Buffers per rayon task, not per node (six allocations a node were 3 % of a
+    // degree-6 run: docs/notebook/2026-11-29-stencil-weights-null-space.md).
     (0..supports.len())
         .into_par_iter()
-        .filter_map(|i| {
+        .map_init(RankScratch::default, |scratch, i| {
             if needs[i].is_empty() {
                 return None;
             }
@@ -120,12 +122,26 @@ pub fn degenerate_supports(positions: &[Point], supports: &Supports, basis: &Bas
             if support.len() < local.len() {
                 return Some((i, 0.0));
             }
-            let points: Vec<[f64; 2]> = support.iter().map(|&j| positions[j as usize]).collect();
-            let mut p = monomial_matrix(&local, &LocalFrame::new(positions[i], &points).z);
-            let ratio = rank_ratio(&mut p, support.len(), local.len());
+            let RankScratch { points, frame, p, diag, beta } = scratch;
+            points.clear();
+            points.extend(support.iter().map(|&j| positions[j as usize]));
+            frame.fill(positions[i], points);
+            monomial_matrix_into(&local, &frame.z, p);
+            let ratio = rank_ratio_in(p, support.len(), local.len(), (diag, beta));
             (ratio.is_nan() || ratio <= RANK_TOLERANCE).then_some((i, ratio))
         })
+        .flatten()
         .collect()
+}
+
+/// The buffers of [`degenerate_supports`]' rank tests, one set per rayon task.
+#[derive(Default)]
+struct RankScratch {
+    points: Vec<[f64; 2]>,
+    frame: LocalFrame,
+    p: Vec<f64>,
+    diag: Vec<f64>,
+    beta: Vec<f64>,
 }
 
 /// Compute, for every node `i`, the shapes of the operators `needs[i]`.

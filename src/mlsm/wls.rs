@@ -32,10 +32,14 @@ pub(super) fn pivot_ratio(diag: impl Iterator<Item = f64> + Clone) -> f64 {
 /// Smallest relative QR pivot `|R_kk| / max |R_kk|` of the column-major `n x m`
 /// matrix `b` (`n >= m`; overwritten by its factorisation): its numerical rank test.
 /// By [`householder_qr`] (faer's blocked QR was no faster at these sizes, nalgebra's
-/// slower: docs/notebook/2026-11-27-shapes-rank-test-sqrt.md).
-pub fn rank_ratio(b: &mut [f64], n: usize, m: usize) -> f64 {
-    let (mut diag, mut beta) = (vec![0.0; m], vec![0.0; m]);
-    householder_qr(b, n, m, &mut diag, &mut beta);
+/// slower: docs/notebook/2026-11-27-shapes-rank-test-sqrt.md); the reflectors' diagonal
+/// and scales in buffers the caller keeps (`diag`, `beta`).
+pub fn rank_ratio_in(b: &mut [f64], n: usize, m: usize, (diag, beta): (&mut Vec<f64>, &mut Vec<f64>)) -> f64 {
+    diag.clear();
+    diag.resize(m, 0.0);
+    beta.clear();
+    beta.resize(m, 0.0);
+    householder_qr(b, n, m, diag, beta);
     pivot_ratio(diag.iter().copied())
 }
 
