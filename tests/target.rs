@@ -8,7 +8,8 @@ mod common;
 
 use common::f;
 use mlsm::stages::Silent;
-use mlsm::tradeoff::target::{pursue, Outcome, Refinement, Stop, Target, TargetNorm, MAX_STEPS};
+use mlsm::tradeoff::hp;
+use mlsm::tradeoff::target::{pursue, DegreeRule, Outcome, Refinement, Stop, Target, TargetNorm, MAX_STEPS};
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -21,8 +22,15 @@ fn problem(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml")).display().to_string()
 }
 
+/// A target at the scene's degree (the loop's refinement alone, as before the hp
+/// choices).
 fn target(tolerance: f64, norm: TargetNorm, refinement: Refinement) -> Target {
-    Target { tolerance, norm, refinement, budget: None, max_steps: MAX_STEPS }
+    Target { tolerance, norm, refinement, degree: DegreeRule::Scene, budget: None, max_steps: MAX_STEPS }
+}
+
+/// The command line's target: degree and refinement chosen by the loop.
+fn hp_target(tolerance: f64, norm: TargetNorm) -> Target {
+    Target { degree: DegreeRule::Auto, ..target(tolerance, norm, Refinement::Auto) }
 }
 
 /// Every step is refined from the one before, the last is reached and the true
@@ -174,4 +182,41 @@ fn the_bracket_reaches_its_target_by_refining_its_corners() {
     let tip = o.solution.probes.iter().find(|p| p.name == "tip_deflection").expect("the bracket's probe").value;
     let largest = o.solution.displacement.iter().map(|u| u[0].hypot(u[1])).fold(0.0, f64::max);
     assert!((tip - -4.975e-4).abs() <= 1e-2 * largest, "tip {tip:e}, max |u| {largest:e}, {steps:?}");
+}
+
+/// The hp choices on the shipped Lame ring (degree 4, 3 388 nodes): the loop raises
+/// the degree to 6, starts from about 1 000 nodes, refines uniformly by the predicted
+/// factor, and stops near the target: reached in at most three solves, the true error
+/// at most 2 E (the estimate's measured effectivities, module docs) and not more than
+/// 10x below E (the bound on overshooting). Measured: two solves, 1 000 then
+/// about 7 000 nodes (BENCHMARKS.md "Time to accuracy").
+#[test]
+fn lame_hp_raises_the_degree_and_stops_near_the_target() {
+    let p = common::scene("lame", &[]);
+    let e = 1e-6;
+    let o = pursue(&p, &hp_target(e, TargetNorm::EInfU), &Silent, |_| {}).unwrap();
+    let steps: Vec<(usize, f64, Option<f64>)> = o.history.iter().map(|s| (s.nodes, s.estimate, s.error)).collect();
+    assert!(matches!(o.stop, Stop::Reached) && o.history.len() <= 3, "{:?}, {steps:?}", o.stop);
+    assert_eq!(o.refinement, Refinement::Uniform);
+    assert!(o.notes.iter().any(|n| n.contains("raises the degree from 4 to 6")), "{:?}", o.notes);
+    assert!(o.history[0].nodes < 1500, "the first step is the probe: {steps:?}");
+    let error = o.history[o.best].error.expect("exact solution");
+    assert!(error <= 2.0 * e && error >= e / 10.0, "true error {error:.2e} for a target of {e:e}: {steps:?}");
+}
+
+/// Which scenes the loop treats as smooth: those with an exact solution (Lame) and
+/// those without singular corners; not the bracket (re-entrant corner, clamped base
+/// meeting free edges), where it keeps the scene's degree and refines locally.
+#[test]
+fn smooth_scenes_are_told_from_singular_ones() {
+    assert!(hp::is_smooth(&common::scene("lame", &[])));
+    assert!(!hp::is_smooth(&common::scene("bracket", &[])));
+    let lame = common::scene("lame", &[]);
+    assert!(hp::raised_degree(&lame, 1e-2).is_none(), "a loose target keeps degree 4");
+    let (raised, _) = hp::raised_degree(&lame, 1e-4).expect("raised");
+    assert_eq!(raised.navier.approximation.support, 56);
+    let bracket = common::scene("bracket", &[("nodes.spacing", f(4e-3))]);
+    let o = pursue(&bracket, &Target { max_steps: 1, ..hp_target(1e-3, TargetNorm::EInfU) }, &Silent, |_| {}).unwrap();
+    assert_eq!(o.refinement, Refinement::Local);
+    assert!(!o.notes.iter().any(|n| n.contains("raises the degree")), "{:?}", o.notes);
 }

@@ -73,10 +73,21 @@ pub enum TargetNormArg {
 /// How `run --target-error` refines.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum RefinementArg {
+    /// Uniform where the solution is smooth (no singular corner), local where it is not.
+    Auto,
     /// Graded refinement where the per-node estimate is large.
     Local,
     /// The whole spacing function scaled by one factor.
     Uniform,
+}
+
+/// Which degree `run --target-error` solves with.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum TargetDegreeArg {
+    /// The scene's, raised to 6 for RBF-FD scenes without singular corners and targets of 1e-3 or less.
+    Auto,
+    /// The scene's own.
+    Scene,
 }
 
 /// Subcommands.
@@ -119,10 +130,15 @@ pub enum Command {
         /// The norm --target-error is set on.
         #[arg(long, value_enum, default_value = "e_inf_u", requires = "target_error")]
         target_norm: TargetNormArg,
-        /// How --target-error refines: local (graded where the estimate is large) or
-        /// uniform (the whole spacing scaled; grids are always refined uniformly).
-        #[arg(long, value_enum, default_value = "local", requires = "target_error")]
+        /// How --target-error refines: auto (uniform where the solution is smooth, local
+        /// at singular corners), local (graded where the estimate is large) or uniform
+        /// (the whole spacing scaled; grids are always refined uniformly).
+        #[arg(long, value_enum, default_value = "auto", requires = "target_error")]
         refinement: RefinementArg,
+        /// The degree --target-error solves with: auto (RBF-FD raised to degree 6 where
+        /// the solution is smooth and the target 1e-3 or less) or scene (the scene's).
+        #[arg(long, value_enum, default_value = "auto", requires = "target_error")]
+        target_degree: TargetDegreeArg,
         /// Time budget of --target-error: seconds, or 90s, 2m, 1h (default: no limit).
         #[arg(long, allow_negative_numbers = true, value_parser = budget, requires = "target_error")]
         budget: Option<std::time::Duration>,

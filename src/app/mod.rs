@@ -123,6 +123,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
             target_error,
             target_norm,
             refinement,
+            target_degree,
             budget,
             petsc_options,
         } => {
@@ -140,7 +141,7 @@ pub fn run(cli: &Cli) -> Result<(), AppError> {
                 preset: preset.clone(),
                 allow_long: *allow_long,
                 export_system: export_system.clone(),
-                target: target_error.map(|tolerance| target::request(tolerance, *target_norm, *refinement, *budget)),
+                target: target_error.map(|tolerance| target::request(tolerance, *target_norm, *refinement, *target_degree, *budget)),
                 petsc_options: petsc_options.clone(),
             };
             run::run(req, &term, cli.quiet)

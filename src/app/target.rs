@@ -3,18 +3,24 @@
 //! (`target`).
 
 use super::AppError;
-use crate::app::cli::{RefinementArg, TargetNormArg};
+use crate::app::cli::{RefinementArg, TargetDegreeArg, TargetNormArg};
 use crate::output;
 use crate::stages::Silent;
 use crate::scene::problem::Problem;
-use crate::tradeoff::target::{self, Outcome, Refinement, Step, Stop, Target, TargetNorm, MAX_STEPS};
+use crate::tradeoff::target::{self, DegreeRule, Outcome, Refinement, Step, Stop, Target, TargetNorm, MAX_STEPS};
 use crate::quality::warnings::Warning;
 use serde::Serialize;
 use std::path::Path;
 use std::time::Duration;
 
 /// The target of the command line.
-pub(super) fn request(tolerance: f64, norm: TargetNormArg, refinement: RefinementArg, budget: Option<Duration>) -> Target {
+pub(super) fn request(
+    tolerance: f64,
+    norm: TargetNormArg,
+    refinement: RefinementArg,
+    degree: TargetDegreeArg,
+    budget: Option<Duration>,
+) -> Target {
     let norm = match norm {
         TargetNormArg::EInfU => TargetNorm::EInfU,
         TargetNormArg::EInfSigma => TargetNorm::EInfSigma,
@@ -22,10 +28,15 @@ pub(super) fn request(tolerance: f64, norm: TargetNormArg, refinement: Refinemen
         TargetNormArg::RelL2Sigma => TargetNorm::RelL2Sigma,
     };
     let refinement = match refinement {
+        RefinementArg::Auto => Refinement::Auto,
         RefinementArg::Local => Refinement::Local,
         RefinementArg::Uniform => Refinement::Uniform,
     };
-    Target { tolerance, norm, refinement, budget, max_steps: MAX_STEPS }
+    let degree = match degree {
+        TargetDegreeArg::Auto => DegreeRule::Auto,
+        TargetDegreeArg::Scene => DegreeRule::Scene,
+    };
+    Target { tolerance, norm, refinement, degree, budget, max_steps: MAX_STEPS }
 }
 
 /// `summary.json`'s `target`: what was asked, how it ended, and every step.
@@ -33,6 +44,7 @@ pub(super) fn request(tolerance: f64, norm: TargetNormArg, refinement: Refinemen
 pub(super) struct TargetReport {
     tolerance: f64,
     norm: TargetNorm,
+    /// How the loop refined (`auto` resolved: uniform or local).
     refinement: Refinement,
     budget_s: Option<f64>,
     reached: bool,
@@ -73,10 +85,7 @@ pub(super) fn pursue(p: &Problem, target: &Target, quiet: bool) -> Result<(Outco
             "target: {} <= {:e}, {} refinement{}",
             target.norm.name(),
             target.tolerance,
-            match target.refinement {
-                Refinement::Local => "local",
-                Refinement::Uniform => "uniform",
-            },
+            target.refinement.name(),
             target.budget.map_or(String::new(), |b| format!(", budget {:.0} s", b.as_secs_f64()))
         );
     }
@@ -96,12 +105,12 @@ pub(super) fn pursue(p: &Problem, target: &Target, quiet: bool) -> Result<(Outco
         for n in &outcome.notes {
             eprintln!("note: {n}");
         }
-        eprintln!("target: {}", outcome.stop.describe());
+        eprintln!("target: {} ({} refinement)", outcome.stop.describe(), outcome.refinement.name());
     }
     let report = TargetReport {
         tolerance: target.tolerance,
         norm: target.norm,
-        refinement: target.refinement,
+        refinement: outcome.refinement,
         budget_s: target.budget.map(|b| b.as_secs_f64()),
         reached: matches!(outcome.stop, Stop::Reached),
         stop: outcome.stop.clone(),

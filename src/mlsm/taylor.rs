@@ -272,13 +272,26 @@ fn sum_of_terms<'a, const K: usize>(terms: impl Iterator<Item = (u32, u32, &'a [
     out
 }
 
-/// Points a fit of degree `q` takes: 10 times its monomials. The fitted values carry
-/// the run's own error, and only wide least-squares fits average its rough part out
-/// of the high-degree coefficients: with 2.5 times the monomials the estimate of the
-/// tensor cantilever overshoots 1.5-4x, with 10 times it is within 0.84-1.20 of the
-/// true error on every measured scene (docs/notebook/2026-11-28-cheap-estimate.md).
+/// Points a fit of degree `q` takes: 10 times its monomials up to degree 4, 5 times
+/// for degrees 5 and 6, 2.5 times above. The fitted values carry the run's own error,
+/// and only wide least-squares fits average its rough part out of the high-degree
+/// coefficients: with 2.5 times the monomials the estimate of the tensor cantilever
+/// (degree 2, fits of degree 4) overshoots 1.5-4x, with 10 times it is within
+/// 0.84-1.20 of the true error on every measured scene
+/// (docs/notebook/2026-11-28-cheap-estimate.md). But the fits of a high-degree run
+/// are of a high degree themselves, and 10 times their monomials (450 points at
+/// degree 8) span a good part of a coarse plate, more than a polynomial follows:
+/// PHS degree 6 on Kirsch at 2 495 nodes read e_inf(u) 15.5x too high, on Lame at
+/// 1 742 nodes 0.29x; with 2.5 times, 2.06x and 1.00x, and from about 5 000 nodes on
+/// 0.93-1.33 on both in u and sigma (degree 4 with 5 times: 0.77-1.98 from 872 nodes;
+/// docs/notebook/2026-11-29-time-to-accuracy.md).
 pub fn fit_points(q: u32) -> usize {
-    10 * polynomial_size(q)
+    let m = polynomial_size(q);
+    match q {
+        ..=4 => 10 * m,
+        5 | 6 => 5 * m,
+        _ => 5 * m / 2,
+    }
 }
 
 #[cfg(test)]

@@ -6,5 +6,6 @@
 
 pub mod design;
 pub mod front;
+pub mod hp;
 pub mod target;
 pub mod variant;

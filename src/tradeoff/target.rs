@@ -18,7 +18,14 @@
 //!   estimate rose from 0.147 to 0.346), and a corner's error falls more slowly than
 //!   the rest's;
 //! * `uniform` (and any grid fill, which has one spacing): the whole spacing function
-//!   is scaled by the smallest of those factors.
+//!   is scaled by the smallest of those factors, with `q` the order the last two
+//!   steps showed once there are two ([`hp::observed_order`]);
+//! * `auto` (the command line's default): `uniform` where the solution is smooth,
+//!   `local` at singular corners ([`hp::is_smooth`]).
+//!
+//! With [`DegreeRule::Auto`] (the command line's default) on a smooth plate the loop
+//! also raises an RBF-FD degree to 6, starts from about 1 000 nodes and predicts with
+//! `q = p` ([`hp`]).
 //!
 //! The tolerance per node is `tau = E` for an e_inf target; for a relative-L2 target
 //! it is `E * est_e_inf / est_rel_l2` of the same field (a node error at that level
@@ -27,6 +34,7 @@
 //! second-derivative operators are consistent to `O(h^(p-1))`, the pessimistic end of
 //! the measured orders, so a step overshoots rather than falls short.
 
+use super::hp;
 use crate::domain::adapt::{self, GROWTH};
 use crate::domain::{FillKind, SpacingSamples};
 use crate::models::navier::{self, ErrorEstimate, EstimateMethod};
@@ -97,10 +105,33 @@ impl TargetNorm {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Refinement {
+    /// Uniform where the solution is smooth ([`hp::is_smooth`]), local where it is not.
+    Auto,
     /// Graded, where the indicator asks for it.
     Local,
     /// The whole spacing function scaled by one factor.
     Uniform,
+}
+
+impl Refinement {
+    /// The word of the command line (`auto`, `local`, `uniform`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Refinement::Auto => "auto",
+            Refinement::Local => "local",
+            Refinement::Uniform => "uniform",
+        }
+    }
+}
+
+/// Which degree the loop solves with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DegreeRule {
+    /// The scene's, raised by [`hp::raised_degree`] where the solution is smooth.
+    Auto,
+    /// The scene's own.
+    Scene,
 }
 
 /// What `--target-error` asks for.
@@ -112,6 +143,8 @@ pub struct Target {
     pub norm: TargetNorm,
     /// How nodes are refined.
     pub refinement: Refinement,
+    /// Which degree the loop solves with.
+    pub degree: DegreeRule,
     /// Wall-clock limit of the whole loop.
     pub budget: Option<Duration>,
     /// Solves at most ([`MAX_STEPS`] from the command line; a test sets fewer to bound
@@ -204,8 +237,10 @@ pub struct Outcome {
     /// The solution of the best step.
     pub solution: navier::Solution,
     /// What the loop changed in the request, to print (a grid refined uniformly, the
-    /// estimate switched on).
+    /// estimate switched on, the degree raised).
     pub notes: Vec<String>,
+    /// How the loop refined (never `Auto`).
+    pub refinement: Refinement,
 }
 
 /// Why `target` cannot be pursued on `p`, if it cannot.
@@ -270,12 +305,30 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         problem.navier.estimate.method = EstimateMethod::Auto;
         notes.push("the error estimate is switched on (estimate.method = \"auto\"): the target is set on it".into());
     }
-    let mut refinement = target.refinement;
+    let smooth = hp::is_smooth(&problem);
+    let mut refinement = match target.refinement {
+        Refinement::Auto if smooth => Refinement::Uniform,
+        Refinement::Auto => Refinement::Local,
+        chosen => chosen,
+    };
     if refinement == Refinement::Local && problem.navier.fill.kind == FillKind::Grid {
         refinement = Refinement::Uniform;
         notes.push("a grid has one spacing: refined uniformly (fill = \"scattered\" refines locally)".into());
     }
-    let order = problem.navier.approximation.formal_order();
+    let hp_steps = target.degree == DegreeRule::Auto && smooth && refinement == Refinement::Uniform;
+    if target.degree == DegreeRule::Auto && smooth {
+        if let Some((raised, note)) = hp::raised_degree(&problem, target.tolerance) {
+            problem = raised;
+            notes.push(note);
+        }
+        if refinement == Refinement::Uniform {
+            if let Some((coarse, note)) = hp::probe(&problem) {
+                problem = coarse;
+                notes.push(note);
+            }
+        }
+    }
+    let formal = if hp_steps { hp::uniform_order(&problem.navier.approximation) } else { problem.navier.approximation.formal_order() };
     let mut history: Vec<Step> = Vec::new();
     let mut solution = navier::solve(&problem.case, &problem.navier, progress)?;
     let target = &aimed(target, &problem, &solution, &mut notes);
@@ -307,6 +360,8 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
         } else if stalled(&history) {
             Err(Stop::Stalled)
         } else {
+            let shown: Vec<(f64, f64)> = history.iter().map(|s| (s.spacing_max, s.estimate)).collect();
+            let order = hp::observed_order(&shown, formal, refinement == Refinement::Uniform);
             next_problem(&problem, &solution, estimate, target, refinement, order)
                 .map_err(|reason| Stop::Memory { reason })
                 .and_then(|(next, nodes)| within_budget(target.budget, t0.elapsed().as_secs_f64(), &history[k], nodes).map(|()| next))
@@ -336,7 +391,7 @@ pub fn pursue(p: &Problem, target: &Target, progress: &dyn Progress, mut on_step
             best + 1
         ));
     }
-    Ok(Outcome { history, stop, best, problem, solution, notes })
+    Ok(Outcome { history, stop, best, problem, solution, notes, refinement })
 }
 
 /// `Err(Stop::Budget)` when the next step, of about `nodes` nodes, is predicted to take
@@ -380,7 +435,7 @@ fn next_problem(
     // A relative-L2 target as a per-node tolerance (module docs).
     let tau = if value > 0.0 { target.tolerance * e_inf / value } else { target.tolerance };
     let fill = match refinement {
-        Refinement::Uniform => {
+        Refinement::Uniform | Refinement::Auto => {
             let factor = indicator.iter().map(|&eta| adapt::refinement_factor(eta, tau, order)).fold(1.0, f64::min);
             p.navier.fill.scaled(factor)
         }

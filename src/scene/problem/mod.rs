@@ -200,6 +200,11 @@ impl Problem {
         validate::validate(spec, path, preset)
     }
 
+    /// Nodes the Navier fill is expected to make ([`validate::expected_nodes`]).
+    pub fn expected_nodes(&self) -> f64 {
+        validate::expected_nodes(&self.case.domain, &self.navier.fill, self.case.domain.area_estimate(400))
+    }
+
     /// The same problem at another node spacing (used by convergence studies and
     /// `--spacing`); refused when the spacing is not positive or would give more than
     /// [`validate::MAX_NODES`] or fewer than two supports' worth of nodes.
