@@ -281,18 +281,18 @@ impl Domain {
     }
 
     /// Area by midpoint sampling on a `k x k` lattice over the bounding box
-    /// (relative error about perimeter * cell / area).
+    /// (relative error about perimeter * cell / area). The lattice's columns are
+    /// counted in parallel (an exact count, so the same area on any thread count):
+    /// validation, the node count and the memory check each take it, and at 400 x 400
+    /// on the bracket it was a third of a 1 000-node run.
     pub fn area_estimate(&self, k: usize) -> f64 {
+        use rayon::prelude::*;
         let (lo, hi) = self.bounding_box();
         let (dx, dy) = ((hi[0] - lo[0]) / k as f64, (hi[1] - lo[1]) / k as f64);
-        let mut inside = 0usize;
-        for i in 0..k {
-            for j in 0..k {
-                if self.contains([lo[0] + (i as f64 + 0.5) * dx, lo[1] + (j as f64 + 0.5) * dy]) {
-                    inside += 1;
-                }
-            }
-        }
+        let inside: usize = (0..k)
+            .into_par_iter()
+            .map(|i| (0..k).filter(|&j| self.contains([lo[0] + (i as f64 + 0.5) * dx, lo[1] + (j as f64 + 0.5) * dy])).count())
+            .sum();
         inside as f64 * dx * dy
     }
 
