@@ -146,7 +146,7 @@ pub(super) fn run(p: &Problem, levels: usize, dir: &Path, term: &Terminal, quiet
     let factor = 2f64.powi(levels as i32);
     let mut finest = p.clone();
     finest.navier.fill = p.navier.fill.scaled(1.0 / factor);
-    let first = crate::scene::problem::validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
+    let first = p.expected_nodes();
     crate::models::resources::check_navier_nodes(&finest, first * factor * factor)?;
     p.with_spacing(p.navier.fill.spacing / factor)?;
     let staged = StagedDir::create(dir, convergence_owns)?;

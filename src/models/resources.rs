@@ -2,7 +2,7 @@
 //! the memory the machine has available.
 //!
 //! The model (bytes), with `n` nodes (the fill's prediction,
-//! `validate::expected_nodes`), `k` unknowns per node, support `s`, `N = k n`:
+//! `Problem::expected_nodes`), `k` unknowns per node, support `s`, `N = k n`:
 //!
 //! ```text
 //! nonzeros   Z = (k^2 - k + 2) n s        (Navier rows couple k unknowns of s nodes; u-p continuity rows 2)
@@ -44,7 +44,7 @@ use crate::models::navier::estimate::{reference_approximation, EstimateMethod};
 use crate::models::navier::NavierParams;
 use crate::output::{available_memory, available_memory_bytes};
 use crate::models::peridynamics::PdParams;
-use crate::scene::problem::{validate, Problem, ProblemError};
+use crate::scene::problem::{Problem, ProblemError};
 use serde::Serialize;
 
 /// The estimate of one run.
@@ -258,8 +258,7 @@ pub fn of(p: &Problem) -> MemoryEstimate {
             e
         }
         _ => {
-            let nodes = validate::expected_nodes(&p.case.domain, &p.navier.fill, p.case.domain.area_estimate(400));
-            navier(&p.case, &p.navier, nodes)
+            navier(&p.case, &p.navier, p.expected_nodes())
         }
     }
 }

@@ -41,12 +41,12 @@ pub const PROBE_NODES: f64 = 1000.0;
 const SURVEY_NODES: f64 = 2000.0;
 
 /// Whether `p`'s solution is smooth: an exact solution (smooth by construction), or
-/// no singular corner on a coarse node set of its domain.
-pub fn is_smooth(p: &Problem) -> bool {
+/// no singular corner on a coarse node set of its domain (`nodes`: the node count
+/// `p`'s fill is expected to make, [`Problem::expected_nodes`]).
+pub fn is_smooth(p: &Problem, nodes: f64) -> bool {
     if p.case.exact.is_some() {
         return true;
     }
-    let nodes = p.expected_nodes();
     let fill = if nodes > SURVEY_NODES { p.navier.fill.scaled((nodes / SURVEY_NODES).sqrt()) } else { p.navier.fill.clone() };
     crate::physics::case::singular_corners(&p.case, &domain::generate(&p.case.domain, &fill)).is_empty()
 }
@@ -73,11 +73,11 @@ pub fn raised_degree(p: &Problem, tolerance: f64) -> Option<(Problem, String)> {
     Some((raised, note))
 }
 
-/// `p` on about [`PROBE_NODES`] nodes when it would have more (its spacing function
-/// scaled as a whole), with the note that says so; `None` when it has no more or its
-/// fill is a grid (whose spacing the scene fixed for its lattice).
-pub fn probe(p: &Problem) -> Option<(Problem, String)> {
-    let nodes = p.expected_nodes();
+/// `p` on about [`PROBE_NODES`] nodes when it would have more (`nodes`, as for
+/// [`is_smooth`]; its spacing function scaled as a whole), with the note that says
+/// so; `None` when it has no more or its fill is a grid (whose spacing the scene fixed
+/// for its lattice).
+pub fn probe(p: &Problem, nodes: f64) -> Option<(Problem, String)> {
     if nodes <= PROBE_NODES || p.navier.fill.kind == FillKind::Grid {
         return None;
     }

@@ -7,5 +7,6 @@
 pub mod design;
 pub mod front;
 pub mod hp;
+pub mod request;
 pub mod target;
 pub mod variant;
