@@ -638,7 +638,11 @@ fn invalid_scenes_exit_2_naming_the_field() {
             &["peridynamics.force", "[dynamics]"],
         ),
         // Peridynamics ([peridynamics] table on the template, nu = 1/4 unless the case is about nu).
-        ("bond-based PD with nu = 0.3", Some(scene_plus("[peridynamics]\nhorizon = 0.2\n")), &["material.nu", "nu = 1/4", "plane strain"]),
+        (
+            "bond-based PD with nu = 0.3",
+            Some(scene_plus("[peridynamics]\nhorizon = 0.2\nsolid = \"bond-based\"\n")),
+            &["peridynamics.solid", "nu = 1/4", "plane strain", "lps"],
+        ),
         (
             "PD horizon smaller than the spacing",
             Some(pd(&[("horizon = 0.2", "horizon = 0.2\nm = 0.5")])),

@@ -235,6 +235,7 @@ fn write_pd_static(
     }
     let output = OutputStage::start();
     let mut checks = warnings::peridynamics_static(&sol, &estimate, p.navier.estimate.threshold);
+    checks.warnings.extend(warnings::pd_near_incompressible(&p.case.material));
     checks.warnings.extend(warnings::memory(p));
     write_points_vtu(&staged.path().join("solution.vtu"), free, &p.case.domain, pd_fields(&p.case, &sol, &estimate))?;
     output.record(&mut sol.timings);
@@ -404,6 +405,7 @@ fn write_dynamic<M: Serialize>(
     }
     if let Some(pd) = peridynamics {
         warnings::pd_discretisation(discretisation, (pd.horizon, pd.ratio), threshold, &mut checks);
+        checks.warnings.extend(warnings::pd_near_incompressible(&p.case.material));
     }
     checks.warnings.extend(warnings::memory(p));
     checks.notes.extend(warnings::unbalanced_note(d.unbalanced));

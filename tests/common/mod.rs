@@ -10,6 +10,20 @@ use std::path::Path;
 /// unless the scene or an edit sets `estimate.*`: the tests that measure true errors
 /// do not pay for it; tests/estimate.rs turns it on.
 pub fn scene(name: &str, edits: &[(&str, Option<toml::Value>)]) -> Problem {
+    scene_result(name, edits).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The error of a shipped scene with `edits` that validation must refuse.
+#[allow(dead_code)]
+pub fn scene_error(name: &str, edits: &[(&str, Option<toml::Value>)]) -> mlsm::scene::problem::ProblemError {
+    match scene_result(name, edits) {
+        Ok(_) => panic!("{name} with {edits:?} was accepted"),
+        Err(e) => e,
+    }
+}
+
+/// [`scene`], validated or refused.
+pub fn scene_result(name: &str, edits: &[(&str, Option<toml::Value>)]) -> Result<Problem, mlsm::scene::problem::ProblemError> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems").join(format!("{name}.toml"));
     let text = std::fs::read_to_string(&path).unwrap();
     let mut doc: toml::Table = toml::from_str(&text).unwrap();
@@ -31,7 +45,7 @@ pub fn scene(name: &str, edits: &[(&str, Option<toml::Value>)]) -> Problem {
             }
         }
     }
-    Problem::from_str(&toml::to_string(&doc).unwrap(), &path).unwrap_or_else(|e| panic!("{e}"))
+    Problem::from_str(&toml::to_string(&doc).unwrap(), &path)
 }
 
 /// A float TOML value.

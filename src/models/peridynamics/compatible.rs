@@ -54,15 +54,30 @@ pub fn target_moment((a, b): (i32, i32), moment: f64, delta: f64) -> f64 {
 }
 
 /// Moments `int_{H} lambda(|xi|) (xi1/delta)^a (xi2/delta)^b dA` over the horizon disc
-/// of `x` clipped to the points where `contains` holds, by polar quadrature: 128
-/// Gauss-Legendre panels of 4 points in the angle; along each ray the first exit
-/// `R(theta)` is bracketed in steps of `delta/16` and bisected to `1e-12 delta`; the
-/// radial integral is exact for the plain kernel (`c R^(n-1) / ((n-1) delta^n)`) and
+/// of `x` clipped to the points where `contains` holds ([`ray_moments`]); the radial
+/// integral is exact for the plain kernel (`c R^(n-1) / ((n-1) delta^n)`) and
 /// 16 x 12-point Gauss-Legendre otherwise (relative error below 1e-10 on the whole disc).
 pub fn truncated_moments(x: Point, contains: &dyn Fn(Point) -> bool, kernel: &Micromodulus, moments: &[(i32, i32)]) -> Vec<f64> {
     let delta = kernel.horizon;
-    let angle_rule = GaussLegendre::new(NonZeroUsize::new(4).unwrap());
     let radial_rule = GaussLegendre::new(NonZeroUsize::new(12).unwrap());
+    let radial = |reach: f64, n: i32| match kernel.kernel {
+        super::Kernel::Plain => kernel.constant * reach.powi(n - 1) / ((n - 1) as f64 * delta.powi(n)),
+        super::Kernel::Regularised { .. } => {
+            let f = |r: f64| kernel.value(r) * (r / delta).powi(n) * r;
+            (0..16).map(|q| radial_rule.integrate(reach * q as f64 / 16.0, reach * (q + 1) as f64 / 16.0, f)).sum()
+        }
+    };
+    ray_moments(x, contains, delta, &radial, moments)
+}
+
+/// `int_0^2pi cos^a sin^b radial(R(theta), a + b) dtheta` for every `(a, b)` of
+/// `moments`, `R(theta)` the distance from `x` along the ray at angle `theta` to the
+/// first point where `contains` fails, capped at `delta`: 128 Gauss-Legendre panels of
+/// 4 points in the angle; along each ray the first exit is bracketed in steps of
+/// `delta/16` and bisected to `1e-12 delta`. With `radial(R, n) = int_0^R k(r) (r/delta)^n r dr`
+/// this is the moment `int_H k(|xi|) (xi1/delta)^a (xi2/delta)^b dA` of a radial kernel `k`.
+pub fn ray_moments(x: Point, contains: &dyn Fn(Point) -> bool, delta: f64, radial: &dyn Fn(f64, i32) -> f64, moments: &[(i32, i32)]) -> Vec<f64> {
+    let angle_rule = GaussLegendre::new(NonZeroUsize::new(4).unwrap());
     let panels = 128;
     let mut out = vec![0.0; moments.len()];
     for k in 0..panels {
@@ -74,21 +89,13 @@ pub fn truncated_moments(x: Point, contains: &dyn Fn(Point) -> bool, kernel: &Mi
             let at = |r: f64| contains([x[0] + r * dir[0], x[1] + r * dir[1]]);
             let reach = first_exit(&at, delta);
             // The radial integral depends on the degree n = a + b only: once per degree.
-            let radial = |n: i32| match kernel.kernel {
-                super::Kernel::Plain => kernel.constant * reach.powi(n - 1) / ((n - 1) as f64 * delta.powi(n)),
-                super::Kernel::Regularised { .. } => {
-                    let f = |r: f64| kernel.value(r) * (r / delta).powi(n) * r;
-                    (0..16).map(|q| radial_rule.integrate(reach * q as f64 / 16.0, reach * (q + 1) as f64 / 16.0, f)).sum()
-                }
-            };
             let mut radial_of = [f64::NAN; 8];
             for (slot, &(a, b)) in out.iter_mut().zip(moments) {
                 let n = (a + b) as usize;
                 if radial_of[n].is_nan() {
-                    radial_of[n] = radial(a + b);
+                    radial_of[n] = radial(reach, a + b);
                 }
-                let radial = radial_of[n];
-                *slot += wt * dir[0].powi(a) * dir[1].powi(b) * radial;
+                *slot += wt * dir[0].powi(a) * dir[1].powi(b) * radial_of[n];
             }
         }
     }

@@ -11,13 +11,16 @@
 //!
 //! (the second linearises to the first). Energies (seed 000, definition 4.1.5):
 //! `E_kin = sum_i rho V_i |v_i|^2 / 2`, `E_el = 1/2 sum_i V_i sum_j w_ij` with
-//! `w = c_ij (xi . eta)^2 / 2` (linear) or `c_ij |xi|^4 s^2 / 2`, `E_ext = -sum_i V_i b_i . u_i`.
+//! `w = c_ij (xi . eta)^2 / 2` (linear) or `c_ij |xi|^4 s^2 / 2`, `E_ext = -sum_i V_i b_i . u_i`;
+//! the linear peridynamic solid adds its dilatation force and energy
+//! `(beta / 2) sum_i V_i theta_i^2` ([`super::dilatation`]).
 //!
 //! Stable step (Silling & Askari 2005, central differences; Gershgorin bound on the
 //! largest eigenvalue of the linear operator):
 //! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
 //! [`crate::models::dynamics::Integrator::stability_factor`].
 
+use super::dilatation::Dilatation;
 use super::family::Families;
 use super::loads::LoadLayer;
 use super::nodes::PdNodes;
@@ -48,6 +51,8 @@ pub struct PdDynamics<'a> {
     pub density: f64,
     /// Force law.
     pub force: BondForce,
+    /// The dilatation term of the linear peridynamic solid (linear law only).
+    pub dilatation: Option<&'a Dilatation>,
     /// The loads at any time, when a load depends on time.
     pub varying: Option<VaryingLoads<'a>>,
 }
@@ -180,14 +185,24 @@ impl PdDynamics<'_> {
         }
     }
 
-    /// Largest stable time step of the central-difference schemes (module docs).
+    /// Every node's displacement (the free ones from `u`, the collar's of `loads`) and
+    /// the dilatation of every node, when the solid has the dilatation term.
+    fn theta(&self, u: &[f64], loads: &Instant) -> Option<Vec<f64>> {
+        let d = self.dilatation?;
+        let all: Vec<[f64; 2]> = (0..self.nodes().len()).map(|j| self.displacement(u, loads, j)).collect();
+        Some(d.theta(self.nodes(), &all))
+    }
+
+    /// Largest stable time step of the central-difference schemes (module docs; with
+    /// the dilatation term, its rows' Gershgorin bounds are added).
     pub fn stable_time_step(&self) -> f64 {
         let x = &self.nodes().positions;
         let families = self.bonds.families;
+        let dilatation = self.dilatation.map(|d| d.row_bounds(self.nodes()));
         let worst = (0..self.nodes().free)
             .into_par_iter()
             .map(|i| {
-                families
+                dilatation.as_ref().map_or(0.0, |b| b[i]) + families
                     .range(i)
                     .zip(families.of(i))
                     .map(|(b, &j)| {
@@ -212,7 +227,7 @@ impl PdDynamics<'_> {
     pub fn energies(&self, t: f64, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
         let (nodes, dofs) = (self.nodes(), self.dofs());
         let loads = self.loads(t);
-        (0..nodes.free)
+        let (kin, el, ext) = (0..nodes.free)
             .into_par_iter()
             .map(|i| {
                 let vol = nodes.volumes[i];
@@ -222,7 +237,9 @@ impl PdDynamics<'_> {
                 let b = loads.body_force[i];
                 (kin, 0.5 * vol * w, -vol * (b[0] * ui[0] + b[1] * ui[1]))
             })
-            .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2))
+            .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        let dilatation = self.theta(u, &loads).map_or(0.0, |theta| self.dilatation.map_or(0.0, |d| d.energy(nodes, &theta)));
+        (kin, el + dilatation, ext)
     }
 }
 
@@ -233,8 +250,13 @@ impl SecondOrderSystem for PdDynamics<'_> {
 
     fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]) {
         let loads = self.loads(t);
+        let theta = self.theta(u, &loads);
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
-            let f = self.force(u, &loads, i);
+            let mut f = self.force(u, &loads, i);
+            if let (Some(d), Some(theta)) = (self.dilatation, theta.as_deref()) {
+                let g = d.force_at(self.nodes(), theta, i);
+                f = [f[0] + g[0], f[1] + g[1]];
+            }
             let b = loads.body_force[i];
             a[0] = (f[0] + b[0]) / self.density;
             a[1] = (f[1] + b[1]) / self.density;
@@ -296,7 +318,14 @@ pub fn simulate_sampled(
     let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
     let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes)?;
     let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
-    let system = PdDynamics { bonds: disc.bonds(), body_force: &body_force, density: dynamics.density, force: params.force, varying };
+    let system = PdDynamics {
+        bonds: disc.bonds(),
+        body_force: &body_force,
+        density: dynamics.density,
+        force: params.force,
+        dilatation: disc.dilatation.as_ref(),
+        varying,
+    };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let dofs = disc.nodes.dofs();
     let flat = |f: &Value| {

@@ -23,6 +23,7 @@
 //! stable step and the time-dependent run).
 
 pub mod compatible;
+pub mod dilatation;
 pub mod discretisation;
 pub mod dynamics;
 pub mod family;
@@ -37,14 +38,14 @@ pub mod weights;
 
 pub use dynamics::{simulate, simulate_sampled, Simulation};
 pub use kernel::{Kernel, KernelKind, Micromodulus};
-pub use params::{BondForce, PdParams, Quadrature, SurfaceCorrection};
+pub use params::{BondForce, PdParams, Quadrature, Solid, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
 
 /// A small plate shared by the stage tests of this model.
 #[cfg(test)]
 pub(crate) mod test_case {
     use super::nodes::{self, Body, PdNodes};
-    use super::{BondForce, Kernel, PdParams, Quadrature, SurfaceCorrection};
+    use super::{BondForce, Kernel, PdParams, Quadrature, Solid, SurfaceCorrection};
     use crate::domain::Domain;
     use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
     use crate::linalg::SolverParams;
@@ -67,6 +68,7 @@ pub(crate) mod test_case {
             correction: SurfaceCorrection::None,
             solver: SolverParams::lu(),
             force: BondForce::Linear,
+            solid: Solid::BondBased,
         }
     }
 

@@ -5,7 +5,8 @@
 //! A rule point inside the solid (signed distance <= 0) is a free node with volume
 //! `weight * h^2`. The seven-point triangle rule shares vertices and edge midpoints
 //! between cells: a shared point gets the sum of the shares of the cells that hold
-//! material, and a point on the boundary is free with the shares of the inner cells. A rule point outside, within the collar `delta + 0.75 h` of a
+//! material, and a point on the boundary is free with the shares of the inner cells. A rule point outside, within the collar `delta + 0.75 h` (`2 delta + 0.75 h`
+//! for the linear peridynamic solid, [`PdParams::collar_width`]) of a
 //! boundary part with a displacement condition, is a constrained node: the
 //! Dirichlet volume constraint gives it the prescribed displacement (the constant of
 //! the part, or the exact solution evaluated at the node itself). The extra `0.75 h`
@@ -99,7 +100,7 @@ pub struct Body<'a> {
     exact: Option<&'a dyn ExactSolution>,
     samples: Vec<crate::domain::BoundarySample>,
     tree: ImmutableKdTree<f64, 2>,
-    /// Collar width `delta + 0.75 h`.
+    /// Collar width ([`PdParams::collar_width`]).
     pub collar: f64,
 }
 
@@ -111,7 +112,7 @@ impl<'a> Body<'a> {
         let samples = discretise_boundary(domain, h / 4.0);
         let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
         let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&points).expect("finite boundary samples");
-        Body { domain, conditions, exact, samples, tree, collar: params.horizon + 0.75 * h }
+        Body { domain, conditions, exact, samples, tree, collar: params.collar_width() }
     }
 
     /// The part and prescribed displacement of an outside point whose nearest

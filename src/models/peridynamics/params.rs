@@ -83,6 +83,19 @@ choice! {
     }
 }
 
+choice! {
+    /// The constitutive model of the peridynamic solid (`peridynamics.solid`).
+    pub enum Solid("peridynamics.solid", default Some(Solid::Auto), serde "kebab-case") {
+        /// Bond-based where it represents the material, the linear peridynamic solid otherwise
+        /// (resolved by validation: a validated [`PdParams`] never holds it).
+        Auto = "auto" => "bond-based where it represents the material (nu = 1/4 plane strain, 1/3 plane stress), else the linear peridynamic solid",
+        /// Pairwise bonds only: in-plane `lambda = mu` ([`super::kernel`]).
+        BondBased = "bond-based" => "pairwise bonds only (in-plane lambda = mu: nu = 1/4 plane strain, 1/3 plane stress)",
+        /// Bonds plus the dilatation term of [`super::dilatation`]: any `nu`.
+        Linear = "lps" => "the linear peridynamic solid: bonds plus a dilatation term, any nu",
+    }
+}
+
 /// The `[peridynamics]` table of a scene, validated.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct PdParams {
@@ -100,6 +113,8 @@ pub struct PdParams {
     pub solver: crate::linalg::SolverParams,
     /// Bond force law.
     pub force: BondForce,
+    /// Constitutive model (bond-based or the linear peridynamic solid, never `Auto`).
+    pub solid: Solid,
 }
 
 choice! {
@@ -117,6 +132,20 @@ impl PdParams {
     /// Cell size `h = delta / m`.
     pub fn spacing(&self) -> f64 {
         self.horizon / self.ratio
+    }
+
+    /// Whether the dilatation term of the linear peridynamic solid is on.
+    pub fn has_dilatation(&self) -> bool {
+        self.solid == Solid::Linear
+    }
+
+    /// Width of the Dirichlet collar outside displacement parts: `delta + 0.75 h`
+    /// (the extra `0.75 h` covers the cells the partial-area rule counts beyond
+    /// `delta`), and one more `delta` for the linear peridynamic solid, whose
+    /// dilatation at a collar node next to the solid reads the collar's own family.
+    pub fn collar_width(&self) -> f64 {
+        let reach = if self.has_dilatation() { 2.0 } else { 1.0 };
+        reach * self.horizon + 0.75 * self.spacing()
     }
 
     /// Nodes per cell of the rule.

@@ -2,6 +2,7 @@
 //! solve -> post-processing (nonlocal strain, errors against an exact solution on
 //! the whole plate and on the interior region at distance >= delta from the boundary).
 
+use super::dilatation::Dilatation;
 use super::family::Families;
 use super::kernel::{fourth_moment, Micromodulus};
 use super::nodes::{self, Body, PdNodes};
@@ -12,7 +13,7 @@ use crate::physics::case::Case;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
 use crate::physics::elasticity::stress::{Gradient, StressField};
 use crate::physics::exact::ExactSolution;
-use crate::linalg::{self, SolveReport};
+use crate::linalg::{self, Csr, SolveReport};
 use crate::parallel::petsc::World;
 use crate::parallel::distributed;
 use crate::parallel::share::Share;
@@ -24,6 +25,8 @@ use std::borrow::Cow;
 pub const FAMILIES: Stage = Stage::new("families");
 /// Bond weights (quadrature, correction, compatible weights).
 pub const WEIGHTS: Stage = Stage::new("weights");
+/// The dilatation's families and weights (linear peridynamic solid only).
+pub const DILATATION: Stage = Stage::new("dilatation");
 use crate::quality::post::{masked_errors, ErrorNorms, ExactFields};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -115,6 +118,8 @@ pub struct Discretisation {
     pub weights: BondWeights,
     /// Calibrated micromodulus.
     pub micromodulus: Micromodulus,
+    /// The dilatation term of the linear peridynamic solid ([`super::dilatation`]).
+    pub dilatation: Option<Dilatation>,
     /// Bonds of the free nodes (both directions counted), over all ranks.
     pub bond_count: usize,
     /// The free nodes this process works on: all of them, or when the solve is
@@ -190,7 +195,23 @@ impl Discretisation {
             );
             Ok((w, note))
         })?;
-        let mut disc = Discretisation { bond_count: families.bonds(), nodes, families, weights, micromodulus, share: Share::whole() };
+        let dilatation = if params.has_dilatation() {
+            Some(timer.run(DILATATION, || {
+                let d = Dilatation::new(&body, &nodes, params, &case.material);
+                let note = format!(
+                    "beta = lambda - mu = {:.4e}, {} dilatation bonds, {} rows fitted to the continuum moments ({} singular)",
+                    d.coefficient,
+                    d.families.bonds(),
+                    d.fitted_rows,
+                    d.fit_failures
+                );
+                Ok((d, note))
+            })?)
+        } else {
+            None
+        };
+        let mut disc =
+            Discretisation { bond_count: families.bonds(), nodes, families, weights, micromodulus, dilatation, share: Share::whole() };
         if layer.is_some() {
             // Every rank counted its own rows; the counts are of all of them.
             let w = &disc.weights;
@@ -214,6 +235,23 @@ impl Discretisation {
     /// The operator `L_h` over these bonds.
     pub fn bonds(&self) -> Bonds<'_> {
         Bonds { nodes: &self.nodes, families: &self.families, coefficients: &self.weights.coefficients }
+    }
+
+    /// The stiffness over the free unknowns of this process's rows and its right-hand
+    /// side for the body force densities `body_force`: the bonds' and, for the linear
+    /// peridynamic solid, the dilatation's ([`Dilatation::stiffness_rows`]); `Err` is the
+    /// first node with a coefficient that is not finite.
+    pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(Csr, Vec<f64>), usize> {
+        let (k, mut rhs) = self.bonds().stiffness_rows(body_force, |i| self.owns(i))?;
+        let Some(d) = &self.dilatation else {
+            return Ok((k, rhs));
+        };
+        let (kd, rd) = d.stiffness_rows(&self.nodes, |i| self.owns(i));
+        if let Some(bad) = (0..kd.nrows()).find(|&r| kd.row(r).values().iter().any(|v| !v.is_finite()) || !rd[r].is_finite()) {
+            return Err(bad / 2);
+        }
+        rhs.iter_mut().zip(&rd).for_each(|(a, b)| *a += b);
+        Ok((k.minus_scaled(-1.0, &kd), rhs))
     }
 }
 
@@ -271,7 +309,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
         let assembled =
-            disc.bonds().stiffness_rows(&b, |i| disc.owns(i)).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
+            disc.stiffness(&b).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
         let (m, rhs) = distributed::agree(assembled)?;
         let rows = if disc.share.is_split() { " in this rank's rows" } else { "" };
         let note = format!("{} unknowns, {} nonzeros{rows}, {layer} nodes in loaded layers", rhs.len(), m.nnz());

@@ -56,7 +56,8 @@ pub fn partial_area_fraction(xi: Point, h: f64, delta: f64) -> f64 {
     (a / (h * h)).clamp(0.0, 1.0)
 }
 
-fn area_fraction(params: &PdParams, xi: Point) -> f64 {
+/// `f_ij` of the rule (1 but for the partial-area rule, [`partial_area_fraction`]).
+pub fn area_fraction(params: &PdParams, xi: Point) -> f64 {
     match params.quadrature {
         Quadrature::PartialArea => partial_area_fraction(xi, params.spacing(), params.horizon),
         _ => 1.0,

@@ -45,7 +45,10 @@
 mod peridynamics;
 mod time;
 
-pub use peridynamics::{discretisation as pd_discretisation, peridynamics_static, LOCAL_REFERENCE_MARGIN, PD_MIN_RATIO};
+pub use peridynamics::{
+    discretisation as pd_discretisation, near_incompressible as pd_near_incompressible, peridynamics_static, LOCAL_REFERENCE_MARGIN,
+    PD_LAMBDA_OVER_MU, PD_MIN_RATIO,
+};
 pub use time::{dynamic, energy_drift, load_time_resolution};
 
 use crate::domain::Point;

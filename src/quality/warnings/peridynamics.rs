@@ -13,6 +13,29 @@ use crate::models::peridynamics::PdSolution;
 /// the horizon (docs/guide/estimate-and-warnings.md, "Outcomes at the extremes").
 pub const PD_MIN_RATIO: f64 = 3.0;
 
+/// In-plane `lambda / mu` above which a linear peridynamic solid is warned as near
+/// incompressible (`nu > 0.495` in plane strain): with no pressure unknown its error at
+/// coarse horizons grows with `lambda / mu` and the iterative solve slows, then fails
+/// (pd_manufactured, docs/methods/peridynamics.md, "Any Poisson ratio").
+pub const PD_LAMBDA_OVER_MU: f64 = 100.0;
+
+/// The warning of a peridynamic run on a near-incompressible material
+/// (`lambda / mu` above [`PD_LAMBDA_OVER_MU`]), if it is one.
+pub fn near_incompressible(material: &crate::physics::elasticity::material::Material) -> Option<Warning> {
+    let l = material.lame();
+    let ratio = l.lambda / l.mu;
+    (ratio > PD_LAMBDA_OVER_MU).then(|| Warning {
+        check: "pd-near-incompressible",
+        message: format!(
+            "nu = {} gives lambda / mu = {ratio:.0} (above {PD_LAMBDA_OVER_MU}): the peridynamic solid has no pressure unknown, so its \
+             error at coarse horizons grows with lambda / mu (pd_manufactured at nu = 0.49999: 0.63 at delta = 0.2, 1.1e-3 at \
+             0.025) and GMRES + AMG slows, then fails (nu >= 0.4999); use a smaller horizon, [peridynamics.solver] kind = \"lu\", \
+             or --model navier (u-p formulation)",
+            material.elastic.poisson
+        ),
+    })
+}
+
 /// The checks of a static peridynamic run: `m < 3` is warned (a discretisation that
 /// cannot approximate the nonlocal integral), and the `local-model` estimate is read by
 /// [`estimate_of_peridynamics`]. The difference to an exact *local* solution is a

@@ -166,6 +166,8 @@ pub struct PeridynamicsSpec {
     pub solver: Option<SolverSpec>,
     /// Bond force: `linear` (default) or `bond-stretch` (nonlinear).
     pub force: Option<String>,
+    /// `auto` (default), `bond-based` or `lps` (the linear peridynamic solid).
+    pub solid: Option<String>,
 }
 
 /// `[domain]`: a list of regions combined left to right.

@@ -221,7 +221,7 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
     let approximation = approximation::approximation(&c, &spec.approximation, fill.kind, dynamic)?;
     approximation::check_node_count(&c, &domain, &fill, &approximation, area)?;
     let mut material = material::material(&c, &spec.material)?;
-    if spec.peridynamics.is_some() {
+    if spec.peridynamics.as_ref().is_some_and(|p| !peridynamics::names_lps(p)) {
         notes.extend(peridynamics::snap_poisson(&mut material));
     }
     let formulation = approximation::formulation(&c, &spec.approximation, &material, dynamic)?;

@@ -8,7 +8,7 @@ use crate::domain::Domain;
 use crate::physics::elasticity::conditions::ConditionKind;
 use crate::physics::elasticity::material::{Material, PlaneModel};
 use crate::linalg::{SolverKind, SolverParams};
-use crate::models::peridynamics::{BondForce, Kernel, KernelKind, PdParams, Quadrature, SurfaceCorrection};
+use crate::models::peridynamics::{BondForce, Kernel, KernelKind, PdParams, Quadrature, Solid, SurfaceCorrection};
 use crate::scene::problem::spec::{BoundarySpec, PeridynamicsSpec};
 use crate::scene::problem::ProblemError;
 
@@ -81,23 +81,47 @@ pub(super) fn snap_poisson(material: &mut Material) -> Option<String> {
     Some(format!("material.nu = {nu} taken as {name} (within {POISSON_SNAP:e}), the value bond-based peridynamics represents in {plane}"))
 }
 
-/// nu must be one bond-based peridynamics can represent.
-fn check_material(c: &Ctx, material: &Material) -> Result<(), ProblemError> {
-    if !crate::models::peridynamics::kernel::representable(material) {
-        let (need, plane) = match material.plane {
-            PlaneModel::Strain => ("1/4", "plane strain"),
-            PlaneModel::Stress => ("1/3", "plane stress"),
-        };
+/// The solid of `peridynamics.solid` for `material`: `auto` is bond-based where bond-based
+/// peridynamics represents the material and the linear peridynamic solid elsewhere; an
+/// explicit `bond-based` with another `nu` is refused.
+fn solid(c: &Ctx, s: &PeridynamicsSpec, material: &Material) -> Result<Solid, ProblemError> {
+    let representable = crate::models::peridynamics::kernel::representable(material);
+    let chosen: Solid = c.choose("peridynamics.solid", s.solid.as_deref())?;
+    if !crate::models::peridynamics::dilatation::coefficient(material).is_finite() {
         return c.err(
             "material.nu",
             format!(
-                "bond-based peridynamics represents only in-plane lambda = mu, that is nu = {need} in {plane}; got nu = {} \
-                 (remove the [peridynamics] table or set nu = {need})",
+                "nu = {} in plane strain makes lambda infinite: the peridynamic solid has no pressure unknown (the Navier model \
+                 solves it in u-p form: --model navier); use nu < 0.5 (below 0.495 without a warning)",
                 material.elastic.poisson
             ),
         );
     }
-    Ok(())
+    match chosen {
+        Solid::Auto if representable => Ok(Solid::BondBased),
+        Solid::Auto | Solid::Linear => Ok(Solid::Linear),
+        Solid::BondBased if representable => Ok(Solid::BondBased),
+        Solid::BondBased => {
+            let (need, plane) = match material.plane {
+                PlaneModel::Strain => ("1/4", "plane strain"),
+                PlaneModel::Stress => ("1/3", "plane stress"),
+            };
+            c.err(
+                "peridynamics.solid",
+                format!(
+                    "bond-based peridynamics represents only in-plane lambda = mu, that is nu = {need} in {plane}; got nu = {} \
+                     (use solid = \"lps\", the linear peridynamic solid, or leave solid out: \"auto\" picks it)",
+                    material.elastic.poisson
+                ),
+            )
+        }
+    }
+}
+
+/// Whether `[peridynamics]` asks for the linear peridynamic solid by name (then the
+/// Poisson ratio is taken as given, not snapped to the bond-based value).
+pub(super) fn names_lps(s: &PeridynamicsSpec) -> bool {
+    s.solid.as_deref() == Some(Solid::Linear.name())
 }
 
 /// `kernel` and its `alpha`.
@@ -129,7 +153,7 @@ pub(super) fn peridynamics(
     specs: &[BoundarySpec],
     dynamic: bool,
 ) -> Result<PdParams, ProblemError> {
-    check_material(c, material)?;
+    let solid = solid(c, s, material)?;
     for (k, b) in specs.iter().enumerate() {
         if b.kind == ConditionKind::Mixed.name() {
             return c.err(
@@ -161,7 +185,13 @@ pub(super) fn peridynamics(
     if force == BondForce::BondStretch && !dynamic {
         return c.err("peridynamics.force", format!("the static solve uses the linear law; \"{}\" needs a [dynamics] table", force.name()));
     }
-    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force };
+    if force == BondForce::BondStretch && solid == Solid::Linear {
+        return c.err(
+            "peridynamics.force",
+            format!("\"{}\" is a bond-based law; the linear peridynamic solid (nu = {}) runs the linear law", force.name(), material.elastic.poisson),
+        );
+    }
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid };
     check_peridynamics(&params, domain).map_err(|(f, r)| c.error(format!("peridynamics.{f}"), r))?;
     Ok(params)
 }
