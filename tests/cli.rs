@@ -683,12 +683,12 @@ fn invalid_scenes_exit_2_naming_the_field() {
             &["peridynamics.solver.multigrid", "MLSM"],
         ),
         (
-            "PD with a mixed condition",
+            "PD with a mixed condition on the nonlocal surface",
             Some(edit(
-                &pd(&[]),
+                &pd(&[("horizon = 0.2", "horizon = 0.2\nboundary = \"surface\"")]),
                 &[("part = \"top\"\nkind = \"displacement\"", "part = \"top\"\nkind = \"mixed\"\nx = \"displacement\"\ny = \"traction\"")],
             )),
-            &["boundary[3].kind", "volume constraint"],
+            &["boundary[3].kind", "volume constraint", "fictitious"],
         ),
         (
             "model without [peridynamics]",

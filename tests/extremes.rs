@@ -411,7 +411,9 @@ fn moduli_across_the_double_range_give_the_same_solution() {
 /// is determined by the scale-free pivots of its Gram matrix: before, whether Cholesky
 /// passed its rounding on a nearly singular one decided, and it flipped with E
 /// (pd_tension: 448, 449 or 450 fitted families, e_inf(u) 1.43e-1 or 1.52e-1). The
-/// tension's exact strain no longer multiplies two moduli (0 at E = 1e250).
+/// tension's exact strain no longer multiplies two moduli (0 at E = 1e250). With the
+/// fictitious nodes pd_tension is solved to the solver's tolerance (e_inf 1e-11), where
+/// the errors agree to 1e-9 absolutely.
 #[test]
 fn peridynamic_moduli_across_the_double_range_give_the_same_solution() {
     for name in ["pd_manufactured", "pd_tension", "pd_trig"] {
@@ -431,7 +433,9 @@ fn peridynamic_moduli_across_the_double_range_give_the_same_solution() {
             let worst = field.iter().zip(&reference).map(|(a, b)| (a - b).abs()).fold(0.0f64, f64::max);
             eprintln!("{name} E = {young:e}: largest difference {worst:.1e}, e_inf(u) {:.4e} vs {:.4e}", e.e_inf_u, errors.e_inf_u);
             assert!(worst < 1e-6, "{name} E = {young:e}: the solution differs by {worst:e} of its largest value");
-            assert!((e.e_inf_u / errors.e_inf_u - 1.0).abs() < 1e-6, "{name} E = {young:e}: {e:?} vs {errors:?}");
+            // pd_tension is solved exactly with fictitious nodes: its error (1e-11) is the
+            // solver's tolerance, equal across the moduli only to that tolerance.
+            assert!((e.e_inf_u - errors.e_inf_u).abs() < 1e-6 * errors.e_inf_u + 1e-9, "{name} E = {young:e}: {e:?} vs {errors:?}");
         }
     }
 }

@@ -95,12 +95,17 @@ fn lps_operator_is_navier_on_cubic_fields() {
 #[test]
 fn lps_stiffness_is_the_symmetric_jacobian_of_the_internal_force() {
     for nu in [0.3, 0.1] {
-        let mut edits = vec![("peridynamics.horizon", f(0.1)), ("peridynamics.quadrature", s("ac")), ("peridynamics.solid", s("lps"))];
+        let mut edits = vec![
+            ("peridynamics.horizon", f(0.1)),
+            ("peridynamics.quadrature", s("ac")),
+            ("peridynamics.solid", s("lps")),
+            ("peridynamics.boundary", s("surface")),
+        ];
         edits.extend(material(nu, "strain"));
         let p = scene("steel_plate", &edits);
         let d = discretise(&p);
         let n = 2 * d.nodes.free;
-        let (m, _) = d.stiffness(&vec![[0.0, 0.0]; d.nodes.free]).unwrap();
+        let (m, _) = d.stiffness(&vec![[0.0, 0.0]; d.nodes.free], &[]).unwrap();
         let mut k = vec![vec![0.0; n]; n];
         for (r, c, v) in m.entries() {
             k[r][c] += v;

@@ -37,6 +37,7 @@
 //! node's own weighted volume, as LPS codes normalise): `theta` is exact for an
 //! isotropic expansion at every node.
 
+use super::assembly::RowBuilder;
 use super::compatible::{compatible_weights, ray_moments};
 use super::family::Families;
 use super::nodes::{Body, PdNodes};
@@ -44,7 +45,6 @@ use super::weights::{area_fraction, full_families, search_radius};
 use super::{PdParams, Quadrature};
 use crate::domain::Point;
 use crate::physics::elasticity::material::Material;
-use crate::linalg::Csr;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -92,20 +92,6 @@ pub struct Dilatation {
     pub fitted_rows: usize,
     /// Nodes where that fit was singular (normalised base weights kept).
     pub fit_failures: usize,
-}
-
-/// Per-thread space of [`Dilatation::row`]: a block and a mark per node (zero and
-/// unmarked between rows) and the nodes marked.
-struct Scratch {
-    acc: Vec<[f64; 4]>,
-    seen: Vec<bool>,
-    touched: Vec<u32>,
-}
-
-impl Scratch {
-    fn new(nodes: usize) -> Scratch {
-        Scratch { acc: vec![[0.0; 4]; nodes], seen: vec![false; nodes], touched: Vec::new() }
-    }
 }
 
 fn offset(x: &[Point], i: usize, j: usize) -> Point {
@@ -239,21 +225,10 @@ impl Dilatation {
     }
 
     /// The 2x2 blocks `[xx, xy, yx, yy]` of free node `k`'s rows of
-    /// `K_dil = beta D_h^T diag(V) D_h`, by column node in increasing order.
-    fn row(&self, nodes: &PdNodes, k: usize, scratch: &mut Scratch) -> Vec<(u32, [f64; 4])> {
+    /// `K_dil = beta D_h^T diag(V) D_h`, handed to `add` by column node (with repeats).
+    pub fn row(&self, nodes: &PdNodes, k: usize, add: &mut dyn FnMut(usize, [f64; 4])) {
         let (x, v, f) = (&nodes.positions, &nodes.volumes, &self.families);
-        let Scratch { acc, seen, touched } = scratch;
-        let mut add = |l: usize, a: [f64; 2], d: [f64; 2]| {
-            if !seen[l] {
-                seen[l] = true;
-                touched.push(l as u32);
-            }
-            let e = &mut acc[l];
-            e[0] += a[0] * d[0];
-            e[1] += a[0] * d[1];
-            e[2] += a[1] * d[0];
-            e[3] += a[1] * d[1];
-        };
+        let mut add = |l: usize, a: [f64; 2], d: [f64; 2]| add(l, [a[0] * d[0], a[0] * d[1], a[1] * d[0], a[1] * d[1]]);
         // Row k of K_dil = sum over the thetas that read u_k (k's own and its
         // neighbours') of beta V_s (coefficient of u_k in theta_s) ⊗ (row of theta_s).
         let beta = self.coefficient;
@@ -270,62 +245,6 @@ impl Dilatation {
             }
             add(s, a, [-self.sums[s][0], -self.sums[s][1]]);
         }
-        touched.sort_unstable();
-        let out = touched
-            .iter()
-            .map(|&l| {
-                seen[l as usize] = false;
-                (l, std::mem::take(&mut acc[l as usize]))
-            })
-            .collect();
-        touched.clear();
-        out
-    }
-
-    /// The stiffness `K_dil` over the free unknowns (rows of the free nodes `own`
-    /// accepts; the others empty) and its right-hand side `-K_dil,collar u_collar`, in
-    /// the layout of [`super::operator::Bonds::stiffness_rows`].
-    pub fn stiffness_rows(&self, nodes: &PdNodes, own: impl Fn(usize) -> bool + Sync) -> (Csr, Vec<f64>) {
-        let (free, dofs) = (nodes.free, nodes.dofs());
-        type NodeRows = (Vec<u32>, Vec<f64>, Vec<f64>, [f64; 2]);
-        let rows: Vec<NodeRows> = (0..free)
-            .into_par_iter()
-            .map_init(
-                || Scratch::new(nodes.len()),
-                |scratch, k| {
-                    if !own(k) {
-                        return (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
-                    }
-                    let entries = self.row(nodes, k, scratch);
-                    let (mut cols, mut top, mut bottom, mut rhs) = (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
-                    for (l, e) in entries {
-                        let l = l as usize;
-                        if l < free {
-                            cols.extend([dofs.dof(l, 0) as u32, dofs.dof(l, 1) as u32]);
-                            top.extend([e[0], e[1]]);
-                            bottom.extend([e[2], e[3]]);
-                        } else {
-                            let u = nodes.prescribed[l - free];
-                            rhs[0] -= e[0] * u[0] + e[1] * u[1];
-                            rhs[1] -= e[2] * u[0] + e[3] * u[1];
-                        }
-                    }
-                    (cols, top, bottom, rhs)
-                },
-            )
-            .collect();
-        let n = 2 * free;
-        let (mut offsets, mut cols, mut values, mut rhs) = (Vec::with_capacity(n + 1), Vec::new(), Vec::new(), Vec::with_capacity(n));
-        offsets.push(0);
-        for (c, top, bottom, r) in rows {
-            for vals in [top, bottom] {
-                cols.extend_from_slice(&c);
-                values.extend(vals);
-                offsets.push(cols.len());
-            }
-            rhs.extend(r);
-        }
-        (Csr::from_parts(n, n, offsets, cols, values), rhs)
     }
 
     /// Gershgorin bound `max_r sum_c |K_dil(r, c)| / V_k` of free node `k`'s two rows,
@@ -334,11 +253,10 @@ impl Dilatation {
         (0..nodes.free)
             .into_par_iter()
             .map_init(
-                || Scratch::new(nodes.len()),
-                |scratch, k| {
-                    let rows = self.row(nodes, k, scratch).iter().fold([0.0, 0.0], |s, (_, e)| {
-                        [s[0] + e[0].abs() + e[1].abs(), s[1] + e[2].abs() + e[3].abs()]
-                    });
+                || RowBuilder::new(nodes, None),
+                |builder, k| {
+                    self.row(nodes, k, &mut |l, b| builder.add(l, b));
+                    let rows = builder.take().0.iter().fold([0.0, 0.0], |s, (_, e)| [s[0] + e[0].abs() + e[1].abs(), s[1] + e[2].abs() + e[3].abs()]);
                     rows[0].max(rows[1]) / nodes.volumes[k]
                 },
             )

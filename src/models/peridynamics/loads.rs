@@ -13,7 +13,9 @@
 //! shares the points of the cell edges; those at distance exactly `h` get half of their
 //! volume from the layer cells (the rule's shares are symmetric across a cell edge), so
 //! they carry `t / (2 h)`. Corner nodes within `h` of two loaded parts receive both.
-//! Zero tractions (free edges) add nothing.
+//! Zero tractions (free edges) add nothing. With fictitious nodes beyond the traction
+//! parts ([`super::extension`]) there is no layer: the tractions enter through the
+//! extension.
 
 use super::nodes::PdNodes;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
@@ -68,6 +70,10 @@ impl LoadLayer {
     /// not zero (a part whose value depends on time counts as loaded).
     pub fn new(domain: &Domain, conditions: &[BoundaryCondition], nodes: &PdNodes) -> LoadLayer {
         let h = nodes.spacing;
+        if nodes.fictitious_count() > 0 {
+            // The tractions enter through the fictitious nodes' extension instead.
+            return LoadLayer { shares: Vec::new(), spacing: h, layer_nodes: 0 };
+        }
         let loaded: Vec<bool> = conditions.iter().map(|bc| bc.is_all(ComponentCondition::Traction) && !bc.value.is_zero()).collect();
         // Samples every h/16 locate the nearest point of a part to within h/32.
         let samples = if loaded.iter().any(|&l| l) { discretise_boundary(domain, h / 16.0) } else { Vec::new() };

@@ -22,10 +22,12 @@
 //! discretisation error at the same horizon) and [`dynamics`] (bond forces, energies,
 //! stable step and the time-dependent run).
 
+pub mod assembly;
 pub mod compatible;
 pub mod dilatation;
 pub mod discretisation;
 pub mod dynamics;
+pub mod extension;
 pub mod family;
 pub mod kernel;
 pub mod loads;
@@ -38,14 +40,14 @@ pub mod weights;
 
 pub use dynamics::{simulate, simulate_sampled, Simulation};
 pub use kernel::{Kernel, KernelKind, Micromodulus};
-pub use params::{BondForce, PdParams, Quadrature, Solid, SurfaceCorrection};
+pub use params::{BondForce, EdgeTreatment, PdParams, Quadrature, Solid, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
 
 /// A small plate shared by the stage tests of this model.
 #[cfg(test)]
 pub(crate) mod test_case {
     use super::nodes::{self, Body, PdNodes};
-    use super::{BondForce, Kernel, PdParams, Quadrature, Solid, SurfaceCorrection};
+    use super::{BondForce, EdgeTreatment, Kernel, PdParams, Quadrature, Solid, SurfaceCorrection};
     use crate::domain::Domain;
     use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
     use crate::linalg::SolverParams;
@@ -69,6 +71,7 @@ pub(crate) mod test_case {
             solver: SolverParams::lu(),
             force: BondForce::Linear,
             solid: Solid::BondBased,
+            boundary: EdgeTreatment::Surface,
         }
     }
 

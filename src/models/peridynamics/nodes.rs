@@ -66,6 +66,12 @@ pub struct PdNodes {
     pub collar_part: Vec<usize>,
     /// Index of the rule point each node is (its position within its cell).
     pub rule_point: Vec<u8>,
+    /// First fictitious node: nodes `free..fictitious` are the Dirichlet collar, nodes
+    /// `fictitious..` fictitious nodes outside traction parts (`prescribed` holds zero
+    /// for them and `collar_part` the first traction part of their foot).
+    pub fictitious: usize,
+    /// The boundary point nearest to each fictitious node (`k = node - fictitious`).
+    pub feet: Vec<Foot>,
     /// Cell size h.
     pub spacing: f64,
 }
@@ -86,10 +92,25 @@ impl PdNodes {
         DofMap::displacement_only(self.free)
     }
 
-    /// Number of constrained (collar) nodes.
+    /// Number of constrained nodes (collar and fictitious).
     pub fn constrained(&self) -> usize {
         self.len() - self.free
     }
+
+    /// Number of fictitious nodes.
+    pub fn fictitious_count(&self) -> usize {
+        self.len() - self.fictitious
+    }
+}
+
+/// The boundary point nearest to a fictitious node, with the traction parts there and
+/// their outward normals (two at a corner between traction parts).
+#[derive(Debug, Clone)]
+pub struct Foot {
+    /// The boundary point.
+    pub point: Point,
+    /// `(part, outward unit normal)` of every part at the point.
+    pub parts: Vec<(usize, Point)>,
 }
 
 /// The solid together with its Dirichlet collar: which points carry material and
@@ -102,6 +123,8 @@ pub struct Body<'a> {
     tree: ImmutableKdTree<f64, 2>,
     /// Collar width ([`PdParams::collar_width`]).
     pub collar: f64,
+    /// Whether outside points near traction parts are fictitious nodes.
+    fictitious: bool,
 }
 
 impl<'a> Body<'a> {
@@ -112,7 +135,7 @@ impl<'a> Body<'a> {
         let samples = discretise_boundary(domain, h / 4.0);
         let points: Vec<Point> = samples.iter().map(|s| s.position).collect();
         let tree = ImmutableKdTree::<f64, 2>::new_from_slice(&points).expect("finite boundary samples");
-        Body { domain, conditions, exact, samples, tree, collar: params.collar_width() }
+        Body { domain, conditions, exact, samples, tree, collar: params.collar_width(), fictitious: params.has_fictitious_nodes() }
     }
 
     /// The part and prescribed displacement of an outside point whose nearest
@@ -128,10 +151,20 @@ impl<'a> Body<'a> {
             .map(|(part, bc)| (part, exact::value(&bc.value, p, self.exact, |e| e.displacement(p))))
     }
 
-    /// Whether `p` carries material: inside the solid or in the constrained collar.
+    /// The boundary point nearest to `p` with its parts, when none of them carries a
+    /// displacement condition (then `p`, outside, is a fictitious node).
+    fn foot(&self, p: Point) -> Option<Foot> {
+        let nearest = self.tree.query(&p).nearest_one::<SquaredEuclidean<f64>>().execute();
+        let s = &self.samples[nearest.item as usize];
+        let any_displacement = s.touches.iter().any(|&(part, _)| self.conditions[part].is_all(ComponentCondition::Displacement));
+        (!any_displacement).then(|| Foot { point: s.position, parts: s.touches.clone() })
+    }
+
+    /// Whether `p` carries material or a fictitious node: inside the solid, in the
+    /// constrained collar or in the band of fictitious nodes.
     pub fn contains(&self, p: Point) -> bool {
         let d = self.domain.signed_distance(p);
-        d <= 0.0 || (d <= self.collar && self.constraint(p).is_some())
+        d <= 0.0 || (d <= self.collar && (self.fictitious || self.constraint(p).is_some()))
     }
 }
 
@@ -145,6 +178,8 @@ enum Role {
     Free,
     /// A node of the Dirichlet collar with its part and prescribed displacement.
     Constrained(usize, [f64; 2]),
+    /// A fictitious node outside a traction part.
+    Fictitious(Foot),
     /// Not a node (outside the solid and its collar, or without material).
     Dropped,
 }
@@ -161,6 +196,8 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
         prescribed: Vec::new(),
         collar_part: Vec::new(),
         rule_point: Vec::new(),
+        fictitious: 0,
+        feet: Vec::new(),
         spacing: h,
     };
     for (p, w, r, role) in &classified {
@@ -180,6 +217,17 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
             nodes.collar_part.push(*part);
         }
     }
+    nodes.fictitious = nodes.positions.len();
+    for (p, w, r, role) in classified {
+        if let Role::Fictitious(foot) = role {
+            nodes.positions.push(p);
+            nodes.volumes.push(w);
+            nodes.rule_point.push(r);
+            nodes.prescribed.push([0.0, 0.0]);
+            nodes.collar_part.push(foot.parts[0].0);
+            nodes.feet.push(foot);
+        }
+    }
     nodes
 }
 
@@ -191,7 +239,12 @@ fn classify(body: &Body, h: f64, (p, r, w_in, w_out): Merged) -> (Point, f64, u8
     if d <= 1e-9 * h && w_in > 0.0 {
         (p, w_in, r, Role::Free)
     } else if d > 1e-9 * h && d <= body.collar {
-        (p, w_in + w_out, r, body.constraint(p).map_or(Role::Dropped, |(part, u)| Role::Constrained(part, u)))
+        let role = match body.constraint(p) {
+            Some((part, u)) => Role::Constrained(part, u),
+            None if body.fictitious => body.foot(p).map_or(Role::Dropped, Role::Fictitious),
+            None => Role::Dropped,
+        };
+        (p, w_in + w_out, r, role)
     } else {
         (p, 0.0, r, Role::Dropped)
     }

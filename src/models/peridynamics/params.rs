@@ -96,6 +96,21 @@ choice! {
     }
 }
 
+choice! {
+    /// How traction and free edges are treated (`peridynamics.boundary`).
+    pub enum EdgeTreatment("peridynamics.boundary", default Some(EdgeTreatment::Fictitious), serde "kebab-case") {
+        /// Fictitious nodes beyond traction and free edges, their displacements extended
+        /// from the solid by a cubic fit that meets the local traction condition
+        /// ([`super::extension`]): every family is complete, and the run converges to the
+        /// Navier solution at second order in delta.
+        Fictitious = "fictitious" => "fictitious nodes beyond traction and free edges, extended from the solid under the local traction condition (static runs)",
+        /// The nonlocal model's own free surface: truncated families, tractions as a body
+        /// force in the first cell layer ([`super::loads`]); the surface effect converges at
+        /// first order in delta.
+        Surface = "surface" => "truncated families at free edges, tractions as a layer body force (the nonlocal surface)",
+    }
+}
+
 /// The `[peridynamics]` table of a scene, validated.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct PdParams {
@@ -115,6 +130,8 @@ pub struct PdParams {
     pub force: BondForce,
     /// Constitutive model (bond-based or the linear peridynamic solid, never `Auto`).
     pub solid: Solid,
+    /// Treatment of traction and free edges.
+    pub boundary: EdgeTreatment,
 }
 
 choice! {
@@ -139,7 +156,13 @@ impl PdParams {
         self.solid == Solid::Linear
     }
 
-    /// Width of the Dirichlet collar outside displacement parts: `delta + 0.75 h`
+    /// Whether traction and free edges get fictitious nodes ([`super::extension`]).
+    pub fn has_fictitious_nodes(&self) -> bool {
+        self.boundary == EdgeTreatment::Fictitious
+    }
+
+    /// Width of the Dirichlet collar outside displacement parts (and of the band of
+    /// fictitious nodes outside traction parts): `delta + 0.75 h`
     /// (the extra `0.75 h` covers the cells the partial-area rule counts beyond
     /// `delta`), and one more `delta` for the linear peridynamic solid, whose
     /// dilatation at a collar node next to the solid reads the collar's own family.

@@ -2,7 +2,9 @@
 //! solve -> post-processing (nonlocal strain, errors against an exact solution on
 //! the whole plate and on the interior region at distance >= delta from the boundary).
 
+use super::assembly::{compressed, NodeRows, RowBuilder};
 use super::dilatation::Dilatation;
+use super::extension::Extension;
 use super::family::Families;
 use super::kernel::{fourth_moment, Micromodulus};
 use super::nodes::{self, Body, PdNodes};
@@ -27,6 +29,8 @@ pub const FAMILIES: Stage = Stage::new("families");
 pub const WEIGHTS: Stage = Stage::new("weights");
 /// The dilatation's families and weights (linear peridynamic solid only).
 pub const DILATATION: Stage = Stage::new("dilatation");
+/// The extension of the fictitious nodes (traction and free edges, `boundary = "fictitious"`).
+pub const EXTENSION: Stage = Stage::new("extension");
 use crate::quality::post::{masked_errors, ErrorNorms, ExactFields};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -120,6 +124,8 @@ pub struct Discretisation {
     pub micromodulus: Micromodulus,
     /// The dilatation term of the linear peridynamic solid ([`super::dilatation`]).
     pub dilatation: Option<Dilatation>,
+    /// The extension of the fictitious nodes, when there are some ([`super::extension`]).
+    pub extension: Option<Extension>,
     /// Bonds of the free nodes (both directions counted), over all ranks.
     pub bond_count: usize,
     /// The free nodes this process works on: all of them, or when the solve is
@@ -210,8 +216,34 @@ impl Discretisation {
         } else {
             None
         };
-        let mut disc =
-            Discretisation { bond_count: families.bonds(), nodes, families, weights, micromodulus, dilatation, share: Share::whole() };
+        let extension = if nodes.fictitious_count() > 0 {
+            Some(timer.run(EXTENSION, || {
+                let e = Extension::new(&nodes, &case.material, &case.conditions).map_err(|g| RunError::Formula {
+                    field: "peridynamics.boundary".into(),
+                    reason: format!(
+                        "the extension of the fictitious node at ({:.6e}, {:.6e}) is singular: fewer than {} free nodes near its foot, \
+                         or all of them on a line; use a smaller horizon or boundary = \"surface\"",
+                        nodes.positions[g][0],
+                        nodes.positions[g][1],
+                        super::extension::FIT_NODES
+                    ),
+                })?;
+                let note = format!("{} fictitious nodes beyond traction and free edges, each a cubic fit of {} free nodes", nodes.fictitious_count(), super::extension::FIT_NODES);
+                Ok((e, note))
+            })?)
+        } else {
+            None
+        };
+        let mut disc = Discretisation {
+            bond_count: families.bonds(),
+            nodes,
+            families,
+            weights,
+            micromodulus,
+            dilatation,
+            extension,
+            share: Share::whole(),
+        };
         if layer.is_some() {
             // Every rank counted its own rows; the counts are of all of them.
             let w = &disc.weights;
@@ -227,6 +259,25 @@ impl Discretisation {
         Ok(disc)
     }
 
+    /// The traction parts of the fictitious nodes' extension for the tractions of
+    /// `conditions` ([`Extension::traction_parts`]; empty without fictitious nodes).
+    pub fn traction_parts(&self, conditions: &[crate::physics::elasticity::conditions::BoundaryCondition], exact: Option<&dyn ExactSolution>) -> Result<Vec<[f64; 2]>, RunError> {
+        self.extension.as_ref().map_or(Ok(Vec::new()), |e| e.traction_parts(&self.nodes, conditions, exact))
+    }
+
+    /// The displacement of every node for the free nodes' `u`: the collar's
+    /// prescribed values and the fictitious nodes' extension (`traction_parts` from
+    /// [`Discretisation::traction_parts`]).
+    pub fn all_displacements(&self, mut u: Vec<[f64; 2]>, traction_parts: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let nodes = &self.nodes;
+        u.extend_from_slice(&nodes.prescribed[..nodes.fictitious - nodes.free]);
+        if let Some(e) = &self.extension {
+            let ghosts = e.values(&u[..nodes.free], traction_parts);
+            u.extend(ghosts);
+        }
+        u
+    }
+
     /// Whether this rank assembles free node `i`'s rows (always, unless distributed).
     pub fn owns(&self, i: usize) -> bool {
         self.share.owns(i)
@@ -238,20 +289,46 @@ impl Discretisation {
     }
 
     /// The stiffness over the free unknowns of this process's rows and its right-hand
-    /// side for the body force densities `body_force`: the bonds' and, for the linear
-    /// peridynamic solid, the dilatation's ([`Dilatation::stiffness_rows`]); `Err` is the
-    /// first node with a coefficient that is not finite.
-    pub fn stiffness(&self, body_force: &[[f64; 2]]) -> Result<(Csr, Vec<f64>), usize> {
-        let (k, mut rhs) = self.bonds().stiffness_rows(body_force, |i| self.owns(i))?;
-        let Some(d) = &self.dilatation else {
-            return Ok((k, rhs));
-        };
-        let (kd, rd) = d.stiffness_rows(&self.nodes, |i| self.owns(i));
-        if let Some(bad) = (0..kd.nrows()).find(|&r| kd.row(r).values().iter().any(|v| !v.is_finite()) || !rd[r].is_finite()) {
-            return Err(bad / 2);
+    /// side for the body force densities `body_force` and the traction parts of the
+    /// fictitious nodes `traction_parts` ([`Extension::traction_parts`]): the bonds' and,
+    /// for the linear peridynamic solid, the dilatation's, with the fictitious nodes'
+    /// columns condensed ([`super::assembly`]); `Err` is the first node with a
+    /// coefficient that is not finite.
+    pub fn stiffness(&self, body_force: &[[f64; 2]], traction_parts: &[[f64; 2]]) -> Result<(Csr, Vec<f64>), usize> {
+        if self.dilatation.is_none() && self.extension.is_none() {
+            return self.bonds().stiffness_rows(body_force, |i| self.owns(i));
         }
-        rhs.iter_mut().zip(&rd).for_each(|(a, b)| *a += b);
-        Ok((k.minus_scaled(-1.0, &kd), rhs))
+        let nodes = &self.nodes;
+        let x = &nodes.positions;
+        let rows: Vec<NodeRows> = (0..nodes.free)
+            .into_par_iter()
+            .map_init(
+                || RowBuilder::new(nodes, Some((self.extension.as_ref(), traction_parts))),
+                |builder, k| {
+                    if !self.owns(k) {
+                        return (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
+                    }
+                    let v = nodes.volumes[k];
+                    builder.load([v * body_force[k][0], v * body_force[k][1]]);
+                    for (b, &j) in self.families.range(k).zip(self.families.of(k)) {
+                        let j = j as usize;
+                        let xi = [x[j][0] - x[k][0], x[j][1] - x[k][1]];
+                        let c = v * self.weights.coefficients[b];
+                        let kb = [c * xi[0] * xi[0], c * xi[0] * xi[1], c * xi[1] * xi[0], c * xi[1] * xi[1]];
+                        builder.add(k, kb);
+                        builder.add(j, kb.map(|e| -e));
+                    }
+                    if let Some(d) = &self.dilatation {
+                        d.row(nodes, k, &mut |l, blk| builder.add(l, blk));
+                    }
+                    builder.finish()
+                },
+            )
+            .collect();
+        if let Some(bad) = rows.iter().position(|r| r.1.iter().chain(&r.2).chain(&r.3).any(|v| !v.is_finite())) {
+            return Err(bad);
+        }
+        Ok(compressed(rows))
     }
 }
 
@@ -276,8 +353,8 @@ struct Post {
 /// and on the interior region, the probes.
 fn post(case: &Case, params: &PdParams, disc: &Discretisation, exact: Option<&dyn ExactSolution>, x: &[f64]) -> Result<Post, RunError> {
     let nodes = &disc.nodes;
-    let mut u = nodes.dofs().displacements(x, nodes.free);
-    u.extend_from_slice(&nodes.prescribed);
+    let parts = disc.traction_parts(&case.conditions, exact)?;
+    let u = disc.all_displacements(nodes.dofs().displacements(x, nodes.free), &parts);
     let free = &nodes.positions[..nodes.free];
     let interior = interior_flags(&case.domain, free, params.horizon);
     // Distributed: each rank computes its own nodes' gradients, the sum over ranks fills in the rest.
@@ -308,8 +385,8 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let free_positions = &disc.nodes.positions[..disc.nodes.free];
     let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
-        let assembled =
-            disc.stiffness(&b).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
+        let parts = disc.traction_parts(&case.conditions, exact)?;
+        let assembled = disc.stiffness(&b, &parts).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
         let (m, rhs) = distributed::agree(assembled)?;
         let rows = if disc.share.is_split() { " in this rank's rows" } else { "" };
         let note = format!("{} unknowns, {} nonzeros{rows}, {layer} nodes in loaded layers", rhs.len(), m.nnz());

@@ -168,6 +168,8 @@ pub struct PeridynamicsSpec {
     pub force: Option<String>,
     /// `auto` (default), `bond-based` or `lps` (the linear peridynamic solid).
     pub solid: Option<String>,
+    /// `fictitious` (static default) or `surface` (dynamic default).
+    pub boundary: Option<String>,
 }
 
 /// `[domain]`: a list of regions combined left to right.

@@ -8,7 +8,7 @@ use crate::domain::Domain;
 use crate::physics::elasticity::conditions::ConditionKind;
 use crate::physics::elasticity::material::{Material, PlaneModel};
 use crate::linalg::{SolverKind, SolverParams};
-use crate::models::peridynamics::{BondForce, Kernel, KernelKind, PdParams, Quadrature, Solid, SurfaceCorrection};
+use crate::models::peridynamics::{BondForce, EdgeTreatment, Kernel, KernelKind, PdParams, Quadrature, Solid, SurfaceCorrection};
 use crate::scene::problem::spec::{BoundarySpec, PeridynamicsSpec};
 use crate::scene::problem::ProblemError;
 
@@ -154,14 +154,6 @@ pub(super) fn peridynamics(
     dynamic: bool,
 ) -> Result<PdParams, ProblemError> {
     let solid = solid(c, s, material)?;
-    for (k, b) in specs.iter().enumerate() {
-        if b.kind == ConditionKind::Mixed.name() {
-            return c.err(
-                format!("boundary[{k}].kind"),
-                "mixed (per-component) conditions have no peridynamic volume constraint here; use displacement or traction",
-            );
-        }
-    }
     let horizon = c.need("peridynamics.horizon", s.horizon, "the horizon delta (m)")?;
     let kernel = kernel(c, s)?;
     let quadrature: Quadrature = c.choose("peridynamics.quadrature", s.quadrature.as_deref())?;
@@ -191,7 +183,27 @@ pub(super) fn peridynamics(
             format!("\"{}\" is a bond-based law; the linear peridynamic solid (nu = {}) runs the linear law", force.name(), material.elastic.poisson),
         );
     }
-    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid };
+    let boundary = match (s.boundary.as_deref(), dynamic) {
+        (None, true) => EdgeTreatment::Surface,
+        (given, _) => c.choose("peridynamics.boundary", given)?,
+    };
+    for (k, b) in specs.iter().enumerate() {
+        if b.kind == ConditionKind::Mixed.name() && boundary == EdgeTreatment::Surface {
+            return c.err(
+                format!("boundary[{k}].kind"),
+                "mixed (per-component) conditions have no volume constraint on the nonlocal surface; they need \
+                 peridynamics.boundary = \"fictitious\" (static runs)",
+            );
+        }
+    }
+    if boundary == EdgeTreatment::Fictitious && dynamic {
+        return c.err(
+            "peridynamics.boundary",
+            "the fictitious nodes' extension is not the variation of an energy, so explicit dynamics keeps the nonlocal surface; \
+             use boundary = \"surface\" (the default with [dynamics])",
+        );
+    }
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid, boundary };
     check_peridynamics(&params, domain).map_err(|(f, r)| c.error(format!("peridynamics.{f}"), r))?;
     Ok(params)
 }
