@@ -234,7 +234,8 @@ fn lps_dynamics_conserves_energy_and_moves_rigidly() {
 
 /// `peridynamics.solid`: `auto` picks bond-based at nu = 1/4 and the solid elsewhere,
 /// `bond-based` at another nu and the bond-stretch law with the solid are refused with
-/// the field named, nu = 1/2 in plane strain is refused for both, and a Poisson ratio
+/// the field named, nu = 1/2 in plane strain is refused where the peridynamic model
+/// runs (not for a Navier scene that only carries the table), and a Poisson ratio
 /// written near 1/4 is snapped for bond-based but kept for a solid named `lps`.
 #[test]
 fn the_choice_of_solid_is_validated() {
@@ -252,7 +253,14 @@ fn the_choice_of_solid_is_validated() {
     let e = scene_error("steel_plate_dynamic", &[("material.nu", f(0.3)), ("peridynamics.force", s("bond-stretch"))]);
     assert!(e.field == "peridynamics.force", "{e:?}");
     for solid in ["auto", "lps"] {
-        let e = scene_error("steel_plate", &[("material.nu", f(0.5)), ("peridynamics.solid", s(solid))]);
+        let e = scene_error("steel_plate", &[("model", s("peridynamics")), ("material.nu", f(0.5)), ("peridynamics.solid", s(solid))]);
         assert!(e.field == "material.nu" && e.reason.contains("infinite"), "{solid}: {e:?}");
     }
+    // A Navier scene that only carries the table runs at nu = 1/2; compare and
+    // --horizon (with_peridynamics) refuse it.
+    let navier = scene("steel_plate", &[("material.nu", f(0.5))]);
+    let params = *navier.model.peridynamics().unwrap();
+    let e = navier.with_peridynamics(params).unwrap_err();
+    assert!(e.field == "material.nu" && e.reason.contains("infinite"), "{e:?}");
 }
+

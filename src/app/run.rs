@@ -47,6 +47,9 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         p.model = p.model.running(m).ok_or_else(|| {
             AppError::Usage(format!("{}: the peridynamic model needs a [peridynamics] table", req.scene.display()))
         })?;
+        if let Some(why) = (m == Model::Peridynamics).then(|| crate::scene::problem::validate::peridynamic_material_refusal(&p.case.material)).flatten() {
+            return Err(AppError::Usage(format!("--model peridynamics: {}: material.nu: {why}", req.scene.display())));
+        }
         if let Some(why) = crate::scene::problem::estimate_mismatch(m, p.case.dynamics.is_some(), p.navier.estimate.method) {
             return Err(AppError::Usage(format!("--model {}: {}: estimate.method: {why}", m.name(), req.scene.display())));
         }

@@ -35,10 +35,12 @@
 //! area `A_i` ([`super::compatible::ray_moments`]). With the other rules, and where a fit
 //! is singular, the base weights are scaled so that `sum_j w_ij |xi_ij|^2 = 2` (the
 //! node's own weighted volume, as LPS codes normalise): `theta` is exact for an
-//! isotropic expansion at every node.
+//! isotropic expansion at every node. A family cut by the sight of fictitious nodes
+//! ([`super::extension::in_sight`]) matches the whole disc's moments of degrees 1-3.
 
 use super::assembly::RowBuilder;
 use super::compatible::{compatible_weights, ray_moments};
+use super::extension::in_sight;
 use super::family::Families;
 use super::nodes::{Body, PdNodes};
 use super::weights::{area_fraction, full_families, search_radius};
@@ -114,6 +116,7 @@ impl Dilatation {
         let n = nodes.len();
         let x = &nodes.positions;
         let families = Families::within(x, n, search_radius(params));
+        let families = if nodes.fictitious_count() > 0 { families.retain(|i, j| in_sight(body, nodes, i, j)).0 } else { families };
         // A node carries a theta when a free node reads it: itself free or in a free family.
         let mut needed = vec![false; n];
         for i in 0..nodes.free {
@@ -146,7 +149,11 @@ impl Dilatation {
                     return (normalised(base(1.0), &xi), None);
                 }
                 let complete = family.len() == full[nodes.rule_point[i] as usize].1;
-                let fitted = if complete {
+                let fitted = if families.is_cut(i) {
+                    // Cut by the sight of fictitious nodes: a consistent one-sided row
+                    // (the whole disc's moments of degrees 1-3).
+                    compatible_weights(&xi, &base(2.0 / (PI * delta * delta)), delta, TRUNCATED_MOMENTS, &complete_targets[..9], scale)
+                } else if complete {
                     compatible_weights(&xi, &base(2.0 / (PI * delta * delta)), delta, &MOMENTS, &complete_targets, scale)
                 } else {
                     // int_0^R r^-2 (r/delta)^n r dr = (R/delta)^n / n; the (0, 0) entry is the area.

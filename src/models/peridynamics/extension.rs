@@ -30,7 +30,7 @@
 //! and Galvanetto 2022), volume constraints from local boundary data (D'Elia, Tian and
 //! Yu 2019: order 2 needs a smooth extension, Foss, Radu and Yu 2021).
 
-use super::nodes::PdNodes;
+use super::nodes::{Body, PdNodes};
 use crate::domain::Point;
 use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition};
 use crate::physics::elasticity::material::Material;
@@ -62,6 +62,46 @@ pub struct Extension {
     tractions: Vec<Vec<(usize, Point, [f64; 4])>>,
     /// Its foot point (where the tractions are read).
     feet: Vec<Point>,
+}
+
+/// Smallest cosine between two normals taken as the same side of the solid (45 degrees).
+pub const SAME_SIDE: f64 = std::f64::consts::FRAC_1_SQRT_2;
+
+/// Whether a bond between nodes `i` and `j` reads a fictitious node the way its
+/// extension assumes: through the side of the solid its foot is on. A bond from a free
+/// node leaves the solid at an exit point `e`; it reads fictitious node `g` (foot `f`)
+/// unless the two sides face each other across a concave (re-entrant) turn of the
+/// boundary: normals more than 45 degrees apart with `(e - f) . n_f > 0` and
+/// `(f - e) . n_e > 0` (at a convex corner both are negative). Two fictitious nodes are
+/// tested the same way with their feet. Across a re-entrant corner (or a hole narrower
+/// than the band) the wedge's fictitious nodes are extended from one arm, and bonds
+/// from the other arm would tie the arms through them like material; those bonds are
+/// not made (the families there are cut and fitted as such, [`super::weights`]).
+pub fn in_sight(body: &Body, nodes: &PdNodes, i: usize, j: usize) -> bool {
+    let (fi, fj) = (i >= nodes.fictitious, j >= nodes.fictitious);
+    let side = |g: usize| {
+        let foot = &nodes.feet[g - nodes.fictitious];
+        (foot.point, foot.parts.iter().map(|p| p.1).collect::<Vec<Point>>())
+    };
+    let tol = 1e-9 * nodes.spacing;
+    // Whether the sides (point a, normals na) and (point b, normals nb) face each other.
+    let facing = |(a, na): (Point, Vec<Point>), (b, nb): (Point, Vec<Point>)| {
+        let dot = |u: Point, v: Point| u[0] * v[0] + u[1] * v[1];
+        let same = na.iter().any(|n| nb.iter().any(|m| dot(*n, *m) >= SAME_SIDE));
+        let d = [a[0] - b[0], a[1] - b[1]];
+        !same && nb.iter().any(|m| dot(d, *m) > tol) && na.iter().any(|n| -dot(d, *n) > tol)
+    };
+    match (fi, fj) {
+        (false, false) => true,
+        (true, true) => !facing(side(i), side(j)),
+        (true, false) | (false, true) => {
+            let (a, g) = if fi { (j, i) } else { (i, j) };
+            if a >= nodes.free {
+                return true;
+            }
+            body.exit(nodes.positions[a], nodes.positions[g], nodes.spacing).is_none_or(|exit| !facing(exit, side(g)))
+        }
+    }
 }
 
 /// One fictitious node's extension: `E_gi` per free node, `F_gk` per part.

@@ -11,6 +11,8 @@ use rayon::prelude::*;
 pub struct Families {
     offsets: Vec<usize>,
     neighbours: Vec<u32>,
+    /// Rows that [`Families::retain`] took bonds from (empty: none).
+    cut: Vec<bool>,
 }
 
 /// A layer of [`Families::around`] that the layers did not reach.
@@ -68,6 +70,25 @@ impl Families {
         (Families::from_lists(lists), layer)
     }
 
+    /// The same families without the bonds `(i, j)` that `keep` rejects, and how many
+    /// were removed.
+    pub fn retain(&self, keep: impl Fn(usize, usize) -> bool + Sync) -> (Families, usize) {
+        let lists: Vec<Vec<u32>> = (0..self.len()).into_par_iter().map(|i| self.of(i).iter().copied().filter(|&j| keep(i, j as usize)).collect()).collect();
+        let cut: Vec<bool> = lists.iter().enumerate().map(|(i, l)| l.len() < self.of(i).len()).collect();
+        let kept: usize = lists.iter().map(Vec::len).sum();
+        let mut f = Families::from_lists(lists);
+        if cut.iter().any(|&c| c) {
+            f.cut = cut;
+        }
+        (f, self.bonds() - kept)
+    }
+
+    /// Whether row `i` lost bonds to [`Families::retain`] (its family is cut, not
+    /// truncated by the body's edge).
+    pub fn is_cut(&self, i: usize) -> bool {
+        self.cut.get(i).copied().unwrap_or(false)
+    }
+
     fn from_lists(lists: Vec<Vec<u32>>) -> Families {
         let mut offsets = Vec::with_capacity(lists.len() + 1);
         offsets.push(0);
@@ -75,7 +96,7 @@ impl Families {
             offsets.push(offsets.last().unwrap() + l.len());
         }
         let neighbours = lists.into_iter().flatten().collect();
-        Families { offsets, neighbours }
+        Families { offsets, neighbours, cut: Vec::new() }
     }
 
     /// Number of free nodes (rows).

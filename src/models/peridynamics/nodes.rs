@@ -160,6 +160,28 @@ impl<'a> Body<'a> {
         (!any_displacement).then(|| Foot { point: s.position, parts: s.touches.clone() })
     }
 
+    /// Where the segment from `from` (inside the solid) to `to` (outside) first leaves
+    /// the solid and the outward normals of the parts there: stepped in `h / 4` and
+    /// bisected to `1e-10` of its length; `None` when it does not leave it.
+    pub fn exit(&self, from: Point, to: Point, h: f64) -> Option<(Point, Vec<Point>)> {
+        let at = |t: f64| [from[0] + t * (to[0] - from[0]), from[1] + t * (to[1] - from[1])];
+        let length = (to[0] - from[0]).hypot(to[1] - from[1]);
+        let steps = ((4.0 * length / h).ceil() as usize).max(1);
+        let k = (1..=steps).find(|&k| self.domain.signed_distance(at(k as f64 / steps as f64)) > 0.0)?;
+        let (mut lo, mut hi) = ((k - 1) as f64 / steps as f64, k as f64 / steps as f64);
+        while hi - lo > 1e-10 {
+            let mid = 0.5 * (lo + hi);
+            if self.domain.signed_distance(at(mid)) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let nearest = self.tree.query(&at(hi)).nearest_one::<SquaredEuclidean<f64>>().execute();
+        let s = &self.samples[nearest.item as usize];
+        Some((at(hi), s.touches.iter().map(|&(_, n)| n).collect()))
+    }
+
     /// Whether `p` carries material or a fictitious node: inside the solid, in the
     /// constrained collar or in the band of fictitious nodes.
     pub fn contains(&self, p: Point) -> bool {

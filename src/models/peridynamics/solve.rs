@@ -4,7 +4,7 @@
 
 use super::assembly::{compressed, NodeRows, RowBuilder};
 use super::dilatation::Dilatation;
-use super::extension::Extension;
+use super::extension::{in_sight, Extension};
 use super::family::Families;
 use super::kernel::{fourth_moment, Micromodulus};
 use super::nodes::{self, Body, PdNodes};
@@ -187,8 +187,11 @@ impl Discretisation {
             } else {
                 (Families::within(&nodes.positions, nodes.free, radius), None)
             };
+            // Bonds that would read a fictitious node across another side of the solid are not made.
+            let (f, cut) = if nodes.fictitious_count() > 0 { f.retain(|i, j| in_sight(&body, &nodes, i, j)) } else { (f, 0) };
             let mine = if layer.is_some() { " (this rank's nodes and halo)" } else { "" };
-            let note = format!("{} bonds{mine}, {:.1} per node", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
+            let cut = if cut > 0 { format!(", {cut} not made (fictitious nodes across a re-entrant corner or a narrow hole)") } else { String::new() };
+            let note = format!("{} bonds{mine}, {:.1} per node{cut}", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
             Ok(((f, layer), note))
         })?;
         let moment = fourth_moment(&case.material);

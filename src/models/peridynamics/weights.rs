@@ -12,7 +12,9 @@
 //! full-family volume rather than `pi delta^2` keeps `g = 1` exactly in the interior.
 //! With the asymptotically compatible rule every row is then corrected by
 //! [`super::compatible::compatible_weights`] (complete families: moments of degrees 3-5
-//! in closed form; truncated ones: degrees 3-4 integrated over the truncated disc).
+//! in closed form; truncated ones: degrees 3-4 integrated over the truncated disc; those
+//! cut by the sight of fictitious nodes, [`super::extension::in_sight`]: degrees 3-4 of the
+//! whole disc, a consistent one-sided row).
 //!
 //! Every rule but the compatible one gives `V_i c_ij = V_j c_ji`: the stiffness is symmetric.
 
@@ -167,7 +169,11 @@ pub fn bond_coefficients(
             let mut compatible = None;
             if params.quadrature == Quadrature::Compatible {
                 let xi: Vec<Point> = families.of(i).iter().map(|&j| offset(i, j)).collect();
-                let fitted = if complete {
+                let fitted = if families.is_cut(i) {
+                    // Cut by the sight of fictitious nodes: a consistent one-sided row (the
+                    // whole disc's moments of degrees 3-4: the Navier operator on quadratics).
+                    compatible_weights(&xi, &c, delta, TRUNCATED_MOMENTS, &complete_targets[..9], scale)
+                } else if complete {
                     compatible_weights(&xi, &c, delta, &MOMENTS, &complete_targets, scale)
                 } else {
                     let targets = truncated_moments(nodes.positions[i], &|p| body.contains(p), kernel, TRUNCATED_MOMENTS);

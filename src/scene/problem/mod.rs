@@ -239,6 +239,9 @@ impl Problem {
     /// The same problem with other peridynamic parameters (used by `compare` and
     /// `--horizon`), checked like the scene's own table.
     pub fn with_peridynamics(&self, params: PdParams) -> Result<Problem, ProblemError> {
+        if let Some(reason) = validate::peridynamic_material_refusal(&self.case.material) {
+            return Err(ProblemError { file: self.source.clone(), field: "material.nu".into(), reason, kind: ProblemErrorKind::Invalid });
+        }
         validate::check_peridynamics(&params, &self.case.domain).map_err(|(field, reason)| ProblemError {
             file: self.source.clone(),
             field: format!("peridynamics.{field}"),

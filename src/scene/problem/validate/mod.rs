@@ -16,7 +16,7 @@ mod solver;
 
 pub use crate::mlsm::default_support;
 pub use approximation::{expected_nodes, DEFAULT_GHOST_NODES};
-pub use peridynamics::{check_peridynamics, MAX_HORIZON_RATIO, POISSON_SNAP};
+pub use peridynamics::{check_peridynamics, material_refusal as peridynamic_material_refusal, MAX_HORIZON_RATIO, POISSON_SNAP};
 
 use super::preset::Preset;
 use super::spec::{EstimateSpec, SceneSpec};
@@ -246,6 +246,9 @@ pub fn validate(mut spec: SceneSpec, path: &Path, preset: Option<Preset>) -> Res
     let Some(model) = (ModelParams::Navier { peridynamics }).running(model) else {
         return c.err("model", "model = \"peridynamics\" needs a [peridynamics] table (horizon, quadrature, ...)");
     };
+    if let Some(why) = (model.kind() == Model::Peridynamics).then(|| peridynamics::material_refusal(&material)).flatten() {
+        return c.err("material.nu", why);
+    }
     if dynamic && !spec.probe.is_empty() {
         return c.err("probe", "probes read static solutions (run, convergence); a [dynamics] run writes its fields over time instead");
     }

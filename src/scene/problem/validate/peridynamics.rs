@@ -87,16 +87,6 @@ pub(super) fn snap_poisson(material: &mut Material) -> Option<String> {
 fn solid(c: &Ctx, s: &PeridynamicsSpec, material: &Material) -> Result<Solid, ProblemError> {
     let representable = crate::models::peridynamics::kernel::representable(material);
     let chosen: Solid = c.choose("peridynamics.solid", s.solid.as_deref())?;
-    if !crate::models::peridynamics::dilatation::coefficient(material).is_finite() {
-        return c.err(
-            "material.nu",
-            format!(
-                "nu = {} in plane strain makes lambda infinite: the peridynamic solid has no pressure unknown (the Navier model \
-                 solves it in u-p form: --model navier); use nu < 0.5 (below 0.495 without a warning)",
-                material.elastic.poisson
-            ),
-        );
-    }
     match chosen {
         Solid::Auto if representable => Ok(Solid::BondBased),
         Solid::Auto | Solid::Linear => Ok(Solid::Linear),
@@ -116,6 +106,20 @@ fn solid(c: &Ctx, s: &PeridynamicsSpec, material: &Material) -> Result<Solid, Pr
             )
         }
     }
+}
+
+/// Why the peridynamic model cannot run on `material`, if it cannot: plane strain
+/// nu = 1/2 makes lambda infinite, and the solid has no pressure unknown. Checked when
+/// the peridynamic model runs (the scene's model, `--model peridynamics`, `compare`),
+/// not for a Navier scene that only carries the table.
+pub fn material_refusal(material: &Material) -> Option<String> {
+    (!crate::models::peridynamics::dilatation::coefficient(material).is_finite()).then(|| {
+        format!(
+            "nu = {} in plane strain makes lambda infinite: the peridynamic solid has no pressure unknown (the Navier model \
+             solves it in u-p form: --model navier); use nu < 0.5 (below 0.495 without a warning)",
+            material.elastic.poisson
+        )
+    })
 }
 
 /// Whether `[peridynamics]` asks for the linear peridynamic solid by name (then the
