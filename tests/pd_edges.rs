@@ -152,40 +152,12 @@ fn the_condensed_stiffness_is_the_jacobian_of_the_extended_force() {
         let mut all = d.all_displacements(u, &zero);
         // The collar's prescribed values are a load, not part of the Jacobian.
         all[d.nodes.free..d.nodes.fictitious].iter_mut().for_each(|u| *u = [0.0, 0.0]);
-        let mut lu = d.bonds().apply(&all);
-        if let Some(dil) = &d.dilatation {
-            let theta = dil.theta(&d.nodes, &all);
-            for (i, f) in lu.iter_mut().enumerate() {
-                let g = dil.force_at(&d.nodes, &theta, i);
-                f[0] += g[0];
-                f[1] += g[1];
-            }
-        }
+        let lu = d.operator(&all);
         (0..n).map(|r| -d.nodes.volumes[r / 2] * lu[r / 2][r % 2]).collect()
     };
-    let base: Vec<f64> = (0..n).map(|r| ((r * 7919) % 13) as f64 / 13.0 - 0.5).collect();
-    let step = 1e-3;
-    let mut worst: f64 = 0.0;
-    for col in (0..n).step_by(13) {
-        let (mut up, mut down) = (base.clone(), base.clone());
-        up[col] += step;
-        down[col] -= step;
-        let (fu, fd) = (force(&up), force(&down));
-        for r in 0..n {
-            worst = worst.max(((fu[r] - fd[r]) / (2.0 * step) - k[r][col]).abs());
-        }
-    }
+    let worst = jacobian_mismatch(&k, force, 13);
     eprintln!("|K - J| / max|K| = {:.2e}", worst / kmax);
     assert!(worst < 1e-10 * kmax, "{}", worst / kmax);
-}
-
-/// Least-squares order and worst single-step order of `errors` over `deltas`.
-fn orders(deltas: &[f64], errors: &[f64]) -> (f64, f64) {
-    let ls = mlsm::quality::post::observed_order(deltas, errors).unwrap();
-    let worst = (1..deltas.len())
-        .map(|k| (errors[k - 1] / errors[k]).ln() / (deltas[k - 1] / deltas[k]).ln())
-        .fold(f64::INFINITY, f64::min);
-    (ls, worst)
 }
 
 /// Whole-plate e_inf(u) against the exact solution of `name` with `edits`, at each horizon.
@@ -213,7 +185,7 @@ fn traction_edges_converge_at_second_order() {
     let deltas = [0.1, 0.05, 0.025, 0.0125];
     for nu in [0.3, 0.25] {
         let e = errors("manufactured_traction", &[("material.nu", f(nu))], &deltas);
-        let (ls, worst) = orders(&deltas, &e);
+        let (ls, worst) = least_squares_and_worst_order(&deltas, &e);
         let solid = scene("manufactured_traction", &[("peridynamics.horizon", f(0.1)), ("material.nu", f(nu))]).model.peridynamics().unwrap().solid;
         eprintln!("manufactured_traction, nu = {nu} ({solid:?}): e_inf {e:?} -> least squares {ls:.2}, worst step {worst:.2}");
         assert_eq!(solid, if nu == 0.25 { Solid::BondBased } else { Solid::Linear });
@@ -229,7 +201,7 @@ fn traction_edges_converge_at_second_order() {
 fn curved_and_symmetry_edges_converge_at_second_order() {
     let deltas = [2e-3, 1e-3, 5e-4, 2.5e-4];
     let e = errors("lame", &[("peridynamics.m", f(3.0))], &deltas);
-    let (ls, worst) = orders(&deltas, &e);
+    let (ls, worst) = least_squares_and_worst_order(&deltas, &e);
     eprintln!("lame: e_inf {e:?} -> least squares {ls:.2}, worst step {worst:.2}");
     assert!(ls >= 1.9 && worst >= 1.9, "{ls} {worst}");
 }

@@ -28,20 +28,6 @@ fn discretise(p: &Problem) -> Discretisation {
     Discretisation::new(&p.case, p.model.peridynamics().unwrap(), exact.as_deref(), &mut StageTimer::new(&Silent)).unwrap()
 }
 
-/// `(L_h u)_i` of the whole solid (bonds and dilatation) at every free node, `u` at every node.
-fn operator(d: &Discretisation, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut lu = d.bonds().apply(u);
-    if let Some(dil) = &d.dilatation {
-        let theta = dil.theta(&d.nodes, u);
-        for (i, f) in lu.iter_mut().enumerate() {
-            let g = dil.force_at(&d.nodes, &theta, i);
-            f[0] += g[0];
-            f[1] += g[1];
-        }
-    }
-    lu
-}
-
 fn material(nu: f64, plane: &str) -> [(&'static str, Option<toml::Value>); 2] {
     [("material.nu", f(nu)), ("material.plane", s(plane))]
 }
@@ -71,7 +57,7 @@ fn lps_operator_is_navier_on_cubic_fields() {
             let d = discretise(&p);
             assert!(d.dilatation.as_ref().unwrap().fit_failures == 0);
             let u: Vec<[f64; 2]> = d.nodes.positions.iter().map(|x| exact.displacement(*x)).collect();
-            let lu = operator(&d, &u);
+            let lu = d.operator(&u);
             let navier = |i: usize| {
                 let b = exact.body_force(d.nodes.positions[i]);
                 [-b[0], -b[1]]
@@ -114,35 +100,15 @@ fn lps_stiffness_is_the_symmetric_jacobian_of_the_internal_force() {
         let force = |x: &[f64]| -> Vec<f64> {
             let mut u: Vec<[f64; 2]> = (0..d.nodes.free).map(|i| [x[2 * i], x[2 * i + 1]]).collect();
             u.extend(std::iter::repeat_n([0.0, 0.0], d.nodes.constrained()));
-            let lu = operator(&d, &u);
+            let lu = d.operator(&u);
             (0..n).map(|r| -d.nodes.volumes[r / 2] * lu[r / 2][r % 2]).collect()
         };
-        let base: Vec<f64> = (0..n).map(|r| ((r * 7919) % 13) as f64 / 13.0 - 0.5).collect();
-        let step = 1e-3;
-        let mut worst: f64 = 0.0;
-        for col in (0..n).step_by(11) {
-            let (mut up, mut down) = (base.clone(), base.clone());
-            up[col] += step;
-            down[col] -= step;
-            let (fu, fd) = (force(&up), force(&down));
-            for r in 0..n {
-                worst = worst.max(((fu[r] - fd[r]) / (2.0 * step) - k[r][col]).abs());
-            }
-        }
+        let worst = jacobian_mismatch(&k, force, 11);
         let asym = (0..n).flat_map(|r| (0..n).map(move |c| (r, c))).map(|(r, c)| (k[r][c] - k[c][r]).abs()).fold(0.0, f64::max);
         eprintln!("nu = {nu}: |K - J| / max|K| = {:.2e}, |K - K^T| / max|K| = {:.2e}", worst / kmax, asym / kmax);
         assert!(worst < 1e-10 * kmax, "nu = {nu}: Jacobian mismatch {}", worst / kmax);
         assert!(asym < 1e-12 * kmax, "nu = {nu}: asymmetry {}", asym / kmax);
     }
-}
-
-/// Least-squares order and worst single-step order of `errors` over `deltas`.
-fn orders(deltas: &[f64], errors: &[f64]) -> (f64, f64) {
-    let ls = mlsm::quality::post::observed_order(deltas, errors).unwrap();
-    let worst = (1..deltas.len())
-        .map(|k| (errors[k - 1] / errors[k]).ln() / (deltas[k - 1] / deltas[k]).ln())
-        .fold(f64::INFINITY, f64::min);
-    (ls, worst)
 }
 
 /// Nonlocal-to-local with the Dirichlet collar, manufactured solution, m = 3, four
@@ -166,7 +132,7 @@ fn lps_converges_at_second_order_with_a_dirichlet_collar() {
                 sol.errors.unwrap().0.e_inf_u
             })
             .collect();
-        let (ls, worst) = orders(&deltas, &errors);
+        let (ls, worst) = least_squares_and_worst_order(&deltas, &errors);
         eprintln!("nu = {nu} plane {plane}: e_inf {errors:?} -> least squares {ls:.2}, worst step {worst:.2}");
         assert!(ls >= 1.9 && worst >= 1.9, "nu = {nu}: orders {ls}, {worst}");
         assert!(errors[3] < 5e-4, "nu = {nu}: {}", errors[3]);

@@ -253,18 +253,7 @@ fn stiffness_is_the_symmetric_jacobian_of_the_internal_force() {
             let lu = d.bonds().apply(&u);
             (0..n).map(|r| -d.nodes.volumes[r / 2] * lu[r / 2][r % 2]).collect()
         };
-        let base: Vec<f64> = (0..n).map(|r| ((r * 7919) % 13) as f64 / 13.0 - 0.5).collect();
-        let step = 1e-3;
-        let mut worst: f64 = 0.0;
-        for col in (0..n).step_by(7) {
-            let (mut up, mut down) = (base.clone(), base.clone());
-            up[col] += step;
-            down[col] -= step;
-            let (fu, fd) = (force(&up), force(&down));
-            for r in 0..n {
-                worst = worst.max(((fu[r] - fd[r]) / (2.0 * step) - k[r][col]).abs());
-            }
-        }
+        let worst = jacobian_mismatch(&k, force, 7);
         let asym = (0..n).flat_map(|r| (0..n).map(move |c| (r, c))).map(|(r, c)| (k[r][c] - k[c][r]).abs()).fold(0.0, f64::max);
         eprintln!("{rule}: |K - J| / max|K| = {:.2e}, |K - K^T| / max|K| = {:.2e}", worst / kmax, asym / kmax);
         assert!(worst < 1e-10 * kmax, "{rule}: Jacobian mismatch {}", worst / kmax);

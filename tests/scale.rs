@@ -40,6 +40,9 @@ fn scaled(name: &str, fill: &str, factor: f64) -> Problem {
     for probe in doc.get_mut("probe").and_then(|p| p.as_array_mut()).into_iter().flatten() {
         scale(probe.get_mut("at").unwrap());
     }
+    if let Some(horizon) = doc.get_mut("peridynamics").and_then(|t| t.as_table_mut()).and_then(|t| t.get_mut("horizon")) {
+        scale(horizon);
+    }
     for key in ["length", "depth", "radius", "inner", "outer"] {
         if let Some(v) = doc["exact"].as_table_mut().unwrap().get_mut(key) {
             scale(v);

@@ -147,3 +147,31 @@ pub fn names(dir: &std::path::Path) -> Vec<String> {
     v.sort();
     v
 }
+
+/// Largest `|(f(x + s e_c) - f(x - s e_c)) / 2s - K[r][c]|` over every row `r` and every
+/// `every`-th column `c`, at a fixed pseudo-random `x` in [-0.5, 0.5] and step
+/// `s = 1e-3`: how far the dense matrix `k` is from the central finite-difference
+/// Jacobian of `force` (exact up to cancellation for a linear force).
+pub fn jacobian_mismatch(k: &[Vec<f64>], force: impl Fn(&[f64]) -> Vec<f64>, every: usize) -> f64 {
+    let n = k.len();
+    let base: Vec<f64> = (0..n).map(|r| ((r * 7919) % 13) as f64 / 13.0 - 0.5).collect();
+    let step = 1e-3;
+    let mut worst: f64 = 0.0;
+    for col in (0..n).step_by(every) {
+        let (mut up, mut down) = (base.clone(), base.clone());
+        up[col] += step;
+        down[col] -= step;
+        let (fu, fd) = (force(&up), force(&down));
+        for r in 0..n {
+            worst = worst.max(((fu[r] - fd[r]) / (2.0 * step) - k[r][col]).abs());
+        }
+    }
+    worst
+}
+
+/// Least-squares order and worst single-step order of `errors` over `sizes`.
+pub fn least_squares_and_worst_order(sizes: &[f64], errors: &[f64]) -> (f64, f64) {
+    let ls = mlsm::quality::post::observed_order(sizes, errors).unwrap();
+    let worst = (1..sizes.len()).map(|k| (errors[k - 1] / errors[k]).ln() / (sizes[k - 1] / sizes[k]).ln()).fold(f64::INFINITY, f64::min);
+    (ls, worst)
+}

@@ -132,3 +132,10 @@ pub fn compressed(rows: Vec<NodeRows>) -> (Csr, Vec<f64>) {
     }
     (Csr::from_parts(n, n, offsets, cols, values), rhs)
 }
+
+/// `0..n` in about four ranges per thread, for one [`RowBuilder`] each.
+pub fn chunks(n: usize) -> Vec<std::ops::Range<usize>> {
+    let count = (4 * rayon::current_num_threads()).max(1);
+    let size = n.div_ceil(count).max(1);
+    (0..n).step_by(size).map(|a| a..(a + size).min(n)).collect()
+}

@@ -38,7 +38,7 @@
 //! isotropic expansion at every node. A family cut by the sight of fictitious nodes
 //! ([`super::extension::in_sight`]) matches the whole disc's moments of degrees 1-3.
 
-use super::assembly::RowBuilder;
+use super::assembly::{chunks, RowBuilder};
 use super::compatible::{compatible_weights, ray_moments};
 use super::extension::in_sight;
 use super::family::Families;
@@ -257,16 +257,18 @@ impl Dilatation {
     /// Gershgorin bound `max_r sum_c |K_dil(r, c)| / V_k` of free node `k`'s two rows,
     /// per free node (for the stable time step).
     pub fn row_bounds(&self, nodes: &PdNodes) -> Vec<f64> {
-        (0..nodes.free)
+        chunks(nodes.free)
             .into_par_iter()
-            .map_init(
-                || RowBuilder::new(nodes, None),
-                |builder, k| {
-                    self.row(nodes, k, &mut |l, b| builder.add(l, b));
-                    let rows = builder.take().0.iter().fold([0.0, 0.0], |s, (_, e)| [s[0] + e[0].abs() + e[1].abs(), s[1] + e[2].abs() + e[3].abs()]);
-                    rows[0].max(rows[1]) / nodes.volumes[k]
-                },
-            )
+            .flat_map_iter(|range| {
+                let mut builder = RowBuilder::new(nodes, None);
+                range
+                    .map(|k| {
+                        self.row(nodes, k, &mut |l, b| builder.add(l, b));
+                        let rows = builder.take().0.iter().fold([0.0, 0.0], |s, (_, e)| [s[0] + e[0].abs() + e[1].abs(), s[1] + e[2].abs() + e[3].abs()]);
+                        rows[0].max(rows[1]) / nodes.volumes[k]
+                    })
+                    .collect::<Vec<_>>()
+            })
             .collect()
     }
 }

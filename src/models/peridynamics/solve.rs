@@ -2,7 +2,7 @@
 //! solve -> post-processing (nonlocal strain, errors against an exact solution on
 //! the whole plate and on the interior region at distance >= delta from the boundary).
 
-use super::assembly::{compressed, NodeRows, RowBuilder};
+use super::assembly::{chunks, compressed, NodeRows, RowBuilder};
 use super::dilatation::Dilatation;
 use super::extension::{in_sight, Extension};
 use super::family::Families;
@@ -262,6 +262,21 @@ impl Discretisation {
         Ok(disc)
     }
 
+    /// `(L_h u)_i` at every free node, bonds and (for the solid) dilatation, with `u` the
+    /// displacement of every node (collar and fictitious ones included).
+    pub fn operator(&self, u: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let mut lu = self.bonds().apply(u);
+        if let Some(d) = &self.dilatation {
+            let theta = d.theta(&self.nodes, u);
+            lu.par_iter_mut().enumerate().for_each(|(i, f)| {
+                let g = d.force_at(&self.nodes, &theta, i);
+                f[0] += g[0];
+                f[1] += g[1];
+            });
+        }
+        lu
+    }
+
     /// The traction parts of the fictitious nodes' extension for the tractions of
     /// `conditions` ([`Extension::traction_parts`]; empty without fictitious nodes).
     pub fn traction_parts(&self, conditions: &[crate::physics::elasticity::conditions::BoundaryCondition], exact: Option<&dyn ExactSolution>) -> Result<Vec<[f64; 2]>, RunError> {
@@ -303,30 +318,33 @@ impl Discretisation {
         }
         let nodes = &self.nodes;
         let x = &nodes.positions;
-        let rows: Vec<NodeRows> = (0..nodes.free)
+        let row = |builder: &mut RowBuilder, k: usize| -> NodeRows {
+            if !self.owns(k) {
+                return (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
+            }
+            let v = nodes.volumes[k];
+            builder.load([v * body_force[k][0], v * body_force[k][1]]);
+            for (b, &j) in self.families.range(k).zip(self.families.of(k)) {
+                let j = j as usize;
+                let xi = [x[j][0] - x[k][0], x[j][1] - x[k][1]];
+                let c = v * self.weights.coefficients[b];
+                let kb = [c * xi[0] * xi[0], c * xi[0] * xi[1], c * xi[1] * xi[0], c * xi[1] * xi[1]];
+                builder.add(k, kb);
+                builder.add(j, kb.map(|e| -e));
+            }
+            if let Some(d) = &self.dilatation {
+                d.row(nodes, k, &mut |l, blk| builder.add(l, blk));
+            }
+            builder.finish()
+        };
+        // One builder (a block and a mark per node) per chunk of rows, a few chunks per
+        // thread: a builder per rayon job would allocate and clear them thousands of times.
+        let rows: Vec<NodeRows> = chunks(nodes.free)
             .into_par_iter()
-            .map_init(
-                || RowBuilder::new(nodes, Some((self.extension.as_ref(), traction_parts))),
-                |builder, k| {
-                    if !self.owns(k) {
-                        return (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
-                    }
-                    let v = nodes.volumes[k];
-                    builder.load([v * body_force[k][0], v * body_force[k][1]]);
-                    for (b, &j) in self.families.range(k).zip(self.families.of(k)) {
-                        let j = j as usize;
-                        let xi = [x[j][0] - x[k][0], x[j][1] - x[k][1]];
-                        let c = v * self.weights.coefficients[b];
-                        let kb = [c * xi[0] * xi[0], c * xi[0] * xi[1], c * xi[1] * xi[0], c * xi[1] * xi[1]];
-                        builder.add(k, kb);
-                        builder.add(j, kb.map(|e| -e));
-                    }
-                    if let Some(d) = &self.dilatation {
-                        d.row(nodes, k, &mut |l, blk| builder.add(l, blk));
-                    }
-                    builder.finish()
-                },
-            )
+            .flat_map_iter(|range| {
+                let mut builder = RowBuilder::new(nodes, Some((self.extension.as_ref(), traction_parts)));
+                range.map(|k| row(&mut builder, k)).collect::<Vec<_>>()
+            })
             .collect();
         if let Some(bad) = rows.iter().position(|r| r.1.iter().chain(&r.2).chain(&r.3).any(|v| !v.is_finite())) {
             return Err(bad);

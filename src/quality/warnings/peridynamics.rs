@@ -128,3 +128,19 @@ pub(super) fn estimate_of_peridynamics(estimate: &Estimate, threshold: f64, hori
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::elasticity::material::{Material, PlaneModel, YoungPoisson};
+
+    /// `lambda / mu = 2 nu / (1 - 2 nu)` in plane strain passes 100 just above nu = 0.495;
+    /// plane stress never comes near it (`lambda* / mu = 2 nu / (1 - nu)` <= 2).
+    #[test]
+    fn near_incompressible_solids_are_warned_in_plane_strain_only() {
+        let mat = |nu, plane| Material { elastic: YoungPoisson { young: 1.0, poisson: nu }, plane };
+        assert!(near_incompressible(&mat(0.499, PlaneModel::Strain)).is_some_and(|w| w.check == "pd-near-incompressible"));
+        assert!(near_incompressible(&mat(0.494, PlaneModel::Strain)).is_none());
+        assert!(near_incompressible(&mat(0.4999, PlaneModel::Stress)).is_none());
+    }
+}
