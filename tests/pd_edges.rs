@@ -186,7 +186,8 @@ fn traction_edges_converge_at_second_order() {
     for nu in [0.3, 0.25] {
         let e = errors("manufactured_traction", &[("material.nu", f(nu))], &deltas);
         let (ls, worst) = least_squares_and_worst_order(&deltas, &e);
-        let solid = scene("manufactured_traction", &[("peridynamics.horizon", f(0.1)), ("material.nu", f(nu))]).model.peridynamics().unwrap().solid;
+        let solid =
+            scene("manufactured_traction", &[("peridynamics.horizon", f(0.1)), ("material.nu", f(nu))]).model.peridynamics().unwrap().solid;
         eprintln!("manufactured_traction, nu = {nu} ({solid:?}): e_inf {e:?} -> least squares {ls:.2}, worst step {worst:.2}");
         assert_eq!(solid, if nu == 0.25 { Solid::BondBased } else { Solid::Linear });
         assert!(ls >= 1.9 && worst >= 1.9, "nu = {nu}: {ls} {worst}");

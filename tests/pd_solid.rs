@@ -180,7 +180,8 @@ fn lps_dynamics_conserves_energy_and_moves_rigidly() {
         all.extend_from_slice(edits);
         scene("steel_plate_dynamic", &all)
     };
-    let run = |p: &Problem| simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
+    let run =
+        |p: &Problem| simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
     let sim = run(&plate(&[]));
     assert!(sim.discretisation.dilatation.is_some());
     let total = |e: &[f64; 4]| e[1] + e[2] + e[3];
@@ -229,4 +230,3 @@ fn the_choice_of_solid_is_validated() {
     let e = navier.with_peridynamics(params).unwrap_err();
     assert!(e.field == "material.nu" && e.reason.contains("infinite"), "{e:?}");
 }
-

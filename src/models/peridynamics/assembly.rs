@@ -120,7 +120,8 @@ impl<'a> RowBuilder<'a> {
 pub fn compressed(rows: Vec<NodeRows>) -> (Csr, Vec<f64>) {
     let n = 2 * rows.len();
     let nnz: usize = rows.iter().map(|r| 2 * r.0.len()).sum();
-    let (mut offsets, mut cols, mut values, mut rhs) = (Vec::with_capacity(n + 1), Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(n));
+    let (mut offsets, mut cols, mut values, mut rhs) =
+        (Vec::with_capacity(n + 1), Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(n));
     offsets.push(0);
     for (c, top, bottom, r) in rows {
         for vals in [top, bottom] {

@@ -264,7 +264,11 @@ impl Dilatation {
                 range
                     .map(|k| {
                         self.row(nodes, k, &mut |l, b| builder.add(l, b));
-                        let rows = builder.take().0.iter().fold([0.0, 0.0], |s, (_, e)| [s[0] + e[0].abs() + e[1].abs(), s[1] + e[2].abs() + e[3].abs()]);
+                        let rows = builder
+                            .take()
+                            .0
+                            .iter()
+                            .fold([0.0, 0.0], |s, (_, e)| [s[0] + e[0].abs() + e[1].abs(), s[1] + e[2].abs() + e[3].abs()]);
                         rows[0].max(rows[1]) / nodes.volumes[k]
                     })
                     .collect::<Vec<_>>()

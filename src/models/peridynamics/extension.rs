@@ -191,8 +191,10 @@ impl Extension {
                 let phi_g = cubic(z(nodes.positions[nodes.fictitious + g]));
                 // Component c of u_g: phi_g . (coefficients of component c) for each right-hand side.
                 let value = |c: usize, col: usize| (0..10).map(|a| phi_g[a] * sol[(10 * c + a, col)]).sum::<f64>();
-                let block = |cx: usize, cy: usize, sx: f64, sy: f64| [value(0, cx) * sx, value(0, cy) * sy, value(1, cx) * sx, value(1, cy) * sy];
-                let terms: Vec<(u32, [f64; 4])> = near.iter().enumerate().map(|(i, n)| (n.item, block(2 * i, 2 * i + 1, 1.0, 1.0))).collect();
+                let block =
+                    |cx: usize, cy: usize, sx: f64, sy: f64| [value(0, cx) * sx, value(0, cy) * sy, value(1, cx) * sx, value(1, cy) * sy];
+                let terms: Vec<(u32, [f64; 4])> =
+                    near.iter().enumerate().map(|(i, n)| (n.item, block(2 * i, 2 * i + 1, 1.0, 1.0))).collect();
                 let t0 = 2 * near.len();
                 let values = parts
                     .iter()
@@ -209,7 +211,8 @@ impl Extension {
                 finite.then_some((terms, values))
             })
             .collect();
-        let mut ext = Extension { offsets: vec![0], terms: Vec::new(), tractions: Vec::new(), feet: nodes.feet.iter().map(|f| f.point).collect() };
+        let mut ext =
+            Extension { offsets: vec![0], terms: Vec::new(), tractions: Vec::new(), feet: nodes.feet.iter().map(|f| f.point).collect() };
         for (g, fit) in fits.into_iter().enumerate() {
             let (terms, tractions) = fit.ok_or(nodes.fictitious + g)?;
             ext.terms.extend(terms);
@@ -241,7 +244,12 @@ impl Extension {
 
     /// The traction parts `sum_k F_gk t_k` of every fictitious node, or the first one
     /// where a traction is not finite.
-    pub fn traction_parts(&self, nodes: &PdNodes, conditions: &[BoundaryCondition], exact: Option<&dyn ExactSolution>) -> Result<Vec<[f64; 2]>, RunError> {
+    pub fn traction_parts(
+        &self,
+        nodes: &PdNodes,
+        conditions: &[BoundaryCondition],
+        exact: Option<&dyn ExactSolution>,
+    ) -> Result<Vec<[f64; 2]>, RunError> {
         let parts: Vec<[f64; 2]> = (0..self.feet.len()).into_par_iter().map(|g| self.traction_part(g, conditions, exact)).collect();
         match parts.iter().position(|v| !v[0].is_finite() || !v[1].is_finite()) {
             Some(g) => Err(RunError::not_finite_at(nodes.fictitious + g, nodes.positions[nodes.fictitious + g])),
