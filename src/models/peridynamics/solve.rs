@@ -51,6 +51,8 @@ pub struct PdSolution {
     pub layer_nodes: usize,
     /// Bonds (both directions counted).
     pub bonds: usize,
+    /// Bonds not made by the sight rule at re-entrant corners ([`in_sight`]).
+    pub cut_bonds: usize,
     /// Bond weighting report.
     pub weights: WeightsSummary,
     /// Unknowns and nonzeros.
@@ -128,6 +130,8 @@ pub struct Discretisation {
     pub extension: Option<Extension>,
     /// Bonds of the free nodes (both directions counted), over all ranks.
     pub bond_count: usize,
+    /// Bonds not made by the sight rule ([`in_sight`]; this process's families).
+    pub cut_bonds: usize,
     /// The free nodes this process works on: all of them, or when the solve is
     /// distributed over MPI ranks (`solver.kind = "petsc"`, a Morton split of their
     /// positions) the families and weights of its own nodes and of the halo they read
@@ -179,7 +183,7 @@ impl Discretisation {
         })?;
         let share = world.map_or_else(Share::whole, |w| Share::as_rank(&nodes.positions[..nodes.free], w));
         let own = |i: usize| share.owns(i);
-        let (families, layer) = timer.run(FAMILIES, || {
+        let (families, layer, cut_bonds) = timer.run(FAMILIES, || {
             let radius = search_radius(params);
             let (f, layer) = if share.is_split() {
                 let (f, layer) = Families::around(&nodes.positions, nodes.free, radius, own, halo_layers(params).1);
@@ -190,9 +194,9 @@ impl Discretisation {
             // Bonds that would read a fictitious node across another side of the solid are not made.
             let (f, cut) = if nodes.fictitious_count() > 0 { f.retain(|i, j| in_sight(&body, &nodes, i, j)) } else { (f, 0) };
             let mine = if layer.is_some() { " (this rank's nodes and halo)" } else { "" };
-            let cut = if cut > 0 { format!(", {cut} not made (fictitious nodes across a re-entrant corner or a narrow hole)") } else { String::new() };
-            let note = format!("{} bonds{mine}, {:.1} per node{cut}", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
-            Ok(((f, layer), note))
+            let said = if cut > 0 { format!(", {cut} not made (fictitious nodes across a re-entrant corner or a narrow hole)") } else { String::new() };
+            let note = format!("{} bonds{mine}, {:.1} per node{said}", f.bonds(), f.bonds() as f64 / nodes.free.max(1) as f64);
+            Ok(((f, layer, cut), note))
         })?;
         let moment = fourth_moment(&case.material);
         let micromodulus = Micromodulus::calibrated(params.kernel, params.horizon, moment);
@@ -239,6 +243,7 @@ impl Discretisation {
         };
         let mut disc = Discretisation {
             bond_count: families.bonds(),
+            cut_bonds,
             nodes,
             families,
             weights,
@@ -436,7 +441,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         };
         Ok((post, note))
     })?;
-    let Discretisation { nodes, weights, micromodulus, bond_count, .. } = disc;
+    let Discretisation { nodes, weights, micromodulus, bond_count, cut_bonds, .. } = disc;
     let timings = timer.finish();
     let mut report = report;
     if let Some(ranks) = report.ranks.as_mut() {
@@ -446,6 +451,7 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
         params: *params,
         unknowns: nodes.dofs().len(),
         bonds: bond_count,
+        cut_bonds,
         weights: WeightsSummary {
             complete_families: weights.complete_families,
             compatible_rows: weights.compatible_rows,
