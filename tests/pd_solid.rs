@@ -12,6 +12,7 @@ mod common;
 
 use common::*;
 use mlsm::models::peridynamics::solve::Discretisation;
+use mlsm::models::peridynamics::stiffness::DilatationPart;
 use mlsm::models::peridynamics::{simulate, Solid};
 use mlsm::scene::problem::Problem;
 use mlsm::stages::{Silent, StageTimer};
@@ -91,7 +92,7 @@ fn lps_stiffness_is_the_symmetric_jacobian_of_the_internal_force() {
         let p = scene("steel_plate", &edits);
         let d = discretise(&p);
         let n = 2 * d.nodes.free;
-        let (m, _) = d.stiffness(&vec![[0.0, 0.0]; d.nodes.free], &[]).unwrap();
+        let (m, _) = d.stiffness(&vec![[0.0, 0.0]; d.nodes.free], &[], DilatationPart::Assembled).unwrap();
         let mut k = vec![vec![0.0; n]; n];
         for (r, c, v) in m.entries() {
             k[r][c] += v;

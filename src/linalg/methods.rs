@@ -15,7 +15,7 @@ use super::inverse::Inverse;
 use super::report::IN_PROCESS_HINT;
 use super::retained::{Inverse as Kept, Retained};
 use super::{
-    amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, row_residual, solver_error, subtract_column_product,
+    amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, solver_error, subtract_column_product,
 };
 use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
@@ -289,7 +289,7 @@ pub(super) fn solve_gmres_multigrid(
         },
     };
     let rows = system.as_ref().or(pc.fine_operator()).expect("the multigrid keeps its finest operator");
-    match run_gmres(rows, &pc, rhs, &start, settings, layout.as_ref()) {
+    match run_gmres(&Operator::rows(rows), &pc, rhs, &start, settings, layout.as_ref()) {
         Ok(done) => {
             start.retain(|| Retained { method: start.method.clone(), rows: system.map_or_else(OnceLock::new, OnceLock::from), columns: None, inverse: Kept::Gmres(pc, settings) });
             Ok(done)
@@ -332,7 +332,7 @@ pub(super) fn solve_gmres_saddle_point(
     if layout.multipliers > 0 {
         pc = precond::BuiltPreconditioner::Bordered(Box::new(border::Bordered::build(&rows, layout.multipliers, Box::new(pc))?));
     }
-    let done = run_gmres(&rows, &pc, rhs, &start, settings, Some(&layout))?;
+    let done = run_gmres(&Operator::rows(&rows), &pc, rhs, &start, settings, Some(&layout))?;
     start.retain(|| Retained { method: start.method.clone(), rows: OnceLock::from(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
     Ok(done)
 }
@@ -347,14 +347,50 @@ pub(super) fn solve_krylov_gmres(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let pc = precond::BuiltPreconditioner::build(a, settings.preconditioner, layout)?;
     let rows = csr::to_csr(a);
-    let done = run_gmres(&rows, &pc, rhs, start, settings, layout.as_ref())?;
+    let done = run_gmres(&Operator::rows(&rows), &pc, rhs, start, settings, layout.as_ref())?;
     start.retain(|| Retained { method: start.method.clone(), rows: OnceLock::from(rows), columns: None, inverse: Kept::Gmres(pc, settings) });
     Ok(done)
 }
 
-/// GMRES(restart) on `rows` (the solved operator) with the preconditioner `pc`.
+/// The solved operator `D (A + E)` as GMRES applies it: the rows `D A`, and when the
+/// operator has a part applied without its matrix ([`super::Addition`]), that part
+/// and the row scales `D` it is multiplied by (none: unscaled).
+pub(super) struct Operator<'a> {
+    pub(super) rows: &'a Csr,
+    pub(super) addition: Option<(super::Addition<'a>, Option<&'a [f64]>)>,
+}
+
+impl<'a> Operator<'a> {
+    /// The rows alone.
+    pub(super) fn rows(rows: &'a Csr) -> Self {
+        Operator { rows, addition: None }
+    }
+
+    /// `y ← D (A + E) x`.
+    pub(super) fn apply(&self, x: &[f64], y: &mut [f64]) {
+        csr::product(self.rows, x, y);
+        if let Some((addition, scales)) = self.addition {
+            let mut e = vec![0.0; y.len()];
+            addition(x, &mut e);
+            match scales {
+                Some(d) => y.iter_mut().zip(&e).zip(d).for_each(|((y, e), d)| *y += d * e),
+                None => y.iter_mut().zip(&e).for_each(|(y, e)| *y += e),
+            }
+        }
+    }
+
+    /// `b − D (A + E) x`.
+    fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64> {
+        let mut r = vec![0.0; b.len()];
+        self.apply(x, &mut r);
+        r.iter_mut().zip(b).for_each(|(r, b)| *r = b - *r);
+        r
+    }
+}
+
+/// GMRES(restart) on `op` (the solved operator) with the preconditioner `pc`.
 pub(super) fn run_gmres(
-    rows: &Csr,
+    op: &Operator,
     pc: &precond::BuiltPreconditioner,
     rhs: &Rhs,
     start: &Start,
@@ -363,18 +399,18 @@ pub(super) fn run_gmres(
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
     let setup_seconds = start.setup.elapsed().as_secs_f64();
     let t_solve = Instant::now();
-    let apply = |x: &[f64], y: &mut [f64]| csr::product(rows, x, y);
+    let apply = |x: &[f64], y: &mut [f64]| op.apply(x, y);
     let out =
         gmres::solve_gmres_with(apply, &rhs.solved, |v, z| pc.solve_into(v, z), (tolerance, max_iterations, restart, stall), start.watch);
     let solve_seconds = t_solve.elapsed().as_secs_f64();
     let name = format!("GMRES({restart})+{}", preconditioner.display_name());
-    let r = row_residual(rows, &out.x, &rhs.solved);
+    let r = op.residual(&out.x, &rhs.solved);
     let (_, original_relative_residual) = rhs.residuals(&r);
     match out.status {
         gmres::Status::Converged => {
             let counts = (out.iterations, out.restarts, out.relative_residual, original_relative_residual);
             let report = start.converged(pc, (setup_seconds, solve_seconds), counts);
-            let report = with_own_error(report, |x, y| csr::product(rows, x, y), &r, pc, &out.x, layout);
+            let report = with_own_error(report, apply, &r, pc, &out.x, layout);
             Ok((out.x, report))
         }
         gmres::Status::IterationLimit | gmres::Status::Stalled => Err(SolveError::NoConvergence {

@@ -23,6 +23,7 @@
 //! is not finite, or (for LU) whose residual exceeds [`LU_RESIDUAL_LIMIT`], is
 //! an error, never silently returned.
 
+pub mod addition;
 pub mod aggregation;
 pub mod amg;
 pub mod bicgstab;
@@ -67,6 +68,7 @@ use methods::{
     Rhs, Start,
 };
 
+pub use addition::{solve_nodal_with_addition, takes_addition, Addition};
 pub use csr::Csr;
 pub use layout::NodeLayout;
 pub use params::{
@@ -251,12 +253,27 @@ fn solve_nodal_kept(
     auxiliary: Auxiliary<'_>,
     (watch, keep): (&dyn watch::Watch, Option<&std::cell::RefCell<Option<Retained>>>),
 ) -> Result<(Vec<f64>, SolveReport), SolveError> {
+    in_load_scale(solved_rhs_max(&a, b, params.equilibrate), b, |scaled| {
+        solve_with_memory(a, scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch, keep))
+    })
+}
+
+/// `solve(s b) / s` with the power of two `s = 2^-e` that brings `rhs_max`, the largest
+/// entry of the right-hand side the solver sees (`D b` of the equilibrated rows,
+/// [`solved_rhs_max`]), into `[1, 2)` ([`solve`]); a solution beyond the double range
+/// is [`SolveError::Overflow`], and the report counts the unknowns that lost digits
+/// to subnormal numbers.
+fn in_load_scale(
+    rhs_max: f64,
+    b: &[f64],
+    solve: impl FnOnce(&[f64]) -> Result<(Vec<f64>, SolveReport), SolveError>,
+) -> Result<(Vec<f64>, SolveReport), SolveError> {
     if let Some((i, v)) = b.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SolveError::Dimension { detail: format!("right-hand side entry {i} is not finite ({v})") });
     }
-    let exponent = binary_exponent(solved_rhs_max(&a, b, params.equilibrate));
+    let exponent = binary_exponent(rhs_max);
     let scaled: Vec<f64> = b.iter().map(|v| times_power_of_two(*v, -exponent)).collect();
-    let (x, report) = solve_with_memory(a, &scaled, params, layout, auxiliary, (crate::output::available_memory_bytes(), watch, keep))?;
+    let (x, report) = solve(&scaled)?;
     if let Some(i) = x.iter().position(|v| !times_power_of_two(*v, exponent).is_finite()) {
         return Err(SolveError::Overflow {
             detail: format!(

@@ -163,7 +163,7 @@ impl SolveError {
     /// This failure without its advice on what to try next: `auto`, which retries
     /// with another method itself, reports the first failure so (its advice, "try
     /// lu", would name the retry it already made).
-    pub(super) fn without_hint(self) -> SolveError {
+    pub fn without_hint(self) -> SolveError {
         match self {
             SolveError::NoConvergence { iterations, restarts, limit, relative_residual, method, tolerance, .. } => {
                 SolveError::NoConvergence { hint: "", iterations, restarts, limit, relative_residual, method, tolerance }

@@ -35,6 +35,7 @@ pub mod nodes;
 pub mod operator;
 pub mod params;
 pub mod solve;
+pub mod stiffness;
 pub mod strain;
 pub mod weights;
 

@@ -2,7 +2,6 @@
 //! solve -> post-processing (nonlocal strain, errors against an exact solution on
 //! the whole plate and on the interior region at distance >= delta from the boundary).
 
-use super::assembly::{chunks, compressed, NodeRows, RowBuilder};
 use super::dilatation::Dilatation;
 use super::extension::{in_sight, Extension};
 use super::family::Families;
@@ -15,13 +14,12 @@ use crate::physics::case::Case;
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
 use crate::physics::elasticity::stress::{Gradient, StressField};
 use crate::physics::exact::ExactSolution;
-use crate::linalg::{self, Csr, SolveReport};
+use crate::linalg::SolveReport;
 use crate::parallel::petsc::World;
 use crate::parallel::distributed;
 use crate::parallel::share::Share;
 use crate::stages::{stage, Progress, RunError, SolveProgress, Stage, StageTimer, StageTimings};
 use crate::quality::post::probe::{probe_values, NodalFields, ProbeValue};
-use std::borrow::Cow;
 
 /// Family search.
 pub const FAMILIES: Stage = Stage::new("families");
@@ -310,52 +308,6 @@ impl Discretisation {
     pub fn bonds(&self) -> Bonds<'_> {
         Bonds { nodes: &self.nodes, families: &self.families, coefficients: &self.weights.coefficients }
     }
-
-    /// The stiffness over the free unknowns of this process's rows and its right-hand
-    /// side for the body force densities `body_force` and the traction parts of the
-    /// fictitious nodes `traction_parts` ([`Extension::traction_parts`]): the bonds' and,
-    /// for the linear peridynamic solid, the dilatation's, with the fictitious nodes'
-    /// columns condensed ([`super::assembly`]); `Err` is the first node with a
-    /// coefficient that is not finite.
-    pub fn stiffness(&self, body_force: &[[f64; 2]], traction_parts: &[[f64; 2]]) -> Result<(Csr, Vec<f64>), usize> {
-        if self.dilatation.is_none() && self.extension.is_none() {
-            return self.bonds().stiffness_rows(body_force, |i| self.owns(i));
-        }
-        let nodes = &self.nodes;
-        let x = &nodes.positions;
-        let row = |builder: &mut RowBuilder, k: usize| -> NodeRows {
-            if !self.owns(k) {
-                return (Vec::new(), Vec::new(), Vec::new(), [0.0; 2]);
-            }
-            let v = nodes.volumes[k];
-            builder.load([v * body_force[k][0], v * body_force[k][1]]);
-            for (b, &j) in self.families.range(k).zip(self.families.of(k)) {
-                let j = j as usize;
-                let xi = [x[j][0] - x[k][0], x[j][1] - x[k][1]];
-                let c = v * self.weights.coefficients[b];
-                let kb = [c * xi[0] * xi[0], c * xi[0] * xi[1], c * xi[1] * xi[0], c * xi[1] * xi[1]];
-                builder.add(k, kb);
-                builder.add(j, kb.map(|e| -e));
-            }
-            if let Some(d) = &self.dilatation {
-                d.row(nodes, k, &mut |l, blk| builder.add(l, blk));
-            }
-            builder.finish()
-        };
-        // One builder (a block and a mark per node) per chunk of rows, a few chunks per
-        // thread: a builder per rayon job would allocate and clear them thousands of times.
-        let rows: Vec<NodeRows> = chunks(nodes.free)
-            .into_par_iter()
-            .flat_map_iter(|range| {
-                let mut builder = RowBuilder::new(nodes, Some((self.extension.as_ref(), traction_parts)));
-                range.map(|k| row(&mut builder, k)).collect::<Vec<_>>()
-            })
-            .collect();
-        if let Some(bad) = rows.iter().position(|r| r.1.iter().chain(&r.2).chain(&r.3).any(|v| !v.is_finite())) {
-            return Err(bad);
-        }
-        Ok(compressed(rows))
-    }
 }
 
 /// Whether each point lies in the interior region, at distance >= `horizon` from the
@@ -408,26 +360,19 @@ pub fn solve(case: &Case, params: &PdParams, progress: &dyn Progress) -> Result<
     let disc = Discretisation::new(case, params, exact, &mut timer)?;
     // With PETSc each rank assembles the rows of the free nodes it owns (a Morton split
     // of their positions, as for the Navier model).
-    let free_positions = &disc.nodes.positions[..disc.nodes.free];
-    let (matrix, rhs, body_force, layer_nodes) = timer.run(stage::ASSEMBLY, || {
+    let (system, body_force, traction_parts, layer_nodes) = timer.run(stage::ASSEMBLY, || {
         let (b, layer) = loads::body_forces(&case.domain, &case.conditions, &case.body_force, exact, &disc.nodes)?;
         let parts = disc.traction_parts(&case.conditions, exact)?;
-        let assembled = disc.stiffness(&b, &parts).map_err(|node| RunError::not_finite_at(node, disc.nodes.positions[node]));
-        let (m, rhs) = distributed::agree(assembled)?;
+        let system = disc.system(&b, &parts, &params.solver)?;
         let rows = if disc.share.is_split() { " in this rank's rows" } else { "" };
-        let note = format!("{} unknowns, {} nonzeros{rows}, {layer} nodes in loaded layers", rhs.len(), m.nnz());
-        Ok(((m, rhs, b, layer), note))
+        let applied = if system.dilatation_applied() { " (the bonds'; the dilatation applied by its product)" } else { "" };
+        let note = format!("{} unknowns, {} nonzeros{rows}{applied}, {layer} nodes in loaded layers", system.rhs.len(), system.matrix.nnz());
+        Ok(((system, b, parts, layer), note))
     })?;
-    let nonzeros = matrix.nnz();
+    let nonzeros = system.matrix.nnz();
     let watch = SolveProgress(timer.progress());
     let (x, report) = timer.run(stage::SOLVE, || {
-        let (x, report) = if disc.share.is_split() {
-            disc.share.solve(2, matrix.entries(), &rhs, free_positions, &params.solver)?
-        } else {
-            // The unknowns are the free nodes' displacements, free nodes first.
-            let layout = linalg::NodeLayout { per_node: 2, positions: free_positions, multipliers: 0 };
-            linalg::solve_nodal(Cow::Owned(matrix), &rhs, &params.solver, Some(layout), None, &watch)?
-        };
+        let (x, report) = disc.solve_system(system, (&body_force, &traction_parts), &params.solver, &watch)?;
         let note = format!("{}: relative residual {:.1e}", report.method, report.relative_residual);
         Ok(((x, report), note))
     })?;
