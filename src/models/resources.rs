@@ -30,7 +30,8 @@
 //!
 //! For peridynamics `n = area / h^2`, `pi m^2` bonds per node (32 B each),
 //! `Z = 4 n (pi m^2 + 1)`, the same solver terms with `N = 2 n`; a static run's
-//! families and rows are released before its solve.
+//! families and rows are released before its solve. The linear peridynamic solid adds
+//! its dilatation (20 B per bond), and `4 Z` where its dilatation is assembled.
 //!
 //! Measured against the peak the kernel reports (`/usr/bin/time`) on every shipped
 //! scene, preset and solver path: 0.77-1.28 (benches/memory_estimate.sh,
@@ -146,6 +147,11 @@ fn solver_bytes(kind: &SolverKind, unknowns: f64, nonzeros: f64, saddle_point: b
 /// benches/memory_estimate.sh) less their arrays.
 const BASE_BYTES: f64 = 12e6;
 
+/// Bytes per bond of the linear peridynamic solid's dilatation, kept from its stage to
+/// the end of the run: family index (4 B), weight and reverse weight (8 + 8 B)
+/// (measured 16 B: 4.12 GB against bond-based's 3.67 GB at 1e6 nodes, m = 3).
+const DILATATION_BYTES_PER_BOND: f64 = 20.0;
+
 /// The most that the assembly holds beside its rows and shapes ([`navier`]).
 const ASSEMBLY_IN_FLIGHT_BYTES: f64 = 24e6;
 
@@ -228,14 +234,21 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     let nodes = case.domain.area_estimate(400) / (h * h);
     let per_node = std::f64::consts::PI * params.ratio * params.ratio;
     let bonds = nodes * per_node;
-    let nonzeros = 4.0 * nodes * (per_node + 1.0);
+    let bond_nonzeros = 4.0 * nodes * (per_node + 1.0);
+    // The solid's dilatation is applied by its product when the solver runs GMRES with
+    // the multigrid, else assembled: its rows then read the nodes within 2 delta, four
+    // times the bonds' entries (peridynamics::stiffness).
+    let applied = params.has_dilatation() && crate::linalg::takes_addition(&params.solver, 2 * nodes as usize, 4.0 * bond_nonzeros).is_some();
+    let nonzeros = if params.has_dilatation() && !applied { 4.0 * bond_nonzeros } else { bond_nonzeros };
+    let dilatation = if params.has_dilatation() { bonds * DILATATION_BYTES_PER_BOND } else { 0.0 };
     let solve = solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros, false);
     // A static run's families (32 B per bond) and rows (12 B per entry) are the
     // assembly's peak and are released before the solve (the run at twice m of
     // pd_manufactured: 152 MB measured, 230 MB when they were counted with the
-    // solver); a dynamic run keeps its families through the time loop.
+    // solver); a dynamic run keeps its families through the time loop. The
+    // dilatation's stay through both.
     let run = if case.dynamics.is_some() { bonds * 32.0 + solve } else { (bonds * 32.0 + 12.0 * nonzeros).max(solve) };
-    let peak_bytes = run + BASE_BYTES;
+    let peak_bytes = run + dilatation + BASE_BYTES;
     MemoryEstimate { nodes, unknowns: 2.0 * nodes, nonzeros, bonds: Some(bonds), peak_bytes, driver: "peridynamics.horizon" }
 }
 
