@@ -157,7 +157,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         }
         trial_report = Some(report);
     }
-    let mut series = Series::new(&dir, &p.case);
+    let fracture = p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some());
+    let mut series = Series::new(&dir, &p.case, fracture);
     let outcome = dispatch::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     // Each branch starts the output stage where its output begins (after the
     // estimate of a peridynamic run, which is timed as its own stage).
@@ -196,6 +197,13 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             output.record(&mut sim.timings);
             if !quiet {
                 println!("throughput {:.2e} bond updates per second per thread", sim.bond_updates_per_second_per_thread);
+                if let Some(f) = &sim.fracture {
+                    let s0 = f.critical_stretch.map_or("no breaking (pre-cracks only)".into(), |s| format!("critical stretch {s:.3e}"));
+                    println!(
+                        "fracture: {s0}; {} bonds broke ({:.3e} J released), {} across the pre-cracks; {} nodes damaged, largest damage {:.2}",
+                        f.broken_bonds, f.released_energy, f.precracked_bonds, f.damaged_nodes, f.largest_damage
+                    );
+                }
             }
             let dynamic = Dynamic {
                 nodes: nodes.free,

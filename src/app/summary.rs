@@ -274,6 +274,8 @@ pub(super) struct PdDynamicPart<'a> {
     /// The estimated discretisation error at the horizon over the history (`null` when
     /// not asked for, `{"unavailable": why}` when it failed).
     discretisation_estimate: Option<DiscretisationField<'a>>,
+    /// What broke (`null` without `[peridynamics.fracture]`).
+    fracture: Option<crate::models::peridynamics::dynamics::FractureReport>,
 }
 
 impl<'a> PdDynamicPart<'a> {
@@ -292,6 +294,7 @@ impl<'a> PdDynamicPart<'a> {
             micromodulus: disc.micromodulus,
             bond_updates_per_second_per_thread: sim.bond_updates_per_second_per_thread,
             discretisation_estimate: discretisation.map(DiscretisationField::of),
+            fracture: sim.fracture,
         }
     }
 }

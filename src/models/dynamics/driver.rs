@@ -43,10 +43,18 @@ pub struct Snapshot<'a> {
     pub v: &'a [[f64; 2]],
     /// Stress at each node, when the scene's outputs ask for stress or von Mises.
     pub stress: Option<&'a StressField>,
+    /// Damage at each node (the share of its bonds' volume broken), when bonds break
+    /// or the solid has pre-cracks.
+    pub damage: Option<&'a [f64]>,
 }
 
-/// One line of the energy history: `(t, E_kin, E_el, E_ext)`.
-pub type EnergyRow = [f64; 4];
+/// One line of the energy history: `(t, E_kin, E_el, E_ext, E_released, broken bonds)`
+/// (the last two zero unless bonds break: the energy the broken bonds held when they
+/// broke, and their count, both directions counted).
+pub type EnergyRow = [f64; 6];
+
+/// `(E_kin, E_el, E_ext, E_released, broken bonds)` of a state ([`EnergyRow`]).
+pub type Energies = [f64; 5];
 
 /// The step and step count of a run, checked against the stability limit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -127,7 +135,7 @@ pub fn history_steps(steps: usize) -> Vec<usize> {
 /// the report and the history.
 pub fn integrate(
     system: &dyn SecondOrderSystem,
-    energies: &dyn Fn(&State) -> (f64, f64, f64),
+    energies: &dyn Fn(&State) -> Energies,
     state: &mut State,
     (grid, also): (TimeGrid, &[usize]),
     params: &DynamicsParams,
@@ -140,8 +148,8 @@ pub fn integrate(
     let energy_every = steps.div_ceil(1000).max(1);
     let mut history = Vec::with_capacity(steps.min(1000) + 2);
     let record = |s: &State, history: &mut Vec<EnergyRow>| {
-        let (k, e, x) = energies(s);
-        history.push([s.t, k, e, x]);
+        let [k, e, x, r, b] = energies(s);
+        history.push([s.t, k, e, x, r, b]);
     };
     record(state, &mut history);
     if visited(0) {
@@ -158,6 +166,7 @@ pub fn integrate(
             let ts = std::time::Instant::now();
             let t0 = state.t;
             params.integrator.step(system, state, dt);
+            system.settle(state);
             looped += ts.elapsed().as_secs_f64();
             if state.u.iter().chain(&state.a).any(|v| !v.is_finite()) {
                 return Err(system.explain(t0, state.t).unwrap_or(RunError::Diverged { step, t: state.t }));

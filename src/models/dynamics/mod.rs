@@ -34,6 +34,10 @@ pub trait SecondOrderSystem: Sync {
     fn explain(&self, _t0: f64, _t1: f64) -> Option<crate::stages::RunError> {
         None
     }
+    /// Bring the system up to date with the state a step reached (bonds that break,
+    /// `super::super::peridynamics::fracture`), re-evaluating `state.a` if that changed
+    /// the forces; called after every step. Nothing by default.
+    fn settle(&self, _state: &mut State) {}
 }
 
 /// Time, displacement, velocity and the last acceleration.

@@ -374,9 +374,10 @@ pub fn simulate_sampled(
     let reference = matches!(sampling, Sampling::Times(_));
     let energy = |s: &State| {
         if reference {
-            (0.0, 0.0, 0.0)
+            [0.0; 5]
         } else {
-            energies(&system, &disc, body, &areas, case.material.lame(), dynamics.density, s)
+            let (k, e, x) = energies(&system, &disc, body, &areas, case.material.lame(), dynamics.density, s);
+            [k, e, x, 0.0, 0.0]
         }
     };
     let method = params.estimate.method;
@@ -393,7 +394,7 @@ pub fn simulate_sampled(
         let v = if keep || write { nodal(&system.expand(s.t, &s.v, true)) } else { Vec::new() };
         if write {
             let stress = snapshot_stress.then(|| StressField::from_gradients(&case.material, &disc.gradients(&x)));
-            snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v, stress: stress.as_ref() })?;
+            snapshot(Snapshot { step, t: s.t, positions: points, u: &u, v: &v, stress: stress.as_ref(), damage: None })?;
         }
         if keep {
             kept.insert(step, (s.t, u, v));

@@ -28,7 +28,8 @@ use super::operator::Bonds;
 use super::solve::Discretisation;
 use super::{strain, BondForce, PdParams};
 use crate::physics::case::Case;
-use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
+use super::fracture::{Breaking, Live};
+use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, Energies, EnergyRow, Snapshot};
 use crate::models::dynamics::history::TimeSamples;
 use crate::models::dynamics::{DynamicsParams, SecondOrderSystem, State};
 use crate::physics::elasticity::conditions::Value;
@@ -55,6 +56,8 @@ pub struct PdDynamics<'a> {
     pub dilatation: Option<&'a Dilatation>,
     /// The loads at any time, when a load depends on time.
     pub varying: Option<VaryingLoads<'a>>,
+    /// Bonds that break and pre-cracks ([`super::fracture`]), when the scene has them.
+    pub breaking: Option<&'a Breaking>,
 }
 
 /// Loads that depend on time: the body force densities of the free nodes and the
@@ -135,8 +138,12 @@ impl PdDynamics<'_> {
         }
     }
 
-    /// Bond force density at free node `i` (the linear law is [`Bonds::force_at`]).
-    fn force(&self, u: &[f64], loads: &Instant, i: usize) -> [f64; 2] {
+    /// Bond force density at free node `i` (the linear law is [`Bonds::force_at`]), over
+    /// the `live` bonds where bonds break.
+    fn force(&self, u: &[f64], loads: &Instant, i: usize, live: Option<&Live>) -> [f64; 2] {
+        if let (Some(breaking), Some(live)) = (self.breaking, live) {
+            return self.force_breaking(u, loads, i, (breaking, &live.coefficients));
+        }
         match self.force {
             BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, loads, j)),
             BondForce::BondStretch => {
@@ -151,9 +158,78 @@ impl PdDynamics<'_> {
         }
     }
 
+    /// The force of one bond with coefficient `c` on its node (module docs), and whether
+    /// it is live (`c != 0`) and at the critical stretch `s0` ([`super::fracture`]; the
+    /// linearised stretch under the linear law), tested without a division
+    /// (`xi . eta >= s0 |xi|^2`, `|xi + eta| - |xi| >= s0 |xi|`).
+    #[inline]
+    fn bond_force(&self, c: f64, xi: [f64; 2], eta: [f64; 2], s0: f64) -> ([f64; 2], bool) {
+        let r2 = xi[0] * xi[0] + xi[1] * xi[1];
+        match self.force {
+            BondForce::Linear => {
+                let p = xi[0] * eta[0] + xi[1] * eta[1];
+                ([c * p * xi[0], c * p * xi[1]], (c != 0.0) & (p >= s0 * r2))
+            }
+            BondForce::BondStretch => {
+                let r = r2.sqrt();
+                let y = [xi[0] + eta[0], xi[1] + eta[1]];
+                let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
+                // c |xi|^3 s / |xi + eta|, s = (|xi + eta| - |xi|) / |xi|.
+                let k = c * r2 * (ry - r) / ry;
+                ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= s0 * r))
+            }
+        }
+    }
+
+    /// [`PdDynamics::force`] over the live bonds, recording whether one reached the
+    /// critical stretch; the test is a little wide (1e-12), so that no node whose bond
+    /// [`PdDynamics::bond_energy`] finds at `s0` is left out.
+    fn force_breaking(&self, u: &[f64], loads: &Instant, i: usize, (breaking, live): (&Breaking, &[f64])) -> [f64; 2] {
+        let s0 = breaking.critical_stretch * (1.0 - 1e-12);
+        let (mut f, mut reached) = ([0.0, 0.0], false);
+        self.live_bonds(u, loads, i, live, |_, c, xi, eta| {
+            let (g, at) = self.bond_force(c, xi, eta, s0);
+            f = [f[0] + g[0], f[1] + g[1]];
+            reached |= at;
+        });
+        breaking.record(i, reached);
+        f
+    }
+
+    /// For every bond `b` of free node `i`: `(b, c_ij, xi, eta)`, `c_ij` from `live`
+    /// (zero once broken).
+    fn live_bonds(&self, u: &[f64], loads: &Instant, i: usize, live: &[f64], mut visit: impl FnMut(usize, f64, [f64; 2], [f64; 2])) {
+        let x = &self.nodes().positions;
+        let ui = self.displacement(u, loads, i);
+        for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
+            let j = j as usize;
+            let uj = self.displacement(u, loads, j);
+            visit(b, live[b], [x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]]);
+        }
+    }
+
+    /// The micropotential `w` of a bond with coefficient `c` (module docs), and its stretch.
+    fn bond_energy(&self, c: f64, xi: [f64; 2], eta: [f64; 2]) -> (f64, f64) {
+        match self.force {
+            BondForce::Linear => {
+                let p = xi[0] * eta[0] + xi[1] * eta[1];
+                (0.5 * c * p * p, p / (xi[0] * xi[0] + xi[1] * xi[1]))
+            }
+            BondForce::BondStretch => {
+                let r = (xi[0] * xi[0] + xi[1] * xi[1]).sqrt();
+                let s = (((xi[0] + eta[0]).powi(2) + (xi[1] + eta[1]).powi(2)).sqrt() - r) / r;
+                (0.5 * c * r.powi(4) * s * s, s)
+            }
+        }
+    }
+
     /// Sum of the micropotentials `w_ij` of the bonds of free node `i` (module docs).
-    fn micropotential(&self, u: &[f64], loads: &Instant, i: usize) -> f64 {
+    fn micropotential(&self, u: &[f64], loads: &Instant, i: usize, live: Option<&Live>) -> f64 {
         let mut w = 0.0;
+        if let Some(live) = live {
+            self.live_bonds(u, loads, i, &live.coefficients, |_, c, xi, eta| w += self.bond_energy(c, xi, eta).0);
+            return w;
+        }
         match self.force {
             BondForce::Linear => {
                 let x = &self.nodes().positions;
@@ -178,9 +254,10 @@ impl PdDynamics<'_> {
             let j = j as usize;
             let uj = self.displacement(u, loads, j);
             let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
-            let r = xi[0].hypot(xi[1]);
+            // sqrt of the sum of squares: hypot's care for overflow costs 7x here.
+            let r = (xi[0] * xi[0] + xi[1] * xi[1]).sqrt();
             let y = [xi[0] + uj[0] - ui[0], xi[1] + uj[1] - ui[1]];
-            let ry = y[0].hypot(y[1]);
+            let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
             visit(self.bonds.coefficients[b], r, (ry - r) / r, y, ry);
         }
     }
@@ -223,23 +300,67 @@ impl PdDynamics<'_> {
         StressField::from_gradients(material, &strain::gradients(self.nodes(), families, &all, |_| true))
     }
 
-    /// `(E_kin, E_el, E_ext)` of a state at time `t` (`E_ext` with the loads of `t`).
-    pub fn energies(&self, t: f64, u: &[f64], v: &[f64]) -> (f64, f64, f64) {
+    /// `(E_kin, E_el, E_ext, E_released, broken bonds)` of a state at time `t` (`E_ext`
+    /// with the loads of `t`; the last two since the start, [`Breaking::released`]).
+    pub fn energies(&self, t: f64, u: &[f64], v: &[f64]) -> Energies {
         let (nodes, dofs) = (self.nodes(), self.dofs());
         let loads = self.loads(t);
+        let live = self.breaking.map(Breaking::live);
         let (kin, el, ext) = (0..nodes.free)
             .into_par_iter()
             .map(|i| {
                 let vol = nodes.volumes[i];
                 let (ui, vi) = (dofs.displacement(u, i), dofs.displacement(v, i));
                 let kin = 0.5 * self.density * vol * (vi[0].powi(2) + vi[1].powi(2));
-                let w = self.micropotential(u, &loads, i);
+                let w = self.micropotential(u, &loads, i, live.as_deref());
                 let b = loads.body_force[i];
                 (kin, 0.5 * vol * w, -vol * (b[0] * ui[0] + b[1] * ui[1]))
             })
             .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
         let dilatation = self.theta(u, &loads).map_or(0.0, |theta| self.dilatation.map_or(0.0, |d| d.energy(nodes, &theta)));
-        (kin, el + dilatation, ext)
+        let (broken, released) = self.breaking.map_or((0, 0.0), |b| b.released());
+        [kin, el + dilatation, ext, released, broken as f64]
+    }
+
+    /// Break the bonds whose stretch at `state` is at least the critical one, both
+    /// directions at once, among the nodes whose last force evaluation reached it
+    /// ([`super::fracture`]); the energy a pair held (`V_i w_ij / 2 + V_j w_ji / 2`, its
+    /// share of `E_el`) is released. The bonds broken, `(node, bond, coefficient)`.
+    fn break_bonds(&self, breaking: &Breaking, state: &State, loads: &Instant) -> Vec<(usize, usize, f64)> {
+        let candidates = breaking.candidates();
+        if candidates.is_empty() {
+            return Vec::new();
+        }
+        let (nodes, families) = (self.nodes(), self.bonds.families);
+        let s0 = breaking.critical_stretch;
+        let found: Vec<(usize, usize, usize)> = {
+            let live = breaking.live();
+            candidates
+                .par_iter()
+                .flat_map_iter(|&i| {
+                    let mut over = Vec::new();
+                    self.live_bonds(&state.u, loads, i, &live.coefficients, |b, c, xi, eta| {
+                        if c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0 {
+                            over.push((i, families.neighbour(b) as usize, b));
+                        }
+                    });
+                    over
+                })
+                .collect()
+        };
+        // Bond `b` of free node `k` with coefficient `c`, before it breaks: its share of E_el.
+        let share = |k: usize, b: usize, c: f64| {
+            let (xi, eta) = self.bond_vectors(&state.u, loads, k, b);
+            0.5 * nodes.volumes[k] * self.bond_energy(c, xi, eta).0
+        };
+        breaking.break_bonds(families, &found, nodes.free, &share)
+    }
+
+    /// `(xi, eta)` of bond `b` of free node `k`.
+    fn bond_vectors(&self, u: &[f64], loads: &Instant, k: usize, b: usize) -> ([f64; 2], [f64; 2]) {
+        let j = self.bonds.families.neighbour(b) as usize;
+        let (x, uk, uj) = (&self.nodes().positions, self.displacement(u, loads, k), self.displacement(u, loads, j));
+        ([x[j][0] - x[k][0], x[j][1] - x[k][1]], [uj[0] - uk[0], uj[1] - uk[1]])
     }
 }
 
@@ -251,8 +372,9 @@ impl SecondOrderSystem for PdDynamics<'_> {
     fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]) {
         let loads = self.loads(t);
         let theta = self.theta(u, &loads);
+        let live = self.breaking.map(Breaking::live);
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
-            let mut f = self.force(u, &loads, i);
+            let mut f = self.force(u, &loads, i, live.as_deref());
             if let (Some(d), Some(theta)) = (self.dilatation, theta.as_deref()) {
                 let g = d.force_at(self.nodes(), theta, i);
                 f = [f[0] + g[0], f[1] + g[1]];
@@ -261,6 +383,20 @@ impl SecondOrderSystem for PdDynamics<'_> {
             a[0] = (f[0] + b[0]) / self.density;
             a[1] = (f[1] + b[1]) / self.density;
         });
+    }
+
+    /// Bonds that reached the critical stretch break, and their forces leave `state.a`
+    /// (the same as evaluating it again, for the broken bonds' work only).
+    fn settle(&self, state: &mut State) {
+        let Some(breaking) = self.breaking else { return };
+        let loads = self.loads(state.t);
+        let dofs = self.dofs();
+        for (k, b, c) in self.break_bonds(breaking, state, &loads) {
+            let (xi, eta) = self.bond_vectors(&state.u, &loads, k, b);
+            let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
+            state.a[dofs.dof(k, 0)] -= g[0] / self.density;
+            state.a[dofs.dof(k, 1)] -= g[1] / self.density;
+        }
     }
 
     fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
@@ -286,8 +422,27 @@ pub struct Simulation {
     /// The states kept for an error estimate, `(t, displacement of the free nodes)`
     /// ([`crate::models::dynamics::driver::history_steps`]); empty unless asked for.
     pub history: Vec<(f64, Vec<[f64; 2]>)>,
+    /// What broke, when the scene has `[peridynamics.fracture]`.
+    pub fracture: Option<FractureReport>,
     /// Stage timings.
     pub timings: StageTimings,
+}
+
+/// What broke in a dynamic run with `[peridynamics.fracture]`.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct FractureReport {
+    /// The critical stretch `s0` (given or from `G0`); `None` with pre-cracks only.
+    pub critical_stretch: Option<f64>,
+    /// Bonds broken from the start by the pre-cracks (both directions counted).
+    pub precracked_bonds: usize,
+    /// Bonds broken during the run (both directions counted).
+    pub broken_bonds: usize,
+    /// The elastic energy those bonds held when they broke (J per unit thickness).
+    pub released_energy: f64,
+    /// Free nodes with some damage at the end.
+    pub damaged_nodes: usize,
+    /// The largest damage at the end.
+    pub largest_damage: f64,
 }
 
 /// Run `case` (with `dynamics`) with peridynamics `params`, calling `snapshot` (free
@@ -318,6 +473,10 @@ pub fn simulate_sampled(
     let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
     let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes)?;
     let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
+    let breaking = params.fracture.map(|f| {
+        let s0 = f.critical_stretch(&disc.micromodulus).unwrap_or(f64::INFINITY);
+        Breaking::new(&disc.nodes, &disc.families, &disc.weights.coefficients, &f, s0)
+    });
     let system = PdDynamics {
         bonds: disc.bonds(),
         body_force: &body_force,
@@ -325,6 +484,7 @@ pub fn simulate_sampled(
         force: params.force,
         dilatation: disc.dilatation.as_ref(),
         varying,
+        breaking: breaking.as_ref(),
     };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let dofs = disc.nodes.dofs();
@@ -341,7 +501,8 @@ pub fn simulate_sampled(
         let (u, v) = (nodal(&s.u), nodal(&s.v));
         if is_snapshot(step, grid.steps, dynamics) {
             let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
-            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref() })?;
+            let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes, &disc.families));
+            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref(), damage: damage.as_deref() })?;
         }
         if samples.keeps(step) {
             kept.insert(step, (s.t, u, v));
@@ -353,6 +514,19 @@ pub fn simulate_sampled(
     let throughput =
         report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
     let (u, v) = (nodal(&state.u), nodal(&state.v));
+    let fracture = breaking.as_ref().map(|b| {
+        let damage = b.damage(&disc.nodes, &disc.families);
+        let (broken, released) = b.released();
+        FractureReport {
+            critical_stretch: b.critical_stretch.is_finite().then_some(b.critical_stretch),
+            precracked_bonds: b.precracked,
+            broken_bonds: broken,
+            released_energy: released,
+            damaged_nodes: damage.iter().filter(|&&d| d > 0.0).count(),
+            largest_damage: damage.iter().copied().fold(0.0, f64::max),
+        }
+    });
+    drop(system);
     Ok(Simulation {
         discretisation: disc,
         u,
@@ -361,6 +535,7 @@ pub fn simulate_sampled(
         energies,
         bond_updates_per_second_per_thread: throughput,
         history,
+        fracture,
         timings: timer.finish(),
     })
 }

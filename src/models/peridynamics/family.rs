@@ -119,6 +119,11 @@ impl Families {
         &self.neighbours[self.offsets[i]..self.offsets[i + 1]]
     }
 
+    /// The node bond `b` reads.
+    pub fn neighbour(&self, b: usize) -> u32 {
+        self.neighbours[b]
+    }
+
     /// Bond index range of free node `i` (into per-bond arrays).
     pub fn range(&self, i: usize) -> std::ops::Range<usize> {
         self.offsets[i]..self.offsets[i + 1]

@@ -29,6 +29,7 @@ pub mod discretisation;
 pub mod dynamics;
 pub mod extension;
 pub mod family;
+pub mod fracture;
 pub mod kernel;
 pub mod loads;
 pub mod nodes;
@@ -73,6 +74,7 @@ pub(crate) mod test_case {
             force: BondForce::Linear,
             solid: Solid::BondBased,
             boundary: EdgeTreatment::Surface,
+            fracture: None,
         }
     }
 

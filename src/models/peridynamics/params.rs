@@ -132,6 +132,8 @@ pub struct PdParams {
     pub solid: Solid,
     /// Treatment of traction and free edges.
     pub boundary: EdgeTreatment,
+    /// Bonds that break and pre-cracks (`[peridynamics.fracture]`, [`super::fracture`]).
+    pub fracture: Option<super::fracture::Fracture>,
 }
 
 choice! {

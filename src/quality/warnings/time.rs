@@ -12,14 +12,14 @@ use crate::physics::elasticity::conditions::Value;
 use crate::models::navier::Estimate;
 use rayon::prelude::*;
 
-/// The largest change of the total energy (kinetic + elastic + external) over the
-/// history, relative to the largest sum of the magnitudes of its three parts: the
-/// integrators conserve it up to their time-discretisation error (there is no
-/// damping, and the external part is the potential of the loads).
+/// The largest change of the total energy (kinetic + elastic + external + released by
+/// broken bonds) over the history, relative to the largest sum of the magnitudes of its
+/// parts: the integrators conserve it up to their time-discretisation error (there is
+/// no damping, and the external part is the potential of the loads).
 pub fn energy_drift(energies: &[EnergyRow]) -> f64 {
-    let total = |e: &EnergyRow| e[1] + e[2] + e[3];
+    let total = |e: &EnergyRow| e[1] + e[2] + e[3] + e[4];
     let Some(first) = energies.first() else { return 0.0 };
-    let scale = energies.iter().map(|e| e[1].abs() + e[2].abs() + e[3].abs()).fold(0.0, f64::max);
+    let scale = energies.iter().map(|e| e[1].abs() + e[2].abs() + e[3].abs() + e[4].abs()).fold(0.0, f64::max);
     let change = energies.iter().map(|e| (total(e) - total(first)).abs()).fold(0.0, f64::max);
     if scale > 0.0 {
         change / scale
@@ -192,7 +192,7 @@ mod tests {
     #[test]
     fn energy_drift_is_the_largest_change_of_the_total() {
         let conserved: Vec<EnergyRow> =
-            (0..50).map(|k| (k as f64 * 0.1).sin()).map(|s| [0.0, 100.0 * s * s, 100.0 * (1.0 - s * s), 0.0]).collect();
+            (0..50).map(|k| (k as f64 * 0.1).sin()).map(|s| [0.0, 100.0 * s * s, 100.0 * (1.0 - s * s), 0.0, 0.0, 0.0]).collect();
         assert!(energy_drift(&conserved) < 1e-14);
         let off = Estimate::Off;
         assert!(dynamic(&conserved, 1e-2, false, &off, None).warnings.is_empty());

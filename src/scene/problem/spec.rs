@@ -170,6 +170,20 @@ pub struct PeridynamicsSpec {
     pub solid: Option<String>,
     /// `fictitious` (static default) or `surface` (dynamic default).
     pub boundary: Option<String>,
+    /// `[peridynamics.fracture]`: bonds that break, pre-cracks.
+    pub fracture: Option<FractureSpec>,
+}
+
+/// `[peridynamics.fracture]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FractureSpec {
+    /// The critical stretch `s0`.
+    pub critical_stretch: Option<f64>,
+    /// The energy release rate `G0` (J/m^2), from which `s0` follows.
+    pub energy_release_rate: Option<f64>,
+    /// Pre-cracks `[x0, y0, x1, y1]`.
+    pub cracks: Option<Vec<[f64; 4]>>,
 }
 
 /// `[domain]`: a list of regions combined left to right.

@@ -9,7 +9,8 @@ use crate::physics::elasticity::conditions::ConditionKind;
 use crate::physics::elasticity::material::{Material, PlaneModel};
 use crate::linalg::{SolverKind, SolverParams};
 use crate::models::peridynamics::{BondForce, EdgeTreatment, Kernel, KernelKind, PdParams, Quadrature, Solid, SurfaceCorrection};
-use crate::scene::problem::spec::{BoundarySpec, PeridynamicsSpec};
+use crate::models::peridynamics::fracture::{CriticalStretch, Fracture, MAX_CRACKS};
+use crate::scene::problem::spec::{BoundarySpec, FractureSpec, PeridynamicsSpec};
 use crate::scene::problem::ProblemError;
 
 /// Largest ratio `m = delta / h` accepted (bonds per node grow like `pi m^2`).
@@ -207,7 +208,59 @@ pub(super) fn peridynamics(
              use boundary = \"surface\" (the default with [dynamics])",
         );
     }
-    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid, boundary };
+    let fracture = s.fracture.as_ref().map(|f| fracture(c, f, solid, dynamic)).transpose()?;
+    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid, boundary, fracture };
     check_peridynamics(&params, domain).map_err(|(f, r)| c.error(format!("peridynamics.{f}"), r))?;
     Ok(params)
+}
+
+/// `[peridynamics.fracture]`: one of `critical_stretch` and `energy_release_rate`
+/// (positive; dynamic runs of the bond-based model only) or neither (pre-cracks only),
+/// and up to [`MAX_CRACKS`] pre-cracks of positive length.
+fn fracture(c: &Ctx, f: &FractureSpec, solid: Solid, dynamic: bool) -> Result<Fracture, ProblemError> {
+    let positive = |field: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            c.err(format!("peridynamics.fracture.{field}"), format!("must be a positive finite number, got {v}"))
+        }
+    };
+    let breaking = match (f.critical_stretch, f.energy_release_rate) {
+        (Some(_), Some(_)) => {
+            return c.err(
+                "peridynamics.fracture",
+                "give critical_stretch or energy_release_rate (from which the critical stretch follows), not both",
+            )
+        }
+        (Some(s0), None) => Some(CriticalStretch::Given(positive("critical_stretch", s0)?)),
+        (None, Some(g0)) => Some(CriticalStretch::EnergyReleaseRate(positive("energy_release_rate", g0)?)),
+        (None, None) => None,
+    };
+    if breaking.is_some() && !dynamic {
+        return c.err(
+            "peridynamics.fracture",
+            "bonds break along a load history; a static run solves the linear system once (no quasi-static loop is built), \
+             so breaking needs a [dynamics] table (pre-cracks alone, `cracks`, run statically)",
+        );
+    }
+    if solid == Solid::Linear {
+        return c.err(
+            "peridynamics.fracture",
+            "fracture is built for the bond-based model only: the linear peridynamic solid's dilatation would need its weights \
+             refitted around every broken bond; use a material with nu = 1/4 (plane strain) or 1/3 (plane stress)",
+        );
+    }
+    let cracks = f.cracks.as_deref().unwrap_or(&[]);
+    if cracks.len() > MAX_CRACKS {
+        return c.err("peridynamics.fracture.cracks", format!("{} pre-cracks given; at most {MAX_CRACKS}", cracks.len()));
+    }
+    for (k, seg) in cracks.iter().enumerate() {
+        if seg.iter().any(|v| !v.is_finite()) || (seg[2] - seg[0]).hypot(seg[3] - seg[1]) == 0.0 {
+            return c.err(
+                format!("peridynamics.fracture.cracks[{k}]"),
+                format!("a pre-crack is a segment [x0, y0, x1, y1] of finite, distinct end points, got {seg:?}"),
+            );
+        }
+    }
+    Ok(Fracture::new(breaking, cracks).expect("at most MAX_CRACKS, checked above"))
 }

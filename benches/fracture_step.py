@@ -1,0 +1,45 @@
+#!/usr/bin/env python3
+"""What bond breaking costs an explicit step: the seed's steel plate (steel_plate_dynamic,
+m = 6, Verlet at dt = 2e-7 s, snapshots off, estimate off) at two horizons (about 1e5
+and 1e6 bonds per thread on 2 threads), the linear and the bond-stretch law, each
+without [peridynamics.fracture], with a critical stretch no bond reaches (s0 = 1: the
+bookkeeping alone) and with s0 = 2e-4 (bonds break in the middle); PAIRS rounds,
+alternated. Prints the integrate stage's seconds (median) and its ratio to the same
+law without fracture.
+
+Usage: python3 benches/fracture_step.py   (MLSM: the binary, default target/release/mlsm;
+PAIRS: rounds, default 3)"""
+import json, os, statistics, subprocess, sys, tempfile
+
+mlsm = os.environ.get("MLSM", "target/release/mlsm")
+pairs = int(os.environ.get("PAIRS", "3"))
+base = open("problems/steel_plate_dynamic.toml").read()
+base = base.replace('integrator = "rk4"', 'integrator = "verlet"').replace("snapshots = 20", "snapshots = 0\ntime_step = 2e-7")
+base += '\n[estimate]\nmethod = "none"\n'
+fracture = {"none": "", "s0 = 1": "\n[peridynamics.fracture]\ncritical_stretch = 1.0\n", "s0 = 2e-4": "\n[peridynamics.fracture]\ncritical_stretch = 2e-4\n"}
+work = tempfile.mkdtemp()
+print("| delta | bonds | law | fracture | integrate s (median) | ratio | bonds broken |")
+print("|---|---|---|---|---|---|---|")
+for delta, end in [(0.075, "2e-4"), (0.0237, "4e-5")]:
+    times, info = {}, {}
+    for _ in range(pairs):
+        for law in ["linear", "bond-stretch"]:
+            for name, table in fracture.items():
+                text = base.replace("end_time = 1e-3", f"end_time = {end}").replace("horizon = 0.1", f"horizon = {delta}")
+                if law == "bond-stretch":
+                    text = text.replace('quadrature = "full-area"', 'quadrature = "full-area"\nforce = "bond-stretch"')
+                scene = os.path.join(work, "s.toml")
+                open(scene, "w").write(text + table)
+                out = os.path.join(work, "out")
+                r = subprocess.run([mlsm, "run", scene, "--out", out, "-q"], capture_output=True, text=True)
+                if r.returncode:
+                    sys.exit(r.stderr)
+                s = json.load(open(os.path.join(out, "summary.json")))
+                times.setdefault((law, name), []).append(s["timings_s"]["integrate"])
+                info[(law, name)] = (s["bonds"], (s.get("fracture") or {}).get("broken_bonds", "-"))
+    for law in ["linear", "bond-stretch"]:
+        plain = statistics.median(times[(law, "none")])
+        for name in fracture:
+            t = statistics.median(times[(law, name)])
+            bonds, broken = info[(law, name)]
+            print(f"| {delta} | {bonds} | {law} | {name} | {t:.3f} | {t / plain:.2f} | {broken} |", flush=True)

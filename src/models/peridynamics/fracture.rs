@@ -1,0 +1,278 @@
+//! Brittle fracture in bond-based peridynamics: pre-cracks and bonds that break for
+//! good (seed 000, ch. 4: "a bond breaks for good once its stretch s >= s0").
+//!
+//! A bond's stretch is `s = (|xi + eta| - |xi|) / |xi|` under the bond-stretch law and its
+//! linearisation `s = xi . eta / |xi|^2` under the linear law. After every time step the
+//! bonds whose stretch at the new state is at least `s0` break, both directions at once
+//! (their forces vanish from then on, and their energy is counted as released); the
+//! acceleration is evaluated again when any broke. Each force evaluation records which
+//! nodes have a bond at `s0` or beyond, so the check after the step reads only the nodes
+//! whose last evaluation reached it (Verlet and RK4 end the step with the evaluation at the new
+//! state; `emu` evaluates at the start of the step, so its bonds break one step later).
+//!
+//! Critical stretch from the energy release rate `G0`: the energy of the bonds that
+//! cross a unit length of a straight crack, each holding `w = lambda(r) r^4 s0^2 / 2`
+//! (Silling and Askari 2005; Ha and Bobaru 2010 in 2D), is
+//!
+//! ```text
+//! G0 = 2 int_0^delta int_z^delta int_0^acos(z/r) w(r) r dtheta dr dz = s0^2 int_0^delta lambda(r) r^6 dr,
+//! ```
+//!
+//! so `s0 = sqrt(G0 / int_0^delta lambda(r) r^6 dr)`: for the plain kernel
+//! (`lambda = c / r^3`) `s0 = sqrt(4 G0 / (c delta^4))`, Ha and Bobaru's
+//! `sqrt(4 pi G0 / (9 E delta))` in plane stress and `sqrt(5 pi G0 / (12 E delta))` in
+//! plane strain.
+//!
+//! A pre-crack is a segment no bond crosses: its bonds are broken from the start (static
+//! runs: their coefficients are zero), as peer codes define pre-cracks.
+
+use super::family::Families;
+use super::kernel::{radial_integral, Micromodulus};
+use super::nodes::PdNodes;
+use super::Kernel;
+use crate::domain::Point;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, RwLock, RwLockReadGuard};
+
+/// The most pre-cracks a scene may give.
+pub const MAX_CRACKS: usize = 8;
+
+/// `[peridynamics.fracture]`: how bonds break and where the solid is cracked at the start.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Fracture {
+    /// How the critical stretch is given; `None`: pre-cracks only, no bond breaks.
+    pub breaking: Option<CriticalStretch>,
+    /// Pre-cracks as segments `[x0, y0, x1, y1]`: the first `crack_count` entries.
+    cracks: [[f64; 4]; MAX_CRACKS],
+    crack_count: usize,
+}
+
+/// The critical stretch `s0`, given or from the energy release rate (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CriticalStretch {
+    /// `s0` itself.
+    Given(f64),
+    /// `G0` in J/m^2 (N/m per unit thickness).
+    EnergyReleaseRate(f64),
+}
+
+impl Fracture {
+    /// Breaking as `breaking` says, with the pre-cracks `cracks` (at most [`MAX_CRACKS`]).
+    pub fn new(breaking: Option<CriticalStretch>, cracks: &[[f64; 4]]) -> Option<Self> {
+        if cracks.len() > MAX_CRACKS {
+            return None;
+        }
+        let mut all = [[0.0; 4]; MAX_CRACKS];
+        all[..cracks.len()].copy_from_slice(cracks);
+        Some(Fracture { breaking, cracks: all, crack_count: cracks.len() })
+    }
+
+    /// The pre-cracks.
+    pub fn cracks(&self) -> &[[f64; 4]] {
+        &self.cracks[..self.crack_count]
+    }
+
+    /// Whether the bond from `a` to `b` crosses a pre-crack.
+    pub fn cut(&self, a: Point, b: Point) -> bool {
+        self.cracks().iter().any(|c| segments_cross(a, b, [c[0], c[1]], [c[2], c[3]]))
+    }
+
+    /// Zero the `coefficients` of the bonds of `families` over `nodes` that cross a
+    /// pre-crack; how many there were (both directions counted).
+    pub fn break_precracked(&self, nodes: &PdNodes, families: &Families, coefficients: &mut [f64]) -> usize {
+        if self.crack_count == 0 {
+            return 0;
+        }
+        let x = &nodes.positions;
+        let cut: Vec<usize> = (0..nodes.free)
+            .into_par_iter()
+            .flat_map_iter(|i| families.range(i).zip(families.of(i)).filter(move |(_, &j)| self.cut(x[i], x[j as usize])).map(|(b, _)| b))
+            .collect();
+        cut.iter().for_each(|&b| coefficients[b] = 0.0);
+        cut.len()
+    }
+
+    /// The critical stretch for `micromodulus` (module docs), when bonds break.
+    pub fn critical_stretch(&self, micromodulus: &Micromodulus) -> Option<f64> {
+        self.breaking.map(|b| match b {
+            CriticalStretch::Given(s0) => s0,
+            CriticalStretch::EnergyReleaseRate(g0) => (g0 / sixth_moment(micromodulus)).sqrt(),
+        })
+    }
+}
+
+/// `int_0^delta lambda(r) r^6 dr` of a calibrated kernel.
+pub fn sixth_moment(m: &Micromodulus) -> f64 {
+    match m.kernel {
+        Kernel::Plain => m.constant * m.horizon.powi(4) / 4.0,
+        Kernel::Regularised { alpha } => m.constant * m.horizon.powf(alpha + 7.0) * radial_integral(alpha + 1.0),
+    }
+}
+
+/// Whether the segments `p0 p1` and `q0 q1` cross (share a point; a bond that ends
+/// exactly on a crack crosses it).
+fn segments_cross(p0: Point, p1: Point, q0: Point, q1: Point) -> bool {
+    let orient = |a: Point, b: Point, c: Point| (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    let (d1, d2) = (orient(q0, q1, p0), orient(q0, q1, p1));
+    let (d3, d4) = (orient(p0, p1, q0), orient(p0, p1, q1));
+    let within =
+        |a: Point, b: Point, c: Point| c[0] >= a[0].min(b[0]) && c[0] <= a[0].max(b[0]) && c[1] >= a[1].min(b[1]) && c[1] <= a[1].max(b[1]);
+    if d1 * d2 < 0.0 && d3 * d4 < 0.0 {
+        return true;
+    }
+    (d1 == 0.0 && within(q0, q1, p0))
+        || (d2 == 0.0 && within(q0, q1, p1))
+        || (d3 == 0.0 && within(p0, p1, q0))
+        || (d4 == 0.0 && within(p0, p1, q1))
+}
+
+/// The bonds of a dynamic run that break: their coefficients while they hold (zero once
+/// broken), which free nodes had a bond at the critical stretch at the last force
+/// evaluation, and what breaking released.
+pub struct Breaking {
+    /// `s0`, or infinity when only pre-cracks are given.
+    pub critical_stretch: f64,
+    /// Read by every force evaluation (one lock per evaluation, plain loads in the bond
+    /// loop), written after the steps in which bonds break.
+    live: RwLock<Live>,
+    /// Per free node: whether one of its live bonds reached the critical stretch at the
+    /// last evaluation.
+    reached: Vec<AtomicBool>,
+    /// Bonds broken since the start (both directions counted), and the elastic energy
+    /// they held when they broke (J per unit thickness).
+    released: Mutex<(usize, f64)>,
+    /// Bonds broken from the start by the pre-cracks (both directions counted).
+    pub precracked: usize,
+}
+
+/// The bonds as they stand: per bond of the families, its coefficient `c_ij` (zero once
+/// broken) and whether it is broken.
+pub struct Live {
+    /// `c_ij`, zero once broken.
+    pub coefficients: Vec<f64>,
+    broken: Vec<bool>,
+}
+
+impl Breaking {
+    /// The bonds of `families` over `nodes` with their `coefficients`, those crossing
+    /// `fracture`'s pre-cracks broken, breaking at `critical_stretch` (infinity: never).
+    pub fn new(nodes: &PdNodes, families: &Families, coefficients: &[f64], fracture: &Fracture, critical_stretch: f64) -> Self {
+        let x = &nodes.positions;
+        let broken: Vec<bool> = (0..nodes.free)
+            .into_par_iter()
+            .flat_map_iter(|i| families.of(i).iter().map(move |&j| fracture.cut(x[i], x[j as usize])))
+            .collect();
+        let precracked = broken.iter().filter(|&&b| b).count();
+        let coefficients = coefficients.iter().zip(&broken).map(|(&c, &cut)| if cut { 0.0 } else { c }).collect();
+        let reached = (0..nodes.free).map(|_| AtomicBool::new(false)).collect();
+        Breaking { critical_stretch, live: RwLock::new(Live { coefficients, broken }), reached, released: Mutex::new((0, 0.0)), precracked }
+    }
+
+    /// The bonds as they stand (held for one force evaluation).
+    pub fn live(&self) -> RwLockReadGuard<'_, Live> {
+        self.live.read().expect("no panic holds it")
+    }
+
+    /// Record whether one of free node `i`'s bonds reached the critical stretch at this
+    /// evaluation.
+    #[inline]
+    pub fn record(&self, i: usize, reached: bool) {
+        self.reached[i].store(reached, Ordering::Relaxed);
+    }
+
+    /// The free nodes whose last evaluation reached the critical stretch.
+    pub fn candidates(&self) -> Vec<usize> {
+        (0..self.reached.len()).into_par_iter().filter(|&i| self.reached[i].load(Ordering::Relaxed)).collect()
+    }
+
+    /// Break each bond `(i, j, b)` (bond `b` of node `i` to `j`) and its reverse in `j`'s
+    /// family when `j` is free, releasing `share(k, b, c)` (the energy bond `b` of node
+    /// `k` with coefficient `c` held) of each: the bonds broken, `(node, bond,
+    /// coefficient)`, each once.
+    pub fn break_bonds(
+        &self,
+        families: &Families,
+        bonds: &[(usize, usize, usize)],
+        free: usize,
+        share: &(dyn Fn(usize, usize, f64) -> f64 + Sync),
+    ) -> Vec<(usize, usize, f64)> {
+        let mut live = self.live.write().expect("no panic holds it");
+        let mut gone = Vec::new();
+        let mut energy = 0.0;
+        for &(i, j, b) in bonds {
+            let reverse =
+                (j < free).then(|| families.of(j).binary_search(&(i as u32)).ok().map(|p| (j, families.range(j).start + p))).flatten();
+            for (k, bond) in std::iter::once((i, b)).chain(reverse) {
+                if !live.broken[bond] {
+                    let c = live.coefficients[bond];
+                    energy += share(k, bond, c);
+                    (live.broken[bond], live.coefficients[bond]) = (true, 0.0);
+                    gone.push((k, bond, c));
+                }
+            }
+        }
+        let mut r = self.released.lock().expect("no panic holds it");
+        r.0 += gone.len();
+        r.1 += energy;
+        gone
+    }
+
+    /// `(bonds broken since the start, energy they released)`.
+    pub fn released(&self) -> (usize, f64) {
+        *self.released.lock().expect("no panic holds it")
+    }
+
+    /// Damage of every free node: the share of its family's volume behind broken bonds,
+    /// `phi_i = sum_{j broken} V_j / sum_j V_j` (0 intact, 1 detached).
+    pub fn damage(&self, nodes: &PdNodes, families: &Families) -> Vec<f64> {
+        let live = self.live();
+        (0..nodes.free)
+            .into_par_iter()
+            .map(|i| {
+                let (mut all, mut lost) = (0.0, 0.0);
+                for (b, &j) in families.range(i).zip(families.of(i)) {
+                    let v = nodes.volumes[j as usize];
+                    all += v;
+                    if live.broken[b] {
+                        lost += v;
+                    }
+                }
+                if all > 0.0 {
+                    lost / all
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn segments_cross_as_drawn() {
+        assert!(segments_cross([0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.0]));
+        assert!(!segments_cross([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]));
+        // Ending on the crack counts; passing its end does not.
+        assert!(segments_cross([0.0, 0.0], [0.5, 0.0], [0.5, -1.0], [0.5, 1.0]));
+        assert!(!segments_cross([0.0, 2.0], [1.0, 2.0], [0.5, -1.0], [0.5, 1.0]));
+    }
+
+    /// Ha and Bobaru's plane-strain relation for the plain kernel at nu = 1/4:
+    /// `c = 48 E / (5 pi delta^3)` and `s0 = sqrt(5 pi G0 / (12 E delta))`.
+    #[test]
+    fn the_plain_kernel_gives_ha_and_bobaru() {
+        let (e, delta, g0) = (72e9, 1.5e-3, 300.0);
+        let c = 48.0 * e / (5.0 * std::f64::consts::PI * delta.powi(3));
+        let m = Micromodulus { kernel: Kernel::Plain, horizon: delta, constant: c };
+        let f = Fracture::new(Some(CriticalStretch::EnergyReleaseRate(g0)), &[]).unwrap();
+        let want = (5.0 * std::f64::consts::PI * g0 / (12.0 * e * delta)).sqrt();
+        let got = f.critical_stretch(&m).unwrap();
+        assert!((got - want).abs() < 1e-12 * want, "{got} {want}");
+    }
+}
