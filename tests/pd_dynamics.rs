@@ -11,7 +11,7 @@ use mlsm::stages::{RunError, Silent};
 use mlsm::scene::problem::{Model, Problem};
 
 /// Final time, displacement (flat) and energy history of a run.
-type Run = (f64, Vec<f64>, Vec<[f64; 4]>);
+type Run = (f64, Vec<f64>, Vec<mlsm::models::dynamics::driver::EnergyRow>);
 
 /// Final time, displacement and energy history of a run of `p`.
 fn run(p: &Problem) -> Result<Run, RunError> {
@@ -50,14 +50,14 @@ fn uniform_velocity_is_a_rigid_motion() {
 #[test]
 fn verlet_conserves_the_plate_energy() {
     let (_, _, energies) = run(&plate(&[("dynamics.integrator", s("verlet"))])).unwrap();
-    let total = |e: &[f64; 4]| e[1] + e[2] + e[3];
+    let total = |e: &mlsm::models::dynamics::driver::EnergyRow| e[1] + e[2] + e[3];
     let e0 = total(&energies[0]);
     let drift = energies.iter().map(|e| (total(e) - e0).abs() / e0).fold(0.0, f64::max);
     let peak_elastic = energies.iter().map(|e| e[2]).fold(0.0, f64::max) / e0;
     eprintln!("plate, Verlet: max |E - E0| / E0 = {drift:.2e}, peak E_el / E0 = {peak_elastic:.2e}, E_kin(0) = {:.6e}", energies[0][1]);
     assert!(drift < 5e-3, "{drift}");
     let half = energies.len() / 2;
-    let dev = |r: &[[f64; 4]]| r.iter().map(|e| (total(e) - e0).abs() / e0).fold(0.0, f64::max);
+    let dev = |r: &[mlsm::models::dynamics::driver::EnergyRow]| r.iter().map(|e| (total(e) - e0).abs() / e0).fold(0.0, f64::max);
     let (first, second) = (dev(&energies[..half]), dev(&energies[half..]));
     eprintln!("  first half {first:.2e}, second half {second:.2e}");
     assert!(second <= 1.1 * first, "energy drifts: {first} then {second}");
@@ -112,7 +112,7 @@ fn unstable_time_step_is_refused() {
 #[test]
 fn mlsm_elastodynamics_is_stable_and_conserves_energy() {
     let navier = |p: &Problem| mlsm::models::navier::simulate(&p.case, &p.navier, p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(()));
-    let total = |e: &[f64; 4]| e[1] + e[2] + e[3];
+    let total = |e: &mlsm::models::dynamics::driver::EnergyRow| e[1] + e[2] + e[3];
     for integrator in ["verlet", "rk4"] {
         let p = scene("steel_plate_dynamic", &[("nodes.spacing", f(0.02)), ("dynamics.integrator", s(integrator))]);
         let sim = navier(&p).unwrap();

@@ -278,3 +278,27 @@ fn a_breaking_run_writes_damage_and_released_energy() {
     let f = &summary["fracture"];
     assert!(f["broken_bonds"].as_u64().unwrap() > 0 && f["largest_damage"].as_f64().unwrap() > 0.0, "{f}");
 }
+
+/// A cracked scene is refused where the local model would stand in for it: `--model
+/// navier` (the Navier model has no crack) and `compare` (the same), with the reason and
+/// exit 2; its runs say they have no error estimate (`no-estimate`).
+#[test]
+fn the_local_model_does_not_stand_in_for_a_cracked_solid() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("problems/pd_three_point_bending_a.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_mlsm")).args(args).current_dir(dir.path()).output().unwrap();
+    for args in [vec!["run", scene.to_str().unwrap(), "--model", "navier", "--out", "n"], vec!["compare", scene.to_str().unwrap(), "--out", "c"]] {
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("peridynamics.fracture") && err.contains("no crack"), "{err}");
+    }
+    let text = std::fs::read_to_string(&scene).unwrap().replace("end_time = 2e-4", "end_time = 2e-6");
+    let short = dir.path().join("short.toml");
+    std::fs::write(&short, text).unwrap();
+    let o = run(&["run", short.to_str().unwrap(), "--out", "s"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(format!("{stdout}{stderr}").contains("no-estimate"), "{stdout}\n{stderr}");
+}

@@ -185,7 +185,7 @@ fn lps_dynamics_conserves_energy_and_moves_rigidly() {
         |p: &Problem| simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
     let sim = run(&plate(&[]));
     assert!(sim.discretisation.dilatation.is_some());
-    let total = |e: &[f64; 4]| e[1] + e[2] + e[3];
+    let total = |e: &mlsm::models::dynamics::driver::EnergyRow| e[1] + e[2] + e[3];
     let e0 = total(&sim.energies[0]);
     let drift = sim.energies.iter().map(|e| (total(e) - e0).abs() / e0).fold(0.0, f64::max);
     let peak_elastic = sim.energies.iter().map(|e| e[2]).fold(0.0, f64::max) / e0;

@@ -101,6 +101,13 @@ fn planned_runs(p: &Problem, req: &CompareRequest) -> Result<Plan, AppError> {
     let Some(base) = p.model.peridynamics().copied() else {
         return Err(AppError::Usage(format!("{}: compare needs a [peridynamics] table (horizon, quadrature, ...)", p.source.display())));
     };
+    if base.fracture.is_some() {
+        return Err(AppError::Usage(format!(
+            "{}: peridynamics.fracture: compare measures the nonlocal model against the local one, which has no crack; remove \
+             [peridynamics.fracture] to compare the uncracked solid",
+            p.source.display()
+        )));
+    }
     let quadratures = quadratures(req, &base)?;
     if req.levels > 6 && req.deltas.is_none() {
         return Err(AppError::Usage(format!("--levels {}: at most 6 halvings (each multiplies the node count by 4)", req.levels)));

@@ -50,6 +50,13 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         if let Some(why) = (m == Model::Peridynamics).then(|| crate::scene::problem::validate::peridynamic_material_refusal(&p.case.material)).flatten() {
             return Err(AppError::Usage(format!("--model peridynamics: {}: material.nu: {why}", req.scene.display())));
         }
+        if m == Model::Navier && p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some()) {
+            return Err(AppError::Usage(format!(
+                "--model navier: {}: peridynamics.fracture: the pre-cracks and breaking bonds belong to the peridynamic model; the \
+                 Navier model has no crack (remove [peridynamics.fracture] to solve the uncracked solid)",
+                req.scene.display()
+            )));
+        }
         if let Some(why) = crate::scene::problem::estimate_mismatch(m, p.case.dynamics.is_some(), p.navier.estimate.method) {
             return Err(AppError::Usage(format!("--model {}: {}: estimate.method: {why}", m.name(), req.scene.display())));
         }
@@ -178,7 +185,11 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             let nodes = &sim.discretisation.nodes;
             let run = ((sim.u.as_slice(), None), sim.history.as_slice());
             let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], run, &mut sim.timings, term);
+            let fracture = p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some());
             let discretisation = p.navier.estimate.method.peridynamics_estimates().then(|| {
+                if fracture {
+                    return (Err(FRACTURE_UNESTIMATED.to_string()), 0.0);
+                }
                 let t = Instant::now();
                 let params = *p.model.peridynamics().expect("a peridynamic scene has [peridynamics]");
                 let dynamics = p.case.dynamics.as_ref().expect("a dynamic run has [dynamics]");
@@ -433,6 +444,10 @@ type PdFields<'a> = ((&'a [[f64; 2]], Option<&'a crate::physics::elasticity::str
 /// The `local-model` estimate of a peridynamic run whose free nodes `positions` carry
 /// `displacement` (and `stress`; a dynamic run's kept `history`), timed as the
 /// estimate stage; off for `estimate.method = "none"`.
+/// Why a peridynamic run with `[peridynamics.fracture]` has no error estimate.
+const FRACTURE_UNESTIMATED: &str = "bonds break or the solid is pre-cracked: the local (Navier) model has no crack to compare with, \
+     and a run at another m breaks other bonds (a crack path is not a converging field)";
+
 fn peridynamics_estimate(
     p: &Problem,
     positions: &[crate::domain::Point],
@@ -442,6 +457,9 @@ fn peridynamics_estimate(
 ) -> Estimate {
     if !p.navier.estimate.method.peridynamics_estimates() {
         return Estimate::Off;
+    }
+    if p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some()) {
+        return Estimate::Unavailable("local-model", FRACTURE_UNESTIMATED.into());
     }
     let t = Instant::now();
     let estimate = crate::quality::compare::estimate::local_model(p, positions, fields, history);

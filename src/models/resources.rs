@@ -257,8 +257,9 @@ pub fn of(p: &Problem) -> MemoryEstimate {
     match &p.model {
         crate::scene::problem::ModelParams::Peridynamics(pd) => {
             let mut e = peridynamics(&p.case, pd);
-            // The local-model estimate's Navier run comes after the nonlocal one.
-            if p.navier.estimate.method.peridynamics_estimates() {
+            // The local-model estimate's Navier run comes after the nonlocal one (none
+            // where bonds break: such runs have no estimate).
+            if p.navier.estimate.method.peridynamics_estimates() && pd.fracture.is_none() {
                 e.peak_bytes = e.peak_bytes.max(of(&p.local_reference()).peak_bytes);
                 // The discretisation estimate: the run at twice m (four times the nodes
                 // and the bonds per node), after the run: a static run's, and a dynamic

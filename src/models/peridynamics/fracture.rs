@@ -267,7 +267,7 @@ mod tests {
     /// `c = 48 E / (5 pi delta^3)` and `s0 = sqrt(5 pi G0 / (12 E delta))`.
     #[test]
     fn the_plain_kernel_gives_ha_and_bobaru() {
-        let (e, delta, g0) = (72e9, 1.5e-3, 300.0);
+        let (e, delta, g0): (f64, f64, f64) = (72e9, 1.5e-3, 300.0);
         let c = 48.0 * e / (5.0 * std::f64::consts::PI * delta.powi(3));
         let m = Micromodulus { kernel: Kernel::Plain, horizon: delta, constant: c };
         let f = Fracture::new(Some(CriticalStretch::EnergyReleaseRate(g0)), &[]).unwrap();

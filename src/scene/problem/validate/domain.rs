@@ -167,10 +167,31 @@ fn self_intersection(v: &[[f64; 2]]) -> Option<(usize, usize)> {
             let (a, b, p, q) = (v[i], v[(i + 1) % n], v[j], v[(j + 1) % n]);
             let (d1, d2) = (cross(a, b, p), cross(a, b, q));
             let (d3, d4) = (cross(p, q, a), cross(p, q, b));
-            if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
+            // Collinear edges (an edge split in parts, e.g. to name a support) cross
+            // only where they overlap.
+            let collinear = d1 == 0.0 && d2 == 0.0;
+            let overlap = |k: usize| a[k].min(b[k]) <= p[k].max(q[k]) && p[k].min(q[k]) <= a[k].max(b[k]);
+            if (collinear && overlap(0) && overlap(1)) || (!collinear && d1 * d2 <= 0.0 && d3 * d4 <= 0.0) {
                 return Some((i, j));
             }
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::self_intersection;
+
+    /// An edge split into collinear parts (a support named on a beam's bottom edge) is
+    /// simple; a bow tie and an edge that doubles back over another are not.
+    #[test]
+    fn split_edges_are_simple_and_crossings_are_not() {
+        let split = [[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [5.0, 0.0], [5.0, 1.0], [0.0, 1.0]];
+        assert_eq!(self_intersection(&split), None);
+        let bow_tie = [[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]];
+        assert!(self_intersection(&bow_tie).is_some());
+        let doubled = [[0.0, 0.0], [3.0, 0.0], [3.0, 1.0], [2.0, 1.0], [2.0, 0.0], [1.0, 0.0], [1.0, 2.0], [0.0, 2.0]];
+        assert!(self_intersection(&doubled).is_some());
+    }
 }
