@@ -22,7 +22,7 @@ use super::gmres::{self, GmresSettings};
 use super::inverse::Inverse;
 use super::methods::{run_gmres, solved_rows, Operator, Rhs, Start};
 use super::{
-    amg, in_load_scale, precond, scaling, solved_rhs_max, watch, Csr, Krylov, NodeLayout, Preconditioner, SolveError, SolveReport,
+    amg, in_load_scale, precond, solved_rhs_max, watch, Csr, Krylov, NodeLayout, Preconditioner, SolveError, SolveReport,
 };
 use super::{SolverKind, SolverParams, AUTO_KRYLOV_PACE};
 
@@ -79,18 +79,7 @@ pub fn solve_nodal_with_addition(
                 SolveReport { relative_residual: 0.0, original_relative_residual: 0.0, ..start.report(None, (0.0, 0.0)) },
             ));
         }
-        let scales = {
-            let row_max = scaling::row_max_abs(&a)?;
-            equilibrate.then(|| scaling::row_scales(&a, &row_max))
-        };
-        let rhs = Rhs {
-            original: scaled,
-            solved: match &scales {
-                Some(d) => Cow::Owned(scaling::scale_rhs(scaled, d)),
-                None => Cow::Borrowed(scaled),
-            },
-            scales,
-        };
+        let rhs = Rhs::of(&a, scaled, equilibrate)?;
         let amg = amg::Amg::build_from_rows(solved_rows(Cow::Owned(a), &rhs), Some(layout), amg::AmgParams::default(), amg::Finest::System);
         let pc = precond::BuiltPreconditioner::Amg(Box::new(amg));
         let rows = pc.fine_operator().expect("the multigrid keeps its finest operator");

@@ -17,7 +17,7 @@ use super::retained::{Inverse as Kept, Retained};
 use super::{
     amg, bicgstab, border, csr, gmres, lu, norm2, precond, relative, residual, solver_error, subtract_column_product,
 };
-use super::{NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
+use super::{scaling, NodeLayout, Preconditioner, SolveError, SolveReport, SparseMatrix};
 
 /// The right-hand side as solved, and how the residual of the original system
 /// `A x = b` is measured from that of the solved one `D A x = D b` (`D` the row
@@ -32,7 +32,20 @@ pub(super) struct Rhs<'a> {
     pub(super) scales: Option<Vec<f64>>,
 }
 
-impl Rhs<'_> {
+impl<'a> Rhs<'a> {
+    /// `b` as the rows of `a` solve it: with `equilibrate`, scaled by `a`'s row scales
+    /// ([`scaling::row_scales`]). Checks that every entry of `a` is finite and no row is
+    /// zero.
+    pub(super) fn of(a: &Csr, b: &'a [f64], equilibrate: bool) -> Result<Self, SolveError> {
+        let row_max = scaling::row_max_abs(a)?;
+        let scales = equilibrate.then(|| scaling::row_scales(a, &row_max));
+        let solved = match &scales {
+            Some(d) => Cow::Owned(scaling::scale_rhs(b, d)),
+            None => Cow::Borrowed(b),
+        };
+        Ok(Rhs { original: b, solved, scales })
+    }
+
     /// Relative residuals `(‖D b − D A x‖ / ‖D b‖, ‖b − A x‖ / ‖b‖)` from the residual
     /// `r = D b − D A x` of the solved system.
     pub(super) fn residuals(&self, r: &[f64]) -> (f64, f64) {

@@ -357,18 +357,7 @@ pub(crate) fn solve_with_memory(
     }
 
     // Validates finiteness / zero rows in every case.
-    let scales = {
-        let row_max = scaling::row_max_abs(&a)?;
-        params.equilibrate.then(|| scaling::row_scales(&a, &row_max))
-    };
-    let rhs = Rhs {
-        original: b,
-        solved: match &scales {
-            Some(d) => Cow::Owned(scaling::scale_rhs(b, d)),
-            None => Cow::Borrowed(b),
-        },
-        scales,
-    };
+    let rhs = Rhs::of(&a, b, params.equilibrate)?;
     match kind {
         SolverKind::Auto(..) | SolverKind::Petsc { .. } => unreachable!("resolved and returned above"),
         SolverKind::Lu => solve_lu(working(a, &rhs), &rhs, &start),
