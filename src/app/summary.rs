@@ -275,7 +275,7 @@ pub(super) struct PdDynamicPart<'a> {
     /// not asked for, `{"unavailable": why}` when it failed).
     discretisation_estimate: Option<DiscretisationField<'a>>,
     /// What broke (`null` without `[peridynamics.fracture]`).
-    fracture: Option<crate::models::peridynamics::dynamics::FractureReport>,
+    fracture: Option<crate::models::peridynamics::simulation::FractureReport>,
 }
 
 impl<'a> PdDynamicPart<'a> {

@@ -25,22 +25,18 @@ use super::family::Families;
 use super::loads::LoadLayer;
 use super::nodes::PdNodes;
 use super::operator::Bonds;
-use super::solve::Discretisation;
-use super::{strain, BondForce, PdParams};
+use super::{strain, BondForce};
 use crate::physics::case::Case;
 use super::fracture::{Breaking, Live};
-use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, Energies, EnergyRow, Snapshot};
-use crate::models::dynamics::history::TimeSamples;
-use crate::models::dynamics::{DynamicsParams, SecondOrderSystem, State};
-use crate::physics::elasticity::conditions::Value;
+use crate::models::dynamics::driver::Energies;
+use crate::models::dynamics::{SecondOrderSystem, State};
 use crate::physics::elasticity::dofs::DofMap;
 use crate::physics::elasticity::material::Material;
 use crate::physics::elasticity::stress::StressField;
 use crate::physics::exact::{self, ExactSolution};
-use crate::stages::{Progress, RunError, StageTimer, StageTimings};
+use crate::stages::RunError;
 use rayon::prelude::*;
 use std::borrow::Cow;
-use std::collections::BTreeMap;
 
 /// The semi-discrete peridynamic system of one discretisation.
 pub struct PdDynamics<'a> {
@@ -403,139 +399,4 @@ impl SecondOrderSystem for PdDynamics<'_> {
         let v = self.varying.as_ref()?;
         [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(self.nodes(), t).err())
     }
-}
-
-/// The result of a time-dependent peridynamic run.
-pub struct Simulation {
-    /// The discretisation (nodes, families, weights).
-    pub discretisation: Discretisation,
-    /// Final displacement of the free nodes.
-    pub u: Vec<[f64; 2]>,
-    /// Final velocity of the free nodes.
-    pub v: Vec<[f64; 2]>,
-    /// Integration report.
-    pub report: DynamicReport,
-    /// Energy history.
-    pub energies: Vec<EnergyRow>,
-    /// Bond updates per second per thread in the time loop.
-    pub bond_updates_per_second_per_thread: f64,
-    /// The states kept for an error estimate, `(t, displacement of the free nodes)`
-    /// ([`crate::models::dynamics::driver::history_steps`]); empty unless asked for.
-    pub history: Vec<(f64, Vec<[f64; 2]>)>,
-    /// What broke, when the scene has `[peridynamics.fracture]`.
-    pub fracture: Option<FractureReport>,
-    /// Stage timings.
-    pub timings: StageTimings,
-}
-
-/// What broke in a dynamic run with `[peridynamics.fracture]`.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct FractureReport {
-    /// The critical stretch `s0` (given or from `G0`); `None` with pre-cracks only.
-    pub critical_stretch: Option<f64>,
-    /// Bonds broken from the start by the pre-cracks (both directions counted).
-    pub precracked_bonds: usize,
-    /// Bonds broken during the run (both directions counted).
-    pub broken_bonds: usize,
-    /// The elastic energy those bonds held when they broke (J per unit thickness).
-    pub released_energy: f64,
-    /// Free nodes with some damage at the end.
-    pub damaged_nodes: usize,
-    /// The largest damage at the end.
-    pub largest_damage: f64,
-}
-
-/// Run `case` (with `dynamics`) with peridynamics `params`, calling `snapshot` (free
-/// nodes) at the snapshot steps.
-pub fn simulate(
-    case: &Case,
-    params: &PdParams,
-    dynamics: &DynamicsParams,
-    progress: &dyn Progress,
-    snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
-) -> Result<Simulation, RunError> {
-    simulate_sampled(case, params, dynamics, progress, false, snapshot)
-}
-
-/// [`simulate`], keeping the states of its history for an error estimate when
-/// `keep_history`.
-pub fn simulate_sampled(
-    case: &Case,
-    params: &PdParams,
-    dynamics: &DynamicsParams,
-    progress: &dyn Progress,
-    keep_history: bool,
-    mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
-) -> Result<Simulation, RunError> {
-    let mut timer = StageTimer::new(progress);
-    let exact = case.exact_solution();
-    let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
-    let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
-    let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes)?;
-    let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
-    let breaking = params.fracture.map(|f| {
-        let s0 = f.critical_stretch(&disc.micromodulus).unwrap_or(f64::INFINITY);
-        Breaking::new(&disc.nodes, &disc.families, &disc.weights.coefficients, &f, s0)
-    });
-    let system = PdDynamics {
-        bonds: disc.bonds(),
-        body_force: &body_force,
-        density: dynamics.density,
-        force: params.force,
-        dilatation: disc.dilatation.as_ref(),
-        varying,
-        breaking: breaking.as_ref(),
-    };
-    let free = &disc.nodes.positions[..disc.nodes.free];
-    let dofs = disc.nodes.dofs();
-    let flat = |f: &Value| {
-        dofs.from_displacements(|i| f.explicit_at(free[i]).expect("validated: an initial state is a constant or an expression"))
-    };
-    let grid = time_grid(system.stable_time_step(), dynamics)?;
-    let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
-    let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
-    let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
-    let samples = if keep_history { TimeSamples::own(grid.steps, grid.dt) } else { TimeSamples::none() };
-    let mut kept = BTreeMap::new();
-    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
-        let (u, v) = (nodal(&s.u), nodal(&s.v));
-        if is_snapshot(step, grid.steps, dynamics) {
-            let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
-            let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes, &disc.families));
-            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref(), damage: damage.as_deref() })?;
-        }
-        if samples.keeps(step) {
-            kept.insert(step, (s.t, u, v));
-        }
-        Ok(())
-    })?;
-    let history = samples.states(&kept);
-    drop(kept);
-    let throughput =
-        report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
-    let (u, v) = (nodal(&state.u), nodal(&state.v));
-    let fracture = breaking.as_ref().map(|b| {
-        let damage = b.damage(&disc.nodes, &disc.families);
-        let (broken, released) = b.released();
-        FractureReport {
-            critical_stretch: b.critical_stretch.is_finite().then_some(b.critical_stretch),
-            precracked_bonds: b.precracked,
-            broken_bonds: broken,
-            released_energy: released,
-            damaged_nodes: damage.iter().filter(|&&d| d > 0.0).count(),
-            largest_damage: damage.iter().copied().fold(0.0, f64::max),
-        }
-    });
-    drop(system);
-    Ok(Simulation {
-        discretisation: disc,
-        u,
-        v,
-        report,
-        energies,
-        bond_updates_per_second_per_thread: throughput,
-        history,
-        fracture,
-        timings: timer.finish(),
-    })
 }

@@ -18,9 +18,12 @@
 //! volume surface correction and the asymptotically compatible weights of
 //! [`compatible`]), [`loads`] (body force and tractions as a boundary-layer body
 //! force), [`operator`] (internal force and stiffness), [`strain`] (nonlocal strain
-//! for output), [`solve`] (the static run), [`discretisation`] (its estimated
-//! discretisation error at the same horizon) and [`dynamics`] (bond forces, energies,
-//! stable step and the time-dependent run).
+//! for output), [`dilatation`] (the linear peridynamic solid's term), [`extension`]
+//! (fictitious nodes at traction and free edges), [`stiffness`] (the static system and
+//! its solve, the dilatation assembled or applied), [`solve`] (the static run),
+//! [`discretisation`] (its estimated discretisation error at the same horizon),
+//! [`dynamics`] (bond forces, energies, stable step), [`fracture`] (bonds that break,
+//! pre-cracks, damage) and [`simulation`] (the time-dependent run).
 
 pub mod assembly;
 pub mod compatible;
@@ -35,12 +38,13 @@ pub mod loads;
 pub mod nodes;
 pub mod operator;
 pub mod params;
+pub mod simulation;
 pub mod solve;
 pub mod stiffness;
 pub mod strain;
 pub mod weights;
 
-pub use dynamics::{simulate, simulate_sampled, Simulation};
+pub use simulation::{simulate, simulate_sampled, Simulation};
 pub use kernel::{Kernel, KernelKind, Micromodulus};
 pub use params::{BondForce, EdgeTreatment, PdParams, Quadrature, Solid, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
