@@ -402,3 +402,21 @@ fn a_rank_builds_the_rows_of_its_nodes_from_its_halo() {
         );
     }
 }
+
+/// A perturbed lattice (`peridynamics.perturbation`, the seed's "random" rows) is refused
+/// outside 0..1 and with the rules and corrections that count on the lattice's families,
+/// with the field and the reason; with `full-area` it runs.
+#[test]
+fn perturbed_lattices_are_refused_where_the_rule_needs_the_lattice() {
+    let refused = |edits: &[(&str, Option<toml::Value>)], says: &str| {
+        let e = scene_error("steel_plate_dynamic", edits).to_string();
+        assert!(e.contains("peridynamics.perturbation") && e.contains(says), "{e}");
+    };
+    refused(&[("peridynamics.perturbation", f(1.5))], "between 0 and 1");
+    refused(&[("peridynamics.perturbation", f(0.5)), ("peridynamics.quadrature", s("ac"))], "full-area and gauss2x2");
+    refused(&[("peridynamics.perturbation", f(0.5)), ("peridynamics.correction", s("volume"))], "without a surface correction");
+    let p = scene("steel_plate_dynamic", &[("peridynamics.perturbation", f(0.5)), ("peridynamics.horizon", f(0.05)), ("dynamics.end_time", f(1e-5))]);
+    assert_eq!(p.model.peridynamics().unwrap().perturbation, 0.5);
+    mlsm::models::peridynamics::simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &mlsm::stages::Silent, |_| Ok(()))
+        .unwrap();
+}

@@ -79,6 +79,7 @@ pub(crate) mod test_case {
             solid: Solid::BondBased,
             boundary: EdgeTreatment::Surface,
             fracture: None,
+            perturbation: 0.0,
         }
     }
 

@@ -134,6 +134,9 @@ pub struct PdParams {
     pub boundary: EdgeTreatment,
     /// Bonds that break and pre-cracks (`[peridynamics.fracture]`, [`super::fracture`]).
     pub fracture: Option<super::fracture::Fracture>,
+    /// A perturbed lattice: every point moved by a uniform offset of up to
+    /// `perturbation h / 2` per coordinate, weights kept (0: the rule's lattice).
+    pub perturbation: f64,
 }
 
 choice! {

@@ -172,6 +172,8 @@ pub struct PeridynamicsSpec {
     pub boundary: Option<String>,
     /// `[peridynamics.fracture]`: bonds that break, pre-cracks.
     pub fracture: Option<FractureSpec>,
+    /// A perturbed lattice: offsets of up to `perturbation h / 2` (0 to 1).
+    pub perturbation: Option<f64>,
 }
 
 /// `[peridynamics.fracture]`.

@@ -209,7 +209,19 @@ pub(super) fn peridynamics(
         );
     }
     let fracture = s.fracture.as_ref().map(|f| fracture(c, f, solid, dynamic)).transpose()?;
-    let params = PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid, boundary, fracture };
+    let perturbation = s.perturbation.unwrap_or(0.0);
+    if !(0.0..=1.0).contains(&perturbation) {
+        return c.err("peridynamics.perturbation", format!("must be between 0 and 1 (a share of the cell size h), got {perturbation}"));
+    }
+    if perturbation > 0.0 && !(matches!(quadrature, Quadrature::FullArea | Quadrature::Gauss2x2) && correction == SurfaceCorrection::None) {
+        return c.err(
+            "peridynamics.perturbation",
+            "a perturbed lattice is built for the cell-interior rules full-area and gauss2x2 without a surface correction (the \
+             seed's \"random\" rows): the other rules and corrections count on the lattice's families",
+        );
+    }
+    let params =
+        PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid, boundary, fracture, perturbation };
     check_peridynamics(&params, domain).map_err(|(f, r)| c.error(format!("peridynamics.{f}"), r))?;
     Ok(params)
 }
