@@ -50,7 +50,7 @@ fn prepare(req: &RunRequest) -> Result<Problem, AppError> {
         if let Some(why) = (m == Model::Peridynamics).then(|| crate::scene::problem::validate::peridynamic_material_refusal(&p.case.material)).flatten() {
             return Err(AppError::Usage(format!("--model peridynamics: {}: material.nu: {why}", req.scene.display())));
         }
-        if m == Model::Navier && p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some()) {
+        if m == Model::Navier && p.model.has_fracture() {
             return Err(AppError::Usage(format!(
                 "--model navier: {}: peridynamics.fracture: the pre-cracks and breaking bonds belong to the peridynamic model; the \
                  Navier model has no crack (remove [peridynamics.fracture] to solve the uncracked solid)",
@@ -164,7 +164,7 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
         }
         trial_report = Some(report);
     }
-    let fracture = p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some());
+    let fracture = p.model.has_fracture();
     let mut series = Series::new(&dir, &p.case, fracture);
     let outcome = dispatch::solve(&p, term, |s| series.snapshot(s).map_err(RunError::Snapshot)).map_err(|e| AppError::of_scene(&p, e))?;
     // Each branch starts the output stage where its output begins (after the
@@ -185,9 +185,8 @@ fn run_prepared(p: Problem, req: RunRequest, term: &Terminal, quiet: bool) -> Re
             let nodes = &sim.discretisation.nodes;
             let run = ((sim.u.as_slice(), None), sim.history.as_slice());
             let estimate = peridynamics_estimate(&p, &nodes.positions[..nodes.free], run, &mut sim.timings, term);
-            let fracture = p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some());
             let discretisation = p.navier.estimate.method.peridynamics_estimates().then(|| {
-                if fracture {
+                if p.model.has_fracture() {
                     return (Err(FRACTURE_UNESTIMATED.to_string()), 0.0);
                 }
                 let t = Instant::now();
@@ -458,7 +457,7 @@ fn peridynamics_estimate(
     if !p.navier.estimate.method.peridynamics_estimates() {
         return Estimate::Off;
     }
-    if p.model.peridynamics().is_some_and(|pd| pd.fracture.is_some()) {
+    if p.model.has_fracture() {
         return Estimate::Unavailable("local-model", FRACTURE_UNESTIMATED.into());
     }
     let t = Instant::now();

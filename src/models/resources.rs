@@ -238,8 +238,9 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     // The solid's dilatation is applied by its product when the solver runs GMRES with
     // the multigrid, else assembled: its rows then read the nodes within 2 delta, four
     // times the bonds' entries (peridynamics::stiffness).
-    let applied = params.has_dilatation() && crate::linalg::takes_addition(&params.solver, 2 * nodes as usize, 4.0 * bond_nonzeros).is_some();
-    let nonzeros = if params.has_dilatation() && !applied { 4.0 * bond_nonzeros } else { bond_nonzeros };
+    let assembled = crate::models::peridynamics::stiffness::assembled_solid_nonzeros(bonds + nodes);
+    let applied = params.has_dilatation() && crate::linalg::takes_addition(&params.solver, 2 * nodes as usize, assembled).is_some();
+    let nonzeros = if params.has_dilatation() && !applied { assembled } else { bond_nonzeros };
     let dilatation = if params.has_dilatation() { bonds * DILATATION_BYTES_PER_BOND } else { 0.0 };
     let solve = solver_bytes(&params.solver.kind, 2.0 * nodes, nonzeros, false);
     // A static run's families (32 B per bond) and rows (12 B per entry) are the

@@ -144,10 +144,9 @@ impl PdDynamics<'_> {
             BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, loads, j)),
             BondForce::BondStretch => {
                 let mut f = [0.0, 0.0];
-                self.stretches(u, loads, i, |c, r, s, y, ry| {
-                    let k = c * r * r * r * s / ry;
-                    f[0] += k * y[0];
-                    f[1] += k * y[1];
+                self.live_bonds(u, loads, i, self.bonds.coefficients, |_, c, xi, eta| {
+                    let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
+                    f = [f[0] + g[0], f[1] + g[1]];
                 });
                 f
             }
@@ -221,41 +220,10 @@ impl PdDynamics<'_> {
 
     /// Sum of the micropotentials `w_ij` of the bonds of free node `i` (module docs).
     fn micropotential(&self, u: &[f64], loads: &Instant, i: usize, live: Option<&Live>) -> f64 {
+        let coefficients = live.map_or(self.bonds.coefficients, |l| &l.coefficients);
         let mut w = 0.0;
-        if let Some(live) = live {
-            self.live_bonds(u, loads, i, &live.coefficients, |_, c, xi, eta| w += self.bond_energy(c, xi, eta).0);
-            return w;
-        }
-        match self.force {
-            BondForce::Linear => {
-                let x = &self.nodes().positions;
-                let ui = self.displacement(u, loads, i);
-                for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
-                    let j = j as usize;
-                    let uj = self.displacement(u, loads, j);
-                    let p = (x[j][0] - x[i][0]) * (uj[0] - ui[0]) + (x[j][1] - x[i][1]) * (uj[1] - ui[1]);
-                    w += 0.5 * self.bonds.coefficients[b] * p * p;
-                }
-            }
-            BondForce::BondStretch => self.stretches(u, loads, i, |c, r, s, _, _| w += 0.5 * c * r.powi(4) * s * s),
-        }
+        self.live_bonds(u, loads, i, coefficients, |_, c, xi, eta| w += self.bond_energy(c, xi, eta).0);
         w
-    }
-
-    /// For every bond of free node `i`: `(c_ij, |xi|, stretch s, xi + eta, |xi + eta|)`.
-    fn stretches(&self, u: &[f64], loads: &Instant, i: usize, mut visit: impl FnMut(f64, f64, f64, [f64; 2], f64)) {
-        let x = &self.nodes().positions;
-        let ui = self.displacement(u, loads, i);
-        for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
-            let j = j as usize;
-            let uj = self.displacement(u, loads, j);
-            let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
-            // sqrt of the sum of squares: hypot's care for overflow costs 7x here.
-            let r = (xi[0] * xi[0] + xi[1] * xi[1]).sqrt();
-            let y = [xi[0] + uj[0] - ui[0], xi[1] + uj[1] - ui[1]];
-            let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
-            visit(self.bonds.coefficients[b], r, (ry - r) / r, y, ry);
-        }
     }
 
     /// Every node's displacement (the free ones from `u`, the collar's of `loads`) and
@@ -322,11 +290,7 @@ impl PdDynamics<'_> {
     /// directions at once, among the nodes whose last force evaluation reached it
     /// ([`super::fracture`]); the energy a pair held (`V_i w_ij / 2 + V_j w_ji / 2`, its
     /// share of `E_el`) is released. The bonds broken, `(node, bond, coefficient)`.
-    fn break_bonds(&self, breaking: &Breaking, state: &State, loads: &Instant) -> Vec<(usize, usize, f64)> {
-        let candidates = breaking.candidates();
-        if candidates.is_empty() {
-            return Vec::new();
-        }
+    fn break_bonds(&self, breaking: &Breaking, candidates: &[usize], state: &State, loads: &Instant) -> Vec<(usize, usize, f64)> {
         let (nodes, families) = (self.nodes(), self.bonds.families);
         let s0 = breaking.critical_stretch;
         let found: Vec<(usize, usize, usize)> = {
@@ -385,9 +349,14 @@ impl SecondOrderSystem for PdDynamics<'_> {
     /// (the same as evaluating it again, for the broken bonds' work only).
     fn settle(&self, state: &mut State) {
         let Some(breaking) = self.breaking else { return };
+        // Most steps break nothing: the loads of the instant are read only when some do.
+        let candidates = breaking.candidates();
+        if candidates.is_empty() {
+            return;
+        }
         let loads = self.loads(state.t);
         let dofs = self.dofs();
-        for (k, b, c) in self.break_bonds(breaking, state, &loads) {
+        for (k, b, c) in self.break_bonds(breaking, &candidates, state, &loads) {
             let (xi, eta) = self.bond_vectors(&state.u, &loads, k, b);
             let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
             state.a[dofs.dof(k, 0)] -= g[0] / self.density;

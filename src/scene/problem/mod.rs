@@ -129,6 +129,12 @@ impl ModelParams {
         }
     }
 
+    /// Whether the scene's solid is cracked or its bonds break (`[peridynamics.fracture]`):
+    /// a model without cracks cannot stand in for it, nor estimate its error.
+    pub fn has_fracture(&self) -> bool {
+        self.peridynamics().is_some_and(|pd| pd.fracture.is_some())
+    }
+
     /// [`ModelParams::peridynamics`], to change.
     pub fn peridynamics_mut(&mut self) -> Option<&mut PdParams> {
         match self {
