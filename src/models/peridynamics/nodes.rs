@@ -3,7 +3,7 @@
 //! the lower-left corner of the solid's bounding box.
 //!
 //! A rule point inside the solid (signed distance <= 0) is a free node with volume
-//! `weight * h^2`. The seven-point triangle rule shares vertices and edge midpoints
+//! `weight * h^2`. The triangle rules of types 1-3 share vertices and edge midpoints
 //! between cells: a shared point gets the sum of the shares of the cells that hold
 //! material, and a point on the boundary is free with the shares of the inner cells. A rule point outside, within the collar `delta + 0.75 h` (`2 delta + 0.75 h`
 //! for the linear peridynamic solid, [`PdParams::collar_width`]) of a
@@ -26,30 +26,19 @@ use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 /// What one cell adds to its points: `(point in [0, 1]^2, share of the cell area,
-/// index of the point in the periodic unit `q.unit_cell()`)`. Only the 7-point triangle rule
-/// puts points on cell edges and corners, shared with the neighbouring cells: there
-/// every triangle gives `|T|/60 (3 at each vertex, 8 at each edge midpoint, 27 at the
-/// centroid)` (seed 000, ch. 1, P3).
+/// index of the point in the periodic unit `q.unit_cell()`)` ([`Quadrature::cell_contributions`]).
+/// Only the triangle rules of types 1-3 put points on cell edges and corners, shared
+/// with the neighbouring cells.
 fn contributions(q: Quadrature) -> Vec<(Point, f64, u8)> {
-    match q {
-        Quadrature::TriangleP3 => {
-            let (v, e, c) = (3.0 / 120.0, 8.0 / 120.0, 27.0 / 120.0);
-            vec![
-                ([0.0, 0.0], 2.0 * v, 0),
-                ([1.0, 1.0], 2.0 * v, 0),
-                ([1.0, 0.0], v, 0),
-                ([0.0, 1.0], v, 0),
-                ([0.5, 0.0], e, 1),
-                ([0.5, 1.0], e, 1),
-                ([0.0, 0.5], e, 2),
-                ([1.0, 0.5], e, 2),
-                ([0.5, 0.5], 2.0 * e, 3),
-                ([2.0 / 3.0, 1.0 / 3.0], c, 4),
-                ([1.0 / 3.0, 2.0 / 3.0], c, 5),
-            ]
-        }
-        _ => q.unit_cell().into_iter().enumerate().map(|(k, (p, w))| (p, w, k as u8)).collect(),
-    }
+    let unit = q.unit_cell();
+    q.cell_contributions()
+        .into_iter()
+        .map(|(p, w)| {
+            let folded = [p[0] - p[0].floor(), p[1] - p[1].floor()];
+            let k = unit.iter().position(|(o, _)| (o[0] - folded[0]).abs() + (o[1] - folded[1]).abs() < 1e-12).expect("a point of the unit");
+            (p, w, k as u8)
+        })
+        .collect()
 }
 
 /// Nodes of a peridynamic discretisation: free nodes `0..free`, constrained nodes after.
@@ -283,7 +272,7 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
     let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
     let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
     let cell = contributions(params.quadrature);
-    let shared = params.quadrature == Quadrature::TriangleP3;
+    let shared = params.quadrature.shares_points();
     // A point is keyed by its lattice position in units of h/12 (every rule's points are
     // at distinct keys), so that a point shared by several cells is one node whose weight
     // is the sum of their shares.
