@@ -148,7 +148,7 @@ impl Dilatation {
                 if params.quadrature != Quadrature::Compatible {
                     return (normalised(base(1.0), &xi), None);
                 }
-                let complete = family.len() == full[nodes.rule_point[i] as usize].1;
+                let complete = full.get(nodes.rule_point[i] as usize).is_some_and(|f| family.len() == f.1);
                 let fitted = if families.is_cut(i) {
                     // Cut by the sight of fictitious nodes: a consistent one-sided row
                     // (the whole disc's moments of degrees 1-3).

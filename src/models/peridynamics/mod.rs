@@ -9,7 +9,7 @@
 //! discretised with the nodes as quadrature points (seed 000, sec. 5.3):
 //! `(L_h u)_i = sum_j c_ij (xi_ij ⊗ xi_ij)(u_j - u_i)`, one scalar `c_ij` per bond.
 //!
-//! Stages of a run: nodes, families, weights ([`solve::FAMILIES`],
+//! Stages of a run: nodes (on a lattice, or on a Delaunay triangulation: [`triangulated`]), families, weights ([`solve::FAMILIES`],
 //! [`solve::WEIGHTS`]), assembly, solve, post. Modules: [`params`] (the validated
 //! `[peridynamics]` table), [`nodes`] (quadrature
 //! points of square cells, plus the Dirichlet collar),
@@ -42,18 +42,19 @@ pub mod simulation;
 pub mod solve;
 pub mod stiffness;
 pub mod strain;
+pub mod triangulated;
 pub mod weights;
 
 pub use simulation::{simulate, simulate_sampled, Simulation};
 pub use kernel::{Kernel, KernelKind, Micromodulus};
-pub use params::{BondForce, EdgeTreatment, PdParams, Quadrature, Solid, SurfaceCorrection};
+pub use params::{BondForce, EdgeTreatment, PdParams, PointSet, Quadrature, Solid, SurfaceCorrection};
 pub use solve::{solve, Discretisation, PdSolution};
 
 /// A small plate shared by the stage tests of this model.
 #[cfg(test)]
 pub(crate) mod test_case {
     use super::nodes::{self, Body, PdNodes};
-    use super::{BondForce, EdgeTreatment, Kernel, PdParams, Quadrature, Solid, SurfaceCorrection};
+    use super::{BondForce, EdgeTreatment, Kernel, PdParams, PointSet, Quadrature, Solid, SurfaceCorrection};
     use crate::domain::Domain;
     use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition, Value};
     use crate::linalg::SolverParams;
@@ -80,6 +81,8 @@ pub(crate) mod test_case {
             boundary: EdgeTreatment::Surface,
             fracture: None,
             perturbation: 0.0,
+            points: PointSet::Lattice,
+            cut_cells: false,
         }
     }
 

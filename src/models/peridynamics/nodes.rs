@@ -13,9 +13,13 @@
 //! covers the cells that the partial-area rule counts beyond `delta` (up to
 //! `delta + h/sqrt(2)`). Other outside points are dropped (free edges).
 //!
-//! Cells cut by a curved or unaligned boundary keep their points' full weights.
+//! Cells cut by a curved or unaligned boundary keep their points' full weights, or with
+//! `peridynamics.cut_cells` give them their area inside and outside the solid
+//! ([`super::triangulated::cut_cell`]). On a Delaunay triangulation
+//! (`peridynamics.points = "delaunay"`) the free nodes come from [`super::triangulated`].
 
-use super::{PdParams, Quadrature};
+use super::triangulated::{self, cut_cell};
+use super::{PdParams, PointSet, Quadrature};
 use crate::domain::{boundary::discretise_boundary, Domain, Point};
 use crate::physics::elasticity::conditions::{BoundaryCondition, ComponentCondition};
 use crate::physics::elasticity::dofs::DofMap;
@@ -41,6 +45,9 @@ fn contributions(q: Quadrature) -> Vec<(Point, f64, u8)> {
         .collect()
 }
 
+/// The `rule_point` of a node of a Delaunay set: no point of the lattice's unit.
+pub const NO_RULE_POINT: u8 = u8::MAX;
+
 /// Nodes of a peridynamic discretisation: free nodes `0..free`, constrained nodes after.
 #[derive(Debug, Clone)]
 pub struct PdNodes {
@@ -54,7 +61,8 @@ pub struct PdNodes {
     pub prescribed: Vec<[f64; 2]>,
     /// The boundary part whose displacement condition constrains node `free + k`.
     pub collar_part: Vec<usize>,
-    /// Index of the rule point each node is (its position within its cell).
+    /// Index of the rule point each node is (its position within its cell;
+    /// [`NO_RULE_POINT`] on a Delaunay set).
     pub rule_point: Vec<u8>,
     /// First fictitious node: nodes `free..fictitious` are the Dirichlet collar, nodes
     /// `fictitious..` fictitious nodes outside traction parts (`prescribed` holds zero
@@ -172,6 +180,11 @@ impl<'a> Body<'a> {
         Some((at(hi), s.touches.iter().map(|&(_, n)| n).collect()))
     }
 
+    /// The solid.
+    pub fn domain(&self) -> &Domain {
+        self.domain
+    }
+
     /// Whether `p` carries material or a fictitious node: inside the solid, in the
     /// constrained collar or in the band of fictitious nodes.
     pub fn contains(&self, p: Point) -> bool {
@@ -184,8 +197,8 @@ impl<'a> Body<'a> {
 /// unit cell, shares of the cells inside the solid and of the cells outside.
 type Merged = (Point, u8, f64, f64);
 
-/// What a lattice point becomes.
-enum Role {
+/// What a rule point becomes.
+pub(super) enum Role {
     /// A free node.
     Free,
     /// A node of the Dirichlet collar with its part and prescribed displacement.
@@ -200,7 +213,15 @@ enum Role {
 /// nodes first, constrained after, each in lattice (row-major) order.
 pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
     let h = params.spacing();
-    let classified: Vec<(Point, f64, u8, Role)> = merged_points(body, params).into_par_iter().map(|m| classify(body, h, m)).collect();
+    let classified: Vec<(Point, f64, u8, Role)> = match params.points {
+        PointSet::Lattice => merged_points(body, params).into_par_iter().map(|m| classify(body, h, m)).collect(),
+        PointSet::Delaunay => {
+            let (inside, _) = triangulated::triangle_points(body, params);
+            let mut all: Vec<_> = inside.into_iter().map(|(p, w, _)| (p, w, NO_RULE_POINT, Role::Free)).collect();
+            all.extend(triangulated::collar_points(body, params));
+            all
+        }
+    };
     let mut nodes = PdNodes {
         positions: Vec::new(),
         volumes: Vec::new(),
@@ -298,6 +319,7 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
                 if shared && !inside && !body.contains(c) {
                     continue;
                 }
+                let first = out.len();
                 for (q, w, k) in &cell {
                     let at = [corner[0] + q[0] * h, corner[1] + q[1] * h];
                     let p = if jitter > 0.0 {
@@ -309,6 +331,12 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
                     // solid (a cell cut by a curved edge keeps its inner points).
                     let inner = if shared { inside } else { domain.signed_distance(p) <= 0.0 };
                     out.push((key(at), p, w * h * h, *k, inner));
+                }
+                if params.cut_cells && !shared {
+                    let cut = cut_cell(domain, corner, h);
+                    if cut.inside > 0.0 && cut.inside < 1.0 {
+                        cut_weights(&mut out, first, &cut, h, |p| key(p));
+                    }
                 }
             }
             out
@@ -324,6 +352,31 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
         }
     }
     merged.into_values().collect()
+}
+
+/// Cut-cell weights of the points `out[first..]` of one cut cell: the points inside the
+/// solid share the cell's area inside (`inside h^2`), those outside the area outside,
+/// each side in proportion to the rule's shares. A side with area but none of the
+/// rule's points gets one more point at its centroid carrying its area (a cell whose
+/// centre is in a hole still gives the solid its sliver, and the collar its part).
+fn cut_weights(
+    out: &mut Vec<((i64, i64), Point, f64, u8, bool)>,
+    first: usize,
+    cut: &super::triangulated::CutCell,
+    h: f64,
+    key: impl Fn(Point) -> (i64, i64),
+) {
+    let rule_point = out[first].3;
+    for (side, area, centroid) in [(true, cut.inside, cut.inside_centroid), (false, 1.0 - cut.inside, cut.outside_centroid)] {
+        let shares: f64 = out[first..].iter().filter(|p| p.4 == side).map(|p| p.2).sum();
+        if shares > 0.0 {
+            for p in out[first..].iter_mut().filter(|p| p.4 == side) {
+                p.2 *= area * h * h / shares;
+            }
+        } else {
+            out.push((key(centroid), centroid, area * h * h, rule_point, side));
+        }
+    }
 }
 
 #[cfg(test)]

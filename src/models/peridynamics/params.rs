@@ -201,6 +201,24 @@ pub struct PdParams {
     /// A perturbed lattice: every point moved by a uniform offset of up to
     /// `perturbation h / 2` per coordinate, weights kept (0: the rule's lattice).
     pub perturbation: f64,
+    /// The cells the rule integrates: a lattice of squares or a Delaunay triangulation.
+    pub points: PointSet,
+    /// Cut-cell weights on the lattice: a cell cut by the boundary gives its points inside
+    /// the solid its area inside, and its points outside (collar) the area outside
+    /// ([`super::triangulated::cut_cell`]); `false`: full weights.
+    pub cut_cells: bool,
+}
+
+choice! {
+    /// The cells a quadrature rule integrates (`peridynamics.points`).
+    pub enum PointSet("peridynamics.points", default Some(PointSet::Lattice), serde "lowercase") {
+        /// Square cells of side `h = delta / m` aligned with the solid's bounding box
+        /// (split in two triangles for the triangle rules).
+        Lattice = "lattice" => "square cells of side h = delta / m (each split in two triangles for the triangle rules)",
+        /// A Delaunay triangulation of the solid's boundary-conforming scattered nodes at
+        /// spacing `h` ([`super::triangulated`]); triangle rules only.
+        Delaunay = "delaunay" => "a Delaunay triangulation of boundary-conforming scattered nodes at spacing h (triangle rules)",
+    }
 }
 
 choice! {

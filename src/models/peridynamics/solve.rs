@@ -319,6 +319,33 @@ pub fn interior_flags(domain: &Domain, points: &[Point], horizon: f64) -> Vec<bo
     points.par_iter().map(|p| domain.signed_distance(*p) <= -horizon).collect()
 }
 
+/// The error of `values` (at the free nodes `points` of volumes `volumes`) against a
+/// reference solution (`reference_values` at `reference_points`, interpolated there by
+/// degree-2 MLS, [`crate::mlsm::interpolate::mls_values`]), over the nodes `interior` marks:
+/// `(max_i |e_i|, sum_i V_i |e_i| / sum_i V_i)` with `|e_i|` the larger component
+/// difference: the largest error and its volume-weighted mean (an L1 error per unit
+/// area, the norm in which a discontinuous field still converges).
+pub fn interior_errors(
+    points: &[Point],
+    values: &[[f64; 2]],
+    volumes: &[f64],
+    interior: &[bool],
+    reference_points: &[Point],
+    reference_values: &[[f64; 2]],
+) -> Result<(f64, f64), crate::mlsm::ShapeError> {
+    let picked: Vec<usize> = (0..points.len()).filter(|&i| interior[i]).collect();
+    let targets: Vec<Point> = picked.iter().map(|&i| points[i]).collect();
+    let reference = crate::mlsm::interpolate::mls_values(reference_points, reference_values, &targets)?;
+    let (mut largest, mut sum, mut volume) = (0.0f64, 0.0, 0.0);
+    for (&i, r) in picked.iter().zip(&reference) {
+        let e = (values[i][0] - r[0]).abs().max((values[i][1] - r[1]).abs());
+        largest = largest.max(e);
+        sum += volumes[i] * e;
+        volume += volumes[i];
+    }
+    Ok((largest, if volume > 0.0 { sum / volume } else { 0.0 }))
+}
+
 /// What the post-processing of a static run computes.
 struct Post {
     displacement: Vec<[f64; 2]>,

@@ -165,7 +165,11 @@ pub fn bond_coefficients(
                     *cj *= 2.0 / (r_of(i) + r_of(j as usize));
                 }
             }
-            let complete = families.of(i).len() == full[nodes.rule_point[i] as usize].1;
+            // A node of a Delaunay set has no lattice count: complete when its disc lies in the solid.
+            let complete = match full.get(nodes.rule_point[i] as usize) {
+                Some(f) => families.of(i).len() == f.1,
+                None => body.domain().signed_distance(x[i]) <= -delta,
+            };
             let mut compatible = None;
             if params.quadrature == Quadrature::Compatible {
                 let xi: Vec<Point> = families.of(i).iter().map(|&j| offset(i, j)).collect();

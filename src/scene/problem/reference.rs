@@ -16,7 +16,7 @@ use crate::linalg::{PreconditionerKind, SolverMethod};
 use crate::mlsm::{BasisKind, WeightKind};
 use crate::models::navier::low_order::MultigridOperator;
 use crate::models::navier::{EstimateMethod, Formulation};
-use crate::models::peridynamics::{BondForce, KernelKind, Quadrature, SurfaceCorrection};
+use crate::models::peridynamics::{BondForce, KernelKind, PointSet, Quadrature, SurfaceCorrection};
 use crate::quality::post::probe::ProbeQuantity;
 
 /// Every option of a scene, in the order of the scene tables.
@@ -41,6 +41,7 @@ pub fn options() -> Vec<OptionDoc> {
         OptionDoc::of::<ProbeQuantity>(),
         OptionDoc::of::<ExactKind>(),
         OptionDoc::of::<Quadrature>(),
+        OptionDoc::of::<PointSet>(),
         OptionDoc::of::<KernelKind>(),
         OptionDoc::of::<SurfaceCorrection>(),
         OptionDoc::of::<BondForce>(),

@@ -174,6 +174,10 @@ pub struct PeridynamicsSpec {
     pub fracture: Option<FractureSpec>,
     /// A perturbed lattice: offsets of up to `perturbation h / 2` (0 to 1).
     pub perturbation: Option<f64>,
+    /// `lattice` (default) or `delaunay`.
+    pub points: Option<String>,
+    /// Cut-cell weights on the lattice (default false).
+    pub cut_cells: Option<bool>,
 }
 
 /// `[peridynamics.fracture]`.

@@ -8,7 +8,7 @@ use crate::domain::Domain;
 use crate::physics::elasticity::conditions::ConditionKind;
 use crate::physics::elasticity::material::{Material, PlaneModel};
 use crate::linalg::{SolverKind, SolverParams};
-use crate::models::peridynamics::{BondForce, EdgeTreatment, Kernel, KernelKind, PdParams, Quadrature, Solid, SurfaceCorrection};
+use crate::models::peridynamics::{BondForce, EdgeTreatment, Kernel, KernelKind, PdParams, PointSet, Quadrature, Solid, SurfaceCorrection};
 use crate::models::peridynamics::fracture::{CriticalStretch, Fracture, MAX_CRACKS};
 use crate::scene::problem::spec::{BoundarySpec, FractureSpec, PeridynamicsSpec};
 use crate::scene::problem::ProblemError;
@@ -220,10 +220,75 @@ pub(super) fn peridynamics(
              seed's \"random\" rows): the other rules and corrections count on the lattice's families",
         );
     }
-    let params =
-        PdParams { horizon, ratio: s.m.unwrap_or(3.0), kernel, quadrature, correction, solver, force, solid, boundary, fracture, perturbation };
+    let points: PointSet = c.choose("peridynamics.points", s.points.as_deref())?;
+    let cut_cells = s.cut_cells.unwrap_or(false);
+    if points == PointSet::Delaunay {
+        triangulated_limits(c, quadrature, correction, solid, boundary, perturbation, cut_cells)?;
+    }
+    if cut_cells && quadrature.shares_points() {
+        return c.err(
+            "peridynamics.cut_cells",
+            format!("\"{}\" shares its points between cells, whose cut areas are not the points' own; use a rule with points inside the cells", quadrature.name()),
+        );
+    }
+    let params = PdParams {
+        horizon,
+        ratio: s.m.unwrap_or(3.0),
+        kernel,
+        quadrature,
+        correction,
+        solver,
+        force,
+        solid,
+        boundary,
+        fracture,
+        perturbation,
+        points,
+        cut_cells,
+    };
     check_peridynamics(&params, domain).map_err(|(f, r)| c.error(format!("peridynamics.{f}"), r))?;
     Ok(params)
+}
+
+/// What a Delaunay point set (`peridynamics.points = "delaunay"`) runs with: a triangle
+/// rule, the nonlocal surface at free and traction edges, bond-based, no volume
+/// correction, no perturbation, no cut cells; each refusal says why.
+fn triangulated_limits(
+    c: &Ctx,
+    quadrature: Quadrature,
+    correction: SurfaceCorrection,
+    solid: Solid,
+    boundary: EdgeTreatment,
+    perturbation: f64,
+    cut_cells: bool,
+) -> Result<(), ProblemError> {
+    let field = "peridynamics.points";
+    if quadrature.triangle_rule().is_none() {
+        return c.err(
+            field,
+            format!(
+                "a Delaunay point set is integrated by a triangle rule; \"{}\" is a rule of square cells (use one of \"triangle-vertex\", \"triangle-edge\", \"triangle-p3\", \"triangle-p2\", \"triangle-p1\", \"triangle-hillion\")",
+                quadrature.name()
+            ),
+        );
+    }
+    let reason = if boundary == EdgeTreatment::Fictitious {
+        Some("its traction and free edges keep the nonlocal surface: fictitious nodes are laid on the lattice; set peridynamics.boundary = \"surface\"")
+    } else if solid == Solid::Linear {
+        Some("the linear peridynamic solid tells complete families by the lattice's bond count; a triangulation has none (bond-based only)")
+    } else if correction == SurfaceCorrection::Volume {
+        Some("the volume correction divides by a lattice point's full family volume; a triangulation has none")
+    } else if perturbation > 0.0 {
+        Some("perturbation moves lattice points; a Delaunay set is irregular already")
+    } else if cut_cells {
+        Some("its triangles follow the boundary: there are no cut cells to weigh")
+    } else {
+        None
+    };
+    match reason {
+        Some(r) => c.err(field, format!("\"delaunay\" runs without this: {r}")),
+        None => Ok(()),
+    }
 }
 
 /// `[peridynamics.fracture]`: one of `critical_stretch` and `energy_release_rate`
