@@ -42,7 +42,8 @@ fn plate_area() -> f64 {
 fn delaunay_points_tile_the_solid() {
     let mut areas = Vec::new();
     for rule in ["triangle-vertex", "triangle-edge", "triangle-p3", "triangle-p2", "triangle-p1", "triangle-hillion"] {
-        let p = scene("pd_plate_hole", &[("peridynamics.horizon", f(0.1)), ("peridynamics.m", f(4.0)), ("peridynamics.quadrature", s(rule))]);
+        let p =
+            scene("pd_plate_hole", &[("peridynamics.horizon", f(0.1)), ("peridynamics.m", f(4.0)), ("peridynamics.quadrature", s(rule))]);
         let (n, params) = nodes_of(&p);
         let h = params.spacing();
         assert_eq!(n.free, n.len(), "{rule}: all edges free, no collar");
@@ -92,11 +93,7 @@ fn cut_cells_weigh_the_cells_around_the_hole() {
 fn a_delaunay_collar_covers_the_clamped_edge() {
     let p = scene(
         "pd_tension",
-        &[
-            ("peridynamics.points", s("delaunay")),
-            ("peridynamics.quadrature", s("triangle-p2")),
-            ("peridynamics.boundary", s("surface")),
-        ],
+        &[("peridynamics.points", s("delaunay")), ("peridynamics.quadrature", s("triangle-p2")), ("peridynamics.boundary", s("surface"))],
     );
     let (n, params) = nodes_of(&p);
     let h = params.spacing();
@@ -177,8 +174,7 @@ fn the_plate_with_a_hole_converges_at_first_order() {
         let interior = interior_flags(&p.case.domain, &x, params.horizon);
         (x, sim.u, n.volumes[..n.free].to_vec(), interior)
     };
-    let reference =
-        run(PdParams { ratio: 16.0, quadrature: Quadrature::FullArea, points: PointSet::Lattice, cut_cells: true, ..base });
+    let reference = run(PdParams { ratio: 16.0, quadrature: Quadrature::FullArea, points: PointSet::Lattice, cut_cells: true, ..base });
     let (mut hs, mut es) = (Vec::new(), Vec::new());
     for m in [2.0, 3.0, 4.0, 6.0] {
         let params = PdParams { ratio: m, ..base };
