@@ -444,3 +444,43 @@ kind = "traction"
     assert!((inner / predicted_inner - 1.0).abs() < 0.01, "{inner} against {predicted_inner}");
     assert!((sigma / strain - 1.0).abs() < 0.1, "discrete stress {sigma} against {strain}");
 }
+
+/// A notch as scene geometry: a slot region cut out of the solid (`op = "subtract"`)
+/// is bridged by the bonds across it when it is narrower than the horizon, so in a
+/// scene with `[peridynamics.fracture]` a bond through it is broken from the start,
+/// as one across a pre-crack. A slot 0.02 m wide (less than delta = 0.05) across the
+/// whole plate: the left half pulled moves, the right half stays exactly at rest, with
+/// no pre-crack given; without the fracture table the bonds bridge the slot and the
+/// right half moves.
+#[test]
+fn a_slot_region_is_a_notch() {
+    let run = |fracture: bool| {
+        let slot = toml::toml! { shape = "rectangle" op = "subtract" min = [0.49, -0.1] max = [0.51, 0.4] };
+        let plate = toml::toml! { shape = "rectangle" min = [0.0, 0.0] max = [1.0, 0.3] };
+        let mut edits = vec![
+            ("peridynamics.horizon", f(0.05)),
+            ("peridynamics.m", f(3.0)),
+            ("dynamics.end_time", f(5e-4)),
+            ("dynamics.initial_velocity", None),
+            ("domain.region", Some(toml::Value::Array(vec![toml::Value::Table(plate), toml::Value::Table(slot)]))),
+            ("boundary", Some(toml::Value::Array(plate_edges()))),
+        ];
+        if fracture {
+            edits.push(("peridynamics.fracture.cracks", Some(toml::Value::Array(vec![]))));
+        }
+        let p = scene("steel_plate_dynamic", &edits);
+        let sim = simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
+        let x = &sim.discretisation.nodes.positions;
+        assert!(x.iter().all(|p| (p[0] - 0.5).abs() >= 0.01), "a node in the slot");
+        let largest =
+            |right: bool| sim.u.iter().zip(x).filter(|(_, p)| (p[0] > 0.5) == right).map(|(u, _)| u[0].hypot(u[1])).fold(0.0, f64::max);
+        (largest(false), largest(true), sim.fracture.map(|f| f.precracked_bonds))
+    };
+    let (left, right, cut) = run(true);
+    eprintln!("slot, fracture table: left {left:.3e}, right {right:.3e}, {cut:?} bonds through the slot");
+    assert!(left > 0.0 && right == 0.0, "{left} {right}");
+    assert!(cut.unwrap() > 0);
+    let (left, right, _) = run(false);
+    eprintln!("slot, no fracture table: left {left:.3e}, right {right:.3e}");
+    assert!(right > 1e-3 * left, "{left} {right}");
+}

@@ -179,14 +179,32 @@ impl PdDynamics<'_> {
     /// [`PdDynamics::force`] over the live bonds, recording whether one reached the
     /// critical stretch; the test is a little wide (1e-12), so that no node whose bond
     /// [`PdDynamics::bond_energy`] finds at `s0` is left out.
+    /// The linear law has its own loop: the same sums as [`PdDynamics::bond_force`], with the
+    /// law chosen once per node and the displacement of a free neighbour read directly.
     fn force_breaking(&self, u: &[f64], loads: &Instant, i: usize, (breaking, live): (&Breaking, &[f64])) -> [f64; 2] {
         let s0 = breaking.critical_stretch * (1.0 - 1e-12);
         let (mut f, mut reached) = ([0.0, 0.0], false);
-        self.live_bonds(u, loads, i, live, |_, c, xi, eta| {
-            let (g, at) = self.bond_force(c, xi, eta, s0);
-            f = [f[0] + g[0], f[1] + g[1]];
-            reached |= at;
-        });
+        match self.force {
+            BondForce::Linear => {
+                let (x, free) = (&self.nodes().positions, self.nodes().free);
+                let ui = self.displacement(u, loads, i);
+                for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
+                    let j = j as usize;
+                    let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { loads.prescribed[j - free] };
+                    let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
+                    let p = xi[0] * (uj[0] - ui[0]) + xi[1] * (uj[1] - ui[1]);
+                    let c = live[b];
+                    f[0] += c * p * xi[0];
+                    f[1] += c * p * xi[1];
+                    reached |= (c != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1]));
+                }
+            }
+            BondForce::BondStretch => self.live_bonds(u, loads, i, live, |_, c, xi, eta| {
+                let (g, at) = self.bond_force(c, xi, eta, s0);
+                f = [f[0] + g[0], f[1] + g[1]];
+                reached |= at;
+            }),
+        }
         breaking.record(i, reached);
         f
     }

@@ -30,7 +30,7 @@ use super::family::Families;
 use super::kernel::{radial_integral, Micromodulus};
 use super::nodes::PdNodes;
 use super::Kernel;
-use crate::domain::Point;
+use crate::domain::{CsgOp, Domain, Point, Primitive};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -75,24 +75,10 @@ impl Fracture {
         &self.cracks[..self.crack_count]
     }
 
-    /// Whether the bond from `a` to `b` crosses a pre-crack.
-    pub fn cut(&self, a: Point, b: Point) -> bool {
-        self.cracks().iter().any(|c| segments_cross(a, b, [c[0], c[1]], [c[2], c[3]]))
-    }
-
-    /// Zero the `coefficients` of the bonds of `families` over `nodes` that cross a
-    /// pre-crack; how many there were (both directions counted).
-    pub fn break_precracked(&self, nodes: &PdNodes, families: &Families, coefficients: &mut [f64]) -> usize {
-        if self.crack_count == 0 {
-            return 0;
-        }
-        let x = &nodes.positions;
-        let cut: Vec<usize> = (0..nodes.free)
-            .into_par_iter()
-            .flat_map_iter(|i| families.range(i).zip(families.of(i)).filter(move |(_, &j)| self.cut(x[i], x[j as usize])).map(|(b, _)| b))
-            .collect();
-        cut.iter().for_each(|&b| coefficients[b] = 0.0);
-        cut.len()
+    /// What no bond of `domain` crosses from the start ([`Cuts`]).
+    pub fn cuts<'a>(&'a self, domain: &'a Domain) -> Cuts<'a> {
+        let notches = domain.regions.iter().skip(1).filter(|r| r.op == CsgOp::Subtract).map(|r| (&r.primitive, r.primitive.bounding_box())).collect();
+        Cuts { cracks: self.cracks(), notches }
     }
 
     /// The critical stretch for `micromodulus` (module docs), when bonds break.
@@ -109,6 +95,65 @@ pub fn sixth_moment(m: &Micromodulus) -> f64 {
     match m.kernel {
         Kernel::Plain => m.constant * m.horizon.powi(4) / 4.0,
         Kernel::Regularised { alpha } => m.constant * m.horizon.powf(alpha + 7.0) * radial_integral(alpha + 1.0),
+    }
+}
+
+/// What no bond crosses from the start: the pre-cracks and the regions cut out of the
+/// solid (`op = "subtract"`: notches, slots, holes). A notch narrower than the horizon
+/// would otherwise be bridged by the bonds across it (families are found by distance),
+/// so in a scene with `[peridynamics.fracture]` a bond whose segment passes through
+/// such a region is broken from the start, as one across a pre-crack.
+pub struct Cuts<'a> {
+    cracks: &'a [[f64; 4]],
+    notches: Vec<(&'a Primitive, (Point, Point))>,
+}
+
+impl Cuts<'_> {
+    /// Whether the bond from `a` to `b` crosses a pre-crack or passes through a region
+    /// cut out of the solid.
+    pub fn cut(&self, a: Point, b: Point) -> bool {
+        self.cracks.iter().any(|c| segments_cross(a, b, [c[0], c[1]], [c[2], c[3]]))
+            || self.notches.iter().any(|(p, (lo, hi))| {
+                let apart = a[0].max(b[0]) < lo[0] || a[0].min(b[0]) > hi[0] || a[1].max(b[1]) < lo[1] || a[1].min(b[1]) > hi[1];
+                !apart && passes_through(p, a, b)
+            })
+    }
+
+    /// Zero the `coefficients` of the bonds of `families` over `nodes` that are cut;
+    /// how many there were (both directions counted).
+    pub fn break_precracked(&self, nodes: &PdNodes, families: &Families, coefficients: &mut [f64]) -> usize {
+        if self.cracks.is_empty() && self.notches.is_empty() {
+            return 0;
+        }
+        let x = &nodes.positions;
+        let cut: Vec<usize> = (0..nodes.free)
+            .into_par_iter()
+            .flat_map_iter(|i| families.range(i).zip(families.of(i)).filter(move |(_, &j)| self.cut(x[i], x[j as usize])).map(|(b, _)| b))
+            .collect();
+        cut.iter().for_each(|&b| coefficients[b] = 0.0);
+        cut.len()
+    }
+}
+
+/// Whether the segment `a b` passes through the interior of `p`: a disc when the
+/// segment comes nearer its centre than the radius; a rectangle or polygon when the
+/// segment properly crosses one of its edges (both ends are material, so outside or on
+/// its boundary).
+fn passes_through(p: &Primitive, a: Point, b: Point) -> bool {
+    let proper = |q0: Point, q1: Point| {
+        let orient = |u: Point, v: Point, w: Point| (v[0] - u[0]) * (w[1] - u[1]) - (v[1] - u[1]) * (w[0] - u[0]);
+        orient(q0, q1, a) * orient(q0, q1, b) < 0.0 && orient(a, b, q0) * orient(a, b, q1) < 0.0
+    };
+    let edges = |v: &[Point]| (0..v.len()).any(|k| proper(v[k], v[(k + 1) % v.len()]));
+    match p {
+        Primitive::Disc { center, radius } => {
+            let ab = [b[0] - a[0], b[1] - a[1]];
+            let t = (((center[0] - a[0]) * ab[0] + (center[1] - a[1]) * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1])).clamp(0.0, 1.0);
+            let q = [a[0] + t * ab[0] - center[0], a[1] + t * ab[1] - center[1]];
+            q[0].hypot(q[1]) < radius * (1.0 - 1e-12)
+        }
+        Primitive::Rectangle { min, max } => edges(&[*min, [max[0], min[1]], *max, [min[0], max[1]]]),
+        Primitive::Polygon { vertices } => edges(vertices),
     }
 }
 
@@ -159,11 +204,11 @@ pub struct Live {
 impl Breaking {
     /// The bonds of `families` over `nodes` with their `coefficients`, those crossing
     /// `fracture`'s pre-cracks broken, breaking at `critical_stretch` (infinity: never).
-    pub fn new(nodes: &PdNodes, families: &Families, coefficients: &[f64], fracture: &Fracture, critical_stretch: f64) -> Self {
+    pub fn new(nodes: &PdNodes, families: &Families, coefficients: &[f64], cuts: &Cuts, critical_stretch: f64) -> Self {
         let x = &nodes.positions;
         let broken: Vec<bool> = (0..nodes.free)
             .into_par_iter()
-            .flat_map_iter(|i| families.of(i).iter().map(move |&j| fracture.cut(x[i], x[j as usize])))
+            .flat_map_iter(|i| families.of(i).iter().map(move |&j| cuts.cut(x[i], x[j as usize])))
             .collect();
         let precracked = broken.iter().filter(|&&b| b).count();
         let coefficients = coefficients.iter().zip(&broken).map(|(&c, &cut)| if cut { 0.0 } else { c }).collect();
@@ -199,21 +244,30 @@ impl Breaking {
         free: usize,
         share: &(dyn Fn(usize, usize, f64) -> f64 + Sync),
     ) -> Vec<(usize, usize, f64)> {
-        let mut live = self.live.write().expect("no panic holds it");
+        // The reverse bonds are found in parallel, the bonds marked in one pass under the
+        // lock, and their energies summed in parallel again.
+        let pairs: Vec<((usize, usize), Option<(usize, usize)>)> = bonds
+            .par_iter()
+            .map(|&(i, j, b)| {
+                let reverse = (j < free)
+                    .then(|| families.of(j).binary_search(&(i as u32)).ok().map(|p| (j, families.range(j).start + p)))
+                    .flatten();
+                ((i, b), reverse)
+            })
+            .collect();
         let mut gone = Vec::new();
-        let mut energy = 0.0;
-        for &(i, j, b) in bonds {
-            let reverse =
-                (j < free).then(|| families.of(j).binary_search(&(i as u32)).ok().map(|p| (j, families.range(j).start + p))).flatten();
-            for (k, bond) in std::iter::once((i, b)).chain(reverse) {
-                if !live.broken[bond] {
-                    let c = live.coefficients[bond];
-                    energy += share(k, bond, c);
-                    (live.broken[bond], live.coefficients[bond]) = (true, 0.0);
-                    gone.push((k, bond, c));
+        {
+            let mut live = self.live.write().expect("no panic holds it");
+            for &(forward, reverse) in &pairs {
+                for (k, bond) in std::iter::once(forward).chain(reverse) {
+                    if !live.broken[bond] {
+                        gone.push((k, bond, live.coefficients[bond]));
+                        (live.broken[bond], live.coefficients[bond]) = (true, 0.0);
+                    }
                 }
             }
         }
+        let energy: f64 = gone.par_iter().map(|&(k, bond, c)| share(k, bond, c)).sum();
         let mut r = self.released.lock().expect("no panic holds it");
         r.0 += gone.len();
         r.1 += energy;

@@ -86,7 +86,7 @@ pub fn simulate_sampled(
     let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
     let breaking = params.fracture.map(|f| {
         let s0 = f.critical_stretch(&disc.micromodulus).unwrap_or(f64::INFINITY);
-        Breaking::new(&disc.nodes, &disc.families, &disc.weights.coefficients, &f, s0)
+        Breaking::new(&disc.nodes, &disc.families, &disc.weights.coefficients, &f.cuts(&case.domain), s0)
     });
     let system = PdDynamics {
         bonds: disc.bonds(),
