@@ -4,8 +4,9 @@ m = 6, Verlet at dt = 2e-7 s, snapshots off, estimate off) at two horizons (abou
 and 1e6 bonds per thread on 2 threads), the linear and the bond-stretch law, each
 without [peridynamics.fracture], with a critical stretch no bond reaches (s0 = 1: the
 bookkeeping alone) and with s0 = 2e-4 (bonds break in the middle); PAIRS rounds,
-alternated. Prints the integrate stage's seconds (median) and its ratio to the same
-law without fracture.
+alternated. Prints the step's seconds (median over the rounds of the stepping time,
+energies and snapshots excluded: summary.json's integration.seconds), its ratio to the same law without fracture, and the integrate
+stage's (which includes the energy sums every step) with its ratio.
 
 Usage: python3 benches/fracture_step.py   (MLSM: the binary, default target/release/mlsm;
 PAIRS: rounds, default 3)"""
@@ -18,8 +19,8 @@ base = base.replace('integrator = "rk4"', 'integrator = "verlet"').replace("snap
 base += '\n[estimate]\nmethod = "none"\n'
 fracture = {"none": "", "s0 = 1": "\n[peridynamics.fracture]\ncritical_stretch = 1.0\n", "s0 = 2e-4": "\n[peridynamics.fracture]\ncritical_stretch = 2e-4\n"}
 work = tempfile.mkdtemp()
-print("| delta | bonds | law | fracture | integrate s (median) | ratio | bonds broken |")
-print("|---|---|---|---|---|---|---|")
+print("| delta | bonds | law | fracture | stepping s (median) | ratio | integrate s | ratio | bonds broken |")
+print("|---|---|---|---|---|---|---|---|---|")
 for delta, end in [(0.075, "2e-4"), (0.0237, "4e-5")]:
     times, info = {}, {}
     for _ in range(pairs):
@@ -35,11 +36,13 @@ for delta, end in [(0.075, "2e-4"), (0.0237, "4e-5")]:
                 if r.returncode:
                     sys.exit(r.stderr)
                 s = json.load(open(os.path.join(out, "summary.json")))
-                times.setdefault((law, name), []).append(s["timings_s"]["integrate"])
+                stepping = s["integration"]["seconds"]
+                times.setdefault((law, name), []).append((stepping, s["timings_s"]["integrate"]))
                 info[(law, name)] = (s["bonds"], (s.get("fracture") or {}).get("broken_bonds", "-"))
     for law in ["linear", "bond-stretch"]:
-        plain = statistics.median(times[(law, "none")])
+        med = lambda k, key: statistics.median(x[k] for x in times[key])
+        plain, plain_integrate = med(0, (law, "none")), med(1, (law, "none"))
         for name in fracture:
-            t = statistics.median(times[(law, name)])
+            t, t_integrate = med(0, (law, name)), med(1, (law, name))
             bonds, broken = info[(law, name)]
-            print(f"| {delta} | {bonds} | {law} | {name} | {t:.3f} | {t / plain:.2f} | {broken} |", flush=True)
+            print(f"| {delta} | {bonds} | {law} | {name} | {t:.3f} | {t / plain:.2f} | {t_integrate:.3f} | {t_integrate / plain_integrate:.2f} | {broken} |", flush=True)

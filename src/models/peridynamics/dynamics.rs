@@ -176,11 +176,11 @@ impl PdDynamics<'_> {
         }
     }
 
-    /// [`PdDynamics::force`] over the live bonds, recording whether one reached the
-    /// critical stretch; the test is a little wide (1e-12), so that no node whose bond
-    /// [`PdDynamics::bond_energy`] finds at `s0` is left out.
-    /// The linear law has its own loop: the same sums as [`PdDynamics::bond_force`], with the
-    /// law chosen once per node and the displacement of a free neighbour read directly.
+    /// [`PdDynamics::force`] over the live bonds, recording those at the critical
+    /// stretch; the test is a little wide (1e-12), so that no bond
+    /// [`PdDynamics::bond_energy`] finds at `s0` is left out. The linear law has its own
+    /// loop: the same sums as [`PdDynamics::bond_force`], with the law chosen once per
+    /// node and the displacement of a free neighbour read directly.
     fn force_breaking(&self, u: &[f64], loads: &Instant, i: usize, (breaking, live): (&Breaking, &[f64])) -> [f64; 2] {
         let s0 = breaking.critical_stretch * (1.0 - 1e-12);
         let (mut f, mut reached) = ([0.0, 0.0], false);
@@ -205,7 +205,16 @@ impl PdDynamics<'_> {
                 reached |= at;
             }),
         }
-        breaking.record(i, reached);
+        // Rare: the node has a bond at s0; a second pass names them.
+        if reached {
+            let mut bonds = Vec::new();
+            self.live_bonds(u, loads, i, live, |b, c, xi, eta| {
+                if self.bond_force(c, xi, eta, s0).1 {
+                    bonds.push(b);
+                }
+            });
+            breaking.record(i, &bonds);
+        }
         f
     }
 
@@ -305,25 +314,22 @@ impl PdDynamics<'_> {
     }
 
     /// Break the bonds whose stretch at `state` is at least the critical one, both
-    /// directions at once, among the nodes whose last force evaluation reached it
+    /// directions at once, among those the last force evaluation found there
     /// ([`super::fracture`]); the energy a pair held (`V_i w_ij / 2 + V_j w_ji / 2`, its
     /// share of `E_el`) is released. The bonds broken, `(node, bond, coefficient)`.
-    fn break_bonds(&self, breaking: &Breaking, candidates: &[usize], state: &State, loads: &Instant) -> Vec<(usize, usize, f64)> {
+    fn break_bonds(&self, breaking: &Breaking, candidates: &[(usize, usize)], state: &State, loads: &Instant) -> Vec<(usize, usize, f64)> {
         let (nodes, families) = (self.nodes(), self.bonds.families);
         let s0 = breaking.critical_stretch;
         let found: Vec<(usize, usize, usize)> = {
             let live = breaking.live();
             candidates
                 .par_iter()
-                .flat_map_iter(|&i| {
-                    let mut over = Vec::new();
-                    self.live_bonds(&state.u, loads, i, &live.coefficients, |b, c, xi, eta| {
-                        if c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0 {
-                            over.push((i, families.neighbour(b) as usize, b));
-                        }
-                    });
-                    over
+                .filter(|&&(i, b)| {
+                    let c = live.coefficients[b];
+                    let (xi, eta) = self.bond_vectors(&state.u, loads, i, b);
+                    c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0
                 })
+                .map(|&(i, b)| (i, families.neighbour(b) as usize, b))
                 .collect()
         };
         // Bond `b` of free node `k` with coefficient `c`, before it breaks: its share of E_el.
@@ -348,6 +354,9 @@ impl SecondOrderSystem for PdDynamics<'_> {
     }
 
     fn acceleration(&self, t: f64, u: &[f64], a: &mut [f64]) {
+        if let Some(breaking) = self.breaking {
+            breaking.start_evaluation();
+        }
         let loads = self.loads(t);
         let theta = self.theta(u, &loads);
         let live = self.breaking.map(Breaking::live);

@@ -5,9 +5,9 @@
 //! linearisation `s = xi . eta / |xi|^2` under the linear law. After every time step the
 //! bonds whose stretch at the new state is at least `s0` break, both directions at once
 //! (their forces vanish from then on, and their energy is counted as released); the
-//! acceleration is evaluated again when any broke. Each force evaluation records which
-//! nodes have a bond at `s0` or beyond, so the check after the step reads only the nodes
-//! whose last evaluation reached it (Verlet and RK4 end the step with the evaluation at the new
+//! acceleration is evaluated again when any broke. Each force evaluation records the
+//! bonds at `s0` or beyond, so the check after the step reads only those bonds of the
+//! last evaluation (Verlet and RK4 end the step with the evaluation at the new
 //! state; `emu` evaluates at the start of the step, so its bonds break one step later).
 //!
 //! Critical stretch from the energy release rate `G0`: the energy of the bonds that
@@ -33,14 +33,13 @@ use super::Kernel;
 use crate::domain::{CsgOp, Domain, Point, Primitive};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, RwLock, RwLockReadGuard};
 
 /// The most pre-cracks a scene may give.
 pub const MAX_CRACKS: usize = 8;
 
 /// `[peridynamics.fracture]`: how bonds break and where the solid is cracked at the start.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Fracture {
     /// How the critical stretch is given; `None`: pre-cracks only, no bond breaks.
     pub breaking: Option<CriticalStretch>,
@@ -57,6 +56,17 @@ pub enum CriticalStretch {
     Given(f64),
     /// `G0` in J/m^2 (N/m per unit thickness).
     EnergyReleaseRate(f64),
+}
+
+impl Serialize for Fracture {
+    /// `{ breaking, cracks }`, the pre-cracks given and no more.
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut s = serializer.serialize_struct("Fracture", 2)?;
+        s.serialize_field("breaking", &self.breaking)?;
+        s.serialize_field("cracks", self.cracks())?;
+        s.end()
+    }
 }
 
 impl Fracture {
@@ -183,9 +193,9 @@ pub struct Breaking {
     /// Read by every force evaluation (one lock per evaluation, plain loads in the bond
     /// loop), written after the steps in which bonds break.
     live: RwLock<Live>,
-    /// Per free node: whether one of its live bonds reached the critical stretch at the
-    /// last evaluation.
-    reached: Vec<AtomicBool>,
+    /// The live bonds `(node, bond)` at the critical stretch at the last force
+    /// evaluation (cleared as each evaluation starts).
+    reached: Mutex<Vec<(usize, usize)>>,
     /// Bonds broken since the start (both directions counted), and the elastic energy
     /// they held when they broke (J per unit thickness).
     released: Mutex<(usize, f64)>,
@@ -212,7 +222,7 @@ impl Breaking {
             .collect();
         let precracked = broken.iter().filter(|&&b| b).count();
         let coefficients = coefficients.iter().zip(&broken).map(|(&c, &cut)| if cut { 0.0 } else { c }).collect();
-        let reached = (0..nodes.free).map(|_| AtomicBool::new(false)).collect();
+        let reached = Mutex::new(Vec::new());
         Breaking { critical_stretch, live: RwLock::new(Live { coefficients, broken }), reached, released: Mutex::new((0, 0.0)), precracked }
     }
 
@@ -221,16 +231,24 @@ impl Breaking {
         self.live.read().expect("no panic holds it")
     }
 
-    /// Record whether one of free node `i`'s bonds reached the critical stretch at this
-    /// evaluation.
-    #[inline]
-    pub fn record(&self, i: usize, reached: bool) {
-        self.reached[i].store(reached, Ordering::Relaxed);
+    /// Forget the bonds the previous force evaluation found at the critical stretch
+    /// (called as an evaluation starts).
+    pub fn start_evaluation(&self) {
+        self.reached.lock().expect("no panic holds it").clear();
     }
 
-    /// The free nodes whose last evaluation reached the critical stretch.
-    pub fn candidates(&self) -> Vec<usize> {
-        (0..self.reached.len()).into_par_iter().filter(|&i| self.reached[i].load(Ordering::Relaxed)).collect()
+    /// Record the bonds `bonds` of free node `i` found at the critical stretch by this
+    /// evaluation (only nodes that have some call it).
+    pub fn record(&self, i: usize, bonds: &[usize]) {
+        self.reached.lock().expect("no panic holds it").extend(bonds.iter().map(|&b| (i, b)));
+    }
+
+    /// The bonds `(node, bond)` the last evaluation found at the critical stretch, in
+    /// node and bond order (the same order whatever the threads did).
+    pub fn candidates(&self) -> Vec<(usize, usize)> {
+        let mut c = std::mem::take(&mut *self.reached.lock().expect("no panic holds it"));
+        c.sort_unstable();
+        c
     }
 
     /// Break each bond `(i, j, b)` (bond `b` of node `i` to `j`) and its reverse in `j`'s
