@@ -28,7 +28,6 @@
 
 use super::family::Families;
 use super::kernel::{radial_integral, Micromodulus};
-use super::nodes::PdNodes;
 use super::Kernel;
 use crate::domain::{CsgOp, Domain, Point, Primitive};
 use rayon::prelude::*;
@@ -129,14 +128,14 @@ impl Cuts<'_> {
             })
     }
 
-    /// Zero the `coefficients` of the bonds of `families` over `nodes` that are cut;
-    /// how many there were (both directions counted).
-    pub fn break_precracked(&self, nodes: &PdNodes, families: &Families, coefficients: &mut [f64]) -> usize {
+    /// Zero the `coefficients` of the bonds of `families` (over the nodes at
+    /// `positions`) that are cut; how many there were (both directions counted).
+    pub fn break_precracked(&self, positions: &[Point], families: &Families, coefficients: &mut [f64]) -> usize {
         if self.cracks.is_empty() && self.notches.is_empty() {
             return 0;
         }
-        let x = &nodes.positions;
-        let cut: Vec<usize> = (0..nodes.free)
+        let x = positions;
+        let cut: Vec<usize> = (0..families.len())
             .into_par_iter()
             .flat_map_iter(|i| families.range(i).zip(families.of(i)).filter(move |(_, &j)| self.cut(x[i], x[j as usize])).map(|(b, _)| b))
             .collect();
@@ -212,11 +211,12 @@ pub struct Live {
 }
 
 impl Breaking {
-    /// The bonds of `families` over `nodes` with their `coefficients`, those crossing
-    /// `fracture`'s pre-cracks broken, breaking at `critical_stretch` (infinity: never).
-    pub fn new(nodes: &PdNodes, families: &Families, coefficients: &[f64], cuts: &Cuts, critical_stretch: f64) -> Self {
-        let x = &nodes.positions;
-        let broken: Vec<bool> = (0..nodes.free)
+    /// The bonds of `families` (over the nodes at `positions`) with their
+    /// `coefficients`, those `cuts` cuts broken, breaking at `critical_stretch`
+    /// (infinity: never).
+    pub fn new(positions: &[Point], families: &Families, coefficients: &[f64], cuts: &Cuts, critical_stretch: f64) -> Self {
+        let x = positions;
+        let broken: Vec<bool> = (0..families.len())
             .into_par_iter()
             .flat_map_iter(|i| families.of(i).iter().map(move |&j| cuts.cut(x[i], x[j as usize])))
             .collect();
@@ -299,14 +299,14 @@ impl Breaking {
 
     /// Damage of every free node: the share of its family's volume behind broken bonds,
     /// `phi_i = sum_{j broken} V_j / sum_j V_j` (0 intact, 1 detached).
-    pub fn damage(&self, nodes: &PdNodes, families: &Families) -> Vec<f64> {
+    pub fn damage(&self, volumes: &[f64], families: &Families) -> Vec<f64> {
         let live = self.live();
-        (0..nodes.free)
+        (0..families.len())
             .into_par_iter()
             .map(|i| {
                 let (mut all, mut lost) = (0.0, 0.0);
                 for (b, &j) in families.range(i).zip(families.of(i)) {
-                    let v = nodes.volumes[j as usize];
+                    let v = volumes[j as usize];
                     all += v;
                     if live.broken[b] {
                         lost += v;

@@ -11,7 +11,7 @@
 //!
 //! Stages of a run: nodes (on a lattice, or on a Delaunay triangulation: [`triangulated`]), families, weights ([`solve::FAMILIES`],
 //! [`solve::WEIGHTS`]), assembly, solve, post. Modules: [`params`] (the validated
-//! `[peridynamics]` table), [`nodes`] (quadrature
+//! `[peridynamics]` table), [`body`] (the solid with its collar), [`nodes`] (quadrature
 //! points of square cells, plus the Dirichlet collar),
 //! [`family`] (bonds within the horizon, k-d tree radius query), [`kernel`]
 //! (calibrated micromodulus), [`weights`] (bond weights of each quadrature rule, the
@@ -26,6 +26,7 @@
 //! pre-cracks, damage) and [`simulation`] (the time-dependent run).
 
 pub mod assembly;
+pub mod body;
 pub mod compatible;
 pub mod dilatation;
 pub mod discretisation;

@@ -97,7 +97,7 @@ impl Quadrature {
                 let mut out: Vec<(Point, f64)> = Vec::new();
                 for [a, b, c] in triangles {
                     for &(q, w) in &rule {
-                        let p = [a[0] + q[0] * (b[0] - a[0]) + q[1] * (c[0] - a[0]), a[1] + q[0] * (b[1] - a[1]) + q[1] * (c[1] - a[1])];
+                        let p = on_triangle(q, [a, b, c]);
                         match out.iter_mut().find(|(o, _)| (o[0] - p[0]).abs() + (o[1] - p[1]).abs() < 1e-12) {
                             Some(o) => o.1 += 0.5 * w,
                             None => out.push((p, 0.5 * w)),
@@ -134,6 +134,12 @@ impl Quadrature {
         }
         out
     }
+}
+
+/// The point `A + xi (B - A) + eta (C - A)` of the triangle `[A, B, C]` for the point
+/// `q = (xi, eta)` of the reference triangle.
+pub fn on_triangle(q: Point, [a, b, c]: [Point; 3]) -> Point {
+    [a[0] + q[0] * (b[0] - a[0]) + q[1] * (c[0] - a[0]), a[1] + q[0] * (b[1] - a[1]) + q[1] * (c[1] - a[1])]
 }
 
 choice! {

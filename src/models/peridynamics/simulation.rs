@@ -86,7 +86,7 @@ pub fn simulate_sampled(
     let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
     let breaking = params.fracture.map(|f| {
         let s0 = f.critical_stretch(&disc.micromodulus).unwrap_or(f64::INFINITY);
-        Breaking::new(&disc.nodes, &disc.families, &disc.weights.coefficients, &f.cuts(&case.domain), s0)
+        Breaking::new(&disc.nodes.positions, &disc.families, &disc.weights.coefficients, &f.cuts(&case.domain), s0)
     });
     let system = PdDynamics {
         bonds: disc.bonds(),
@@ -112,7 +112,7 @@ pub fn simulate_sampled(
         let (u, v) = (nodal(&s.u), nodal(&s.v));
         if is_snapshot(step, grid.steps, dynamics) {
             let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
-            let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes, &disc.families));
+            let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes.volumes, &disc.families));
             snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref(), damage: damage.as_deref() })?;
         }
         if samples.keeps(step) {
@@ -126,7 +126,7 @@ pub fn simulate_sampled(
         report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
     let (u, v) = (nodal(&state.u), nodal(&state.v));
     let fracture = breaking.as_ref().map(|b| {
-        let damage = b.damage(&disc.nodes, &disc.families);
+        let damage = b.damage(&disc.nodes.volumes, &disc.families);
         let (broken, released) = b.released();
         FractureReport {
             critical_stretch: b.critical_stretch.is_finite().then_some(b.critical_stretch),

@@ -201,7 +201,7 @@ impl Discretisation {
         let weights = timer.run(WEIGHTS, || {
             let mut w = bond_coefficients(&body, &nodes, &families, &micromodulus, params, moment, layer.as_deref());
             // Bonds across a pre-crack are broken from the start.
-            let cut = params.fracture.map_or(0, |f| f.cuts(&case.domain).break_precracked(&nodes, &families, &mut w.coefficients));
+            let cut = params.fracture.map_or(0, |f| f.cuts(&case.domain).break_precracked(&nodes.positions, &families, &mut w.coefficients));
             let cracked = if cut > 0 { format!("; {cut} bonds across the pre-cracks and notches broken") } else { String::new() };
             let note = format!(
                 "{} nodes with their whole horizon in the body, {} with weights fitted to reproduce the local operator{cracked}",

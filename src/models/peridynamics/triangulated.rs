@@ -14,7 +14,8 @@
 //! solid, weighted by that part's area ([`cut_cell`]), so that collar and triangles
 //! cover the plane without overlap up to the cut cells' sampling.
 
-use super::nodes::{Body, Role};
+use super::body::Body;
+use super::params::on_triangle;
 use super::PdParams;
 use crate::domain::cells::triangulate;
 use crate::domain::{self, FillKind, FillParams, Point};
@@ -114,7 +115,7 @@ pub fn triangle_points(body: &Body, params: &PdParams) -> (Vec<(Point, f64, u8)>
             } else {
                 Key::Interior(t, k as u8)
             };
-            let p = [a[0] + q[0] * (b[0] - a[0]) + q[1] * (c[0] - a[0]), a[1] + q[0] * (b[1] - a[1]) + q[1] * (c[1] - a[1])];
+            let p = on_triangle(q, [a, b, c]);
             let at = *index.entry(key).or_insert_with(|| {
                 points.push((p, 0.0, k as u8));
                 points.len() - 1
@@ -131,11 +132,12 @@ pub fn triangle_points(body: &Body, params: &PdParams) -> (Vec<(Point, f64, u8)>
     (points, total)
 }
 
-/// The Dirichlet collar of a triangulated set: one constrained node per lattice cell of
+/// The Dirichlet collar of a triangulated set, `(position, volume, part, prescribed
+/// displacement)` of each constrained node: one per lattice cell of
 /// side `h` (aligned with the bounding box's lower-left corner) with a part outside the
 /// solid within the collar of a displacement part, at that part's centroid and
 /// weighted by its area ([`cut_cell`]).
-pub(super) fn collar_points(body: &Body, params: &PdParams) -> Vec<(Point, f64, u8, Role)> {
+pub fn collar_points(body: &Body, params: &PdParams) -> Vec<(Point, f64, usize, [f64; 2])> {
     let h = params.spacing();
     let domain = body.domain();
     let (lo, hi) = domain.bounding_box();
@@ -160,7 +162,7 @@ pub(super) fn collar_points(body: &Body, params: &PdParams) -> Vec<(Point, f64, 
                     return None;
                 }
                 let (part, u) = body.constraint(p)?;
-                Some((p, outside * h * h, super::nodes::NO_RULE_POINT, Role::Constrained(part, u)))
+                Some((p, outside * h * h, part, u))
             })
         })
         .collect()
