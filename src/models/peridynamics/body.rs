@@ -93,6 +93,17 @@ impl<'a> Body<'a> {
         self.domain
     }
 
+    /// The lattice of cells of side `h` over the body (the solid's bounding box, padded
+    /// by the collar and one cell), aligned with the box's lower-left corner `lo`:
+    /// `(lo, rows, columns)`, cell `(i, j)` having its corner at `lo + (i, j) h`.
+    pub fn lattice(&self, h: f64) -> (Point, std::ops::Range<i64>, std::ops::Range<i64>) {
+        let (lo, hi) = self.domain.bounding_box();
+        let pad = (self.collar / h).ceil() as i64 + 1;
+        let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
+        let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
+        (lo, -pad..ny + pad, -pad..nx + pad)
+    }
+
     /// Whether outside points near traction parts are fictitious nodes.
     pub fn has_fictitious(&self) -> bool {
         self.fictitious

@@ -195,10 +195,7 @@ fn classify(body: &Body, h: f64, (p, r, w_in, w_out): Merged) -> (Point, f64, u8
 fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
     let domain = body.domain();
     let h = params.spacing();
-    let (lo, hi) = domain.bounding_box();
-    let pad = (body.collar / h).ceil() as i64 + 1;
-    let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
-    let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
+    let (lo, rows, columns) = body.lattice(h);
     let cell = contributions(params.quadrature);
     let shared = params.quadrature.shares_points();
     // A point is keyed by its lattice position in units of h/12 (every rule's points are
@@ -211,12 +208,12 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
     // up to `perturbation h / 2` per coordinate, drawn row by row from a generator seeded
     // by the row: the same points in every run and for any thread count.
     let jitter = params.perturbation * h;
-    let rows: Vec<Vec<Share>> = (-pad..ny + pad)
+    let rows: Vec<Vec<Share>> = rows
         .into_par_iter()
         .map(|j| {
             let mut out = Vec::new();
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(j as u64 ^ 0x5eed_0f_1a77_1ce5);
-            for i in -pad..nx + pad {
+            for i in columns.clone() {
                 let corner = [lo[0] + i as f64 * h, lo[1] + j as f64 * h];
                 // With shared points, a cell adds its shares only if it is material (its
                 // centre inside the solid or in the constrained collar), so that points on a

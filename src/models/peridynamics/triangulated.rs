@@ -140,15 +140,11 @@ pub fn triangle_points(body: &Body, params: &PdParams) -> (Vec<(Point, f64, u8)>
 pub fn collar_points(body: &Body, params: &PdParams) -> Vec<(Point, f64, usize, [f64; 2])> {
     let h = params.spacing();
     let domain = body.domain();
-    let (lo, hi) = domain.bounding_box();
-    let pad = (body.collar / h).ceil() as i64 + 1;
-    let nx = ((hi[0] - lo[0]) / h).ceil() as i64;
-    let ny = ((hi[1] - lo[1]) / h).ceil() as i64;
+    let (lo, rows, columns) = body.lattice(h);
     let reach = h * std::f64::consts::FRAC_1_SQRT_2;
-    (-pad..ny + pad)
-        .into_par_iter()
+    rows.into_par_iter()
         .flat_map_iter(|j| {
-            (-pad..nx + pad).filter_map(move |i| {
+            columns.clone().filter_map(move |i| {
                 let corner = [lo[0] + i as f64 * h, lo[1] + j as f64 * h];
                 let centre = [corner[0] + 0.5 * h, corner[1] + 0.5 * h];
                 let d = domain.signed_distance(centre);
