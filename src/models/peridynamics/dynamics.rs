@@ -186,17 +186,21 @@ impl PdDynamics<'_> {
         let (mut f, mut reached) = ([0.0, 0.0], false);
         match self.force {
             BondForce::Linear => {
-                let (x, free) = (&self.nodes().positions, self.nodes().free);
+                // The screen `c p >= T_i` (one compare per bond) lets through every live
+                // bond at s0 and a few others; those get the exact test.
+                let (x, free, screen) = (&self.nodes().positions, self.nodes().free, breaking.screen[i] * (1.0 - 1e-12));
                 let ui = self.displacement(u, loads, i);
                 for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
                     let j = j as usize;
                     let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { loads.prescribed[j - free] };
                     let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
-                    let p = xi[0] * (uj[0] - ui[0]) + xi[1] * (uj[1] - ui[1]);
-                    let c = live[b];
-                    f[0] += c * p * xi[0];
-                    f[1] += c * p * xi[1];
-                    reached |= (c != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1]));
+                    let (c, p) = (live[b], xi[0] * (uj[0] - ui[0]) + xi[1] * (uj[1] - ui[1]));
+                    let cp = c * p;
+                    f[0] += cp * xi[0];
+                    f[1] += cp * xi[1];
+                    if cp >= screen {
+                        reached |= (c != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1]));
+                    }
                 }
             }
             BondForce::BondStretch => self.live_bonds(u, loads, i, live, |_, c, xi, eta| {
@@ -205,7 +209,8 @@ impl PdDynamics<'_> {
                 reached |= at;
             }),
         }
-        // Rare: the node has a bond at s0; a second pass names them.
+        // Rare: the node has a bond at s0 (or, under the linear law, passed the screen); a
+        // second pass names them.
         if reached {
             let mut bonds = Vec::new();
             self.live_bonds(u, loads, i, live, |b, c, xi, eta| {
@@ -213,7 +218,9 @@ impl PdDynamics<'_> {
                     bonds.push(b);
                 }
             });
-            breaking.record(i, &bonds);
+            if !bonds.is_empty() {
+                breaking.record(i, &bonds);
+            }
         }
         f
     }
