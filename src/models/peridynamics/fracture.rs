@@ -290,7 +290,9 @@ impl Breaking {
     ) -> Vec<(usize, usize, f64)> {
         // The reverse bonds are found in parallel, the bonds marked in one pass under the
         // lock, and their energies summed in parallel again.
-        let pairs: Vec<((usize, usize), Option<(usize, usize)>)> = bonds
+        // Per bond: `(node, bond)` and its reverse `(node, bond)` when the other end is free.
+        type Pair = ((usize, usize), Option<(usize, usize)>);
+        let pairs: Vec<Pair> = bonds
             .par_iter()
             .map(|&(i, j, b)| {
                 let reverse = (j < free)

@@ -190,6 +190,10 @@ fn classify(body: &Body, h: f64, (p, r, w_in, w_out): Merged) -> (Point, f64, u8
     }
 }
 
+/// One cell's contribution to a rule point: its lattice key, the point, its share of the
+/// area, its index in the unit cell, whether the cell is inside the solid.
+type Share = ((i64, i64), Point, f64, u8, bool);
+
 /// Every rule point of every lattice cell over the body, merged where cells share a
 /// point, in lattice (row-major) order.
 fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
@@ -202,8 +206,6 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
     // at distinct keys), so that a point shared by several cells is one node whose weight
     // is the sum of their shares.
     let key = |p: Point| (((p[1] - lo[1]) * 12.0 / h).round() as i64, ((p[0] - lo[0]) * 12.0 / h).round() as i64);
-    // Per contribution: key, point, share, unit index, whether the cell is inside the solid.
-    type Share = ((i64, i64), Point, f64, u8, bool);
     // A perturbed lattice moves every point of a cell-interior rule by a uniform offset of
     // up to `perturbation h / 2` per coordinate, drawn row by row from a generator seeded
     // by the row: the same points in every run and for any thread count.
@@ -239,7 +241,7 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
                 if params.cut_cells && !shared {
                     let cut = cut_cell(domain, corner, h);
                     if cut.inside > 0.0 && cut.inside < 1.0 {
-                        cut_weights(&mut out, first, &cut, h, |p| key(p));
+                        cut_weights(&mut out, first, &cut, h, key);
                     }
                 }
             }
@@ -264,7 +266,7 @@ fn merged_points(body: &Body, params: &PdParams) -> Vec<Merged> {
 /// rule's points gets one more point at its centroid carrying its area (a cell whose
 /// centre is in a hole still gives the solid its sliver, and the collar its part).
 fn cut_weights(
-    out: &mut Vec<((i64, i64), Point, f64, u8, bool)>,
+    out: &mut Vec<Share>,
     first: usize,
     cut: &super::triangulated::CutCell,
     h: f64,
