@@ -35,11 +35,7 @@ fn contributions(q: Quadrature) -> Vec<(Point, f64, u8)> {
     let unit = q.unit_cell();
     q.cell_contributions()
         .into_iter()
-        .map(|(p, w)| {
-            let folded = [p[0] - p[0].floor(), p[1] - p[1].floor()];
-            let k = unit.iter().position(|(o, _)| (o[0] - folded[0]).abs() + (o[1] - folded[1]).abs() < 1e-12).expect("a point of the unit");
-            (p, w, k as u8)
-        })
+        .map(|(p, w)| (p, w, super::params::unit_index(&unit, p).expect("a point of the unit") as u8))
         .collect()
 }
 
@@ -122,7 +118,7 @@ pub fn generate(body: &Body, params: &PdParams) -> PdNodes {
     let classified: Vec<(Point, f64, u8, Role)> = match params.points {
         PointSet::Lattice => merged_points(body, params).into_par_iter().map(|m| classify(body, h, m)).collect(),
         PointSet::Delaunay => {
-            let (inside, _) = triangulated::triangle_points(body, params);
+            let inside = triangulated::triangle_points(body, params);
             let mut all: Vec<_> = inside.into_iter().map(|(p, w, _)| (p, w, NO_RULE_POINT, Role::Free)).collect();
             let collar = triangulated::collar_points(body, params);
             all.extend(collar.into_iter().map(|(p, w, part, u)| (p, w, NO_RULE_POINT, Role::Constrained(part, u))));

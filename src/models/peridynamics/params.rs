@@ -126,14 +126,20 @@ impl Quadrature {
     pub fn unit_cell(self) -> Vec<(Point, f64)> {
         let mut out: Vec<(Point, f64)> = Vec::new();
         for (p, w) in self.cell_contributions() {
-            let p = [p[0] - p[0].floor(), p[1] - p[1].floor()];
-            match out.iter_mut().find(|(o, _)| (o[0] - p[0]).abs() + (o[1] - p[1]).abs() < 1e-12) {
-                Some(o) => o.1 += w,
-                None => out.push((p, w)),
+            match unit_index(&out, p) {
+                Some(k) => out[k].1 += w,
+                None => out.push(([p[0] - p[0].floor(), p[1] - p[1].floor()], w)),
             }
         }
         out
     }
+}
+
+/// Where the point `p` of a cell, folded into the periodic unit `[0, 1)^2`, stands in
+/// `unit` (points of [`Quadrature::unit_cell`]).
+pub fn unit_index(unit: &[(Point, f64)], p: Point) -> Option<usize> {
+    let folded = [p[0] - p[0].floor(), p[1] - p[1].floor()];
+    unit.iter().position(|(o, _)| (o[0] - folded[0]).abs() + (o[1] - folded[1]).abs() < 1e-12)
 }
 
 /// The point `A + xi (B - A) + eta (C - A)` of the triangle `[A, B, C]` for the point

@@ -79,9 +79,8 @@ enum Key {
 }
 
 /// The triangulated node set of the solid and the volume of each rule point
-/// (module docs), before the collar: `(positions, volumes, rule point index)`. Also
-/// returns the triangles' total area.
-pub fn triangle_points(body: &Body, params: &PdParams) -> (Vec<(Point, f64, u8)>, f64) {
+/// (module docs), before the collar: `(position, volume, rule point index)`.
+pub fn triangle_points(body: &Body, params: &PdParams) -> Vec<(Point, f64, u8)> {
     let h = params.spacing();
     let domain = body.domain();
     let fill = FillParams { spacing: h, refine: None, adapted: None, kind: FillKind::Scattered, seed: 0, relax_iterations: 0 };
@@ -92,11 +91,9 @@ pub fn triangle_points(body: &Body, params: &PdParams) -> (Vec<(Point, f64, u8)>
     let near = |a: f64, b: f64| (a - b).abs() < 1e-12;
     let mut index: HashMap<Key, usize> = HashMap::new();
     let mut points: Vec<(Point, f64, u8)> = Vec::new();
-    let mut total = 0.0;
     for (t, tri) in triangles.iter().enumerate() {
         let [a, b, c] = tri.map(|k| vertices[k]);
         let area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]));
-        total += area;
         for (k, &(q, w)) in rule.iter().enumerate() {
             let corner = |u: f64, v: f64| near(q[0], u) && near(q[1], v);
             let edge = |i: usize, j: usize| Key::Edge(tri[i].min(tri[j]), tri[i].max(tri[j]));
@@ -129,7 +126,7 @@ pub fn triangle_points(body: &Body, params: &PdParams) -> (Vec<(Point, f64, u8)>
         let band = |x: &Point| ((x[1] - set.positions[0][1]) / h).floor() as i64;
         band(&p.0).cmp(&band(&q.0)).then(p.0[0].total_cmp(&q.0[0]))
     });
-    (points, total)
+    points
 }
 
 /// The Dirichlet collar of a triangulated set, `(position, volume, part, prescribed
