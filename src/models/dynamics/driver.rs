@@ -116,6 +116,14 @@ fn evenly_spaced(step: usize, steps: usize, n: usize) -> bool {
     }
 }
 
+/// The energy history's cadence: a row every `k`-th step. The energies cost about one
+/// force evaluation (a pass over the operator or the bonds), so `k` keeps them within a
+/// quarter of the stepping (`k >= 4 / evaluations per step`: every fourth step with
+/// Verlet and `emu`, every step with RK4) and the history within about 1000 rows.
+pub fn energy_every(steps: usize, integrator: Integrator) -> usize {
+    steps.div_ceil(1000).max(4usize.div_ceil(integrator.evaluations()))
+}
+
 /// States over the history at which a dynamic run's error is estimated (besides none
 /// at t = 0, where every run starts from the same prescribed state).
 pub const HISTORY_SAMPLES: usize = 8;
@@ -130,7 +138,8 @@ pub fn history_steps(steps: usize) -> Vec<usize> {
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
 /// `visit` at the steps [`is_snapshot`] picks and at the steps `also` (sorted; the
 /// callback tells them apart; `(grid, also)` is the schedule), and recording `energies` (kinetic,
-/// elastic, external) at every step (every `ceil(steps / 1000)`-th step for longer runs). The loop is the [`INTEGRATE`] stage
+/// elastic, external) every [`energy_every`]-th step, at the last one and at every step
+/// where [`SecondOrderSystem::settle`] changed the forces (bonds broke). The loop is the [`INTEGRATE`] stage
 /// of `timer`, interruptible by Ctrl-C between steps (`pipeline::interrupt`). Returns
 /// the report and the history.
 pub fn integrate(
@@ -144,8 +153,7 @@ pub fn integrate(
 ) -> Result<(DynamicReport, Vec<EnergyRow>), RunError> {
     let TimeGrid { dt, steps, stable } = grid;
     let visited = |step: usize| is_snapshot(step, steps, params) || also.binary_search(&step).is_ok();
-    // Energies cost one more pass over the operator: at most about 1000 rows.
-    let energy_every = steps.div_ceil(1000).max(1);
+    let energy_every = energy_every(steps, params.integrator);
     let mut history = Vec::with_capacity(steps.min(1000) + 2);
     let record = |s: &State, history: &mut Vec<EnergyRow>| {
         let [k, e, x, r, b] = energies(s);
@@ -166,12 +174,12 @@ pub fn integrate(
             let ts = std::time::Instant::now();
             let t0 = state.t;
             params.integrator.step(system, state, dt);
-            system.settle(state);
+            let changed = system.settle(state);
             looped += ts.elapsed().as_secs_f64();
             if state.u.iter().chain(&state.a).any(|v| !v.is_finite()) {
                 return Err(system.explain(t0, state.t).unwrap_or(RunError::Diverged { step, t: state.t }));
             }
-            if step % energy_every == 0 || step == steps {
+            if step % energy_every == 0 || step == steps || changed {
                 record(state, &mut history);
             }
             if visited(step) {

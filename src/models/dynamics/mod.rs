@@ -36,8 +36,11 @@ pub trait SecondOrderSystem: Sync {
     }
     /// Bring the system up to date with the state a step reached (bonds that break,
     /// `super::super::peridynamics::fracture`), re-evaluating `state.a` if that changed
-    /// the forces; called after every step. Nothing by default.
-    fn settle(&self, _state: &mut State) {}
+    /// the forces; called after every step. Returns whether it changed them (the energy
+    /// history then records the step). Nothing by default.
+    fn settle(&self, _state: &mut State) -> bool {
+        false
+    }
 }
 
 /// Time, displacement, velocity and the last acceleration.

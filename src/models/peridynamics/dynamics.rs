@@ -25,6 +25,7 @@ use super::family::Families;
 use super::loads::LoadLayer;
 use super::nodes::PdNodes;
 use super::operator::Bonds;
+use super::pairs::{PairState, Pairs};
 use super::{strain, BondForce};
 use crate::physics::case::Case;
 use super::fracture::{Breaking, Live};
@@ -54,6 +55,9 @@ pub struct PdDynamics<'a> {
     pub varying: Option<VaryingLoads<'a>>,
     /// Bonds that break and pre-cracks ([`super::fracture`]), when the scene has them.
     pub breaking: Option<&'a Breaking>,
+    /// The force loop: each bond once where the weights are symmetric
+    /// ([`super::pairs`]).
+    pub pairs: &'a Pairs,
 }
 
 /// Loads that depend on time: the body force densities of the free nodes and the
@@ -134,23 +138,58 @@ impl PdDynamics<'_> {
         }
     }
 
-    /// Bond force density at free node `i` (the linear law is [`Bonds::force_at`]), over
-    /// the `live` bonds where bonds break.
-    fn force(&self, u: &[f64], loads: &Instant, i: usize, live: Option<&Live>) -> [f64; 2] {
-        if let (Some(breaking), Some(live)) = (self.breaking, live) {
-            return self.force_breaking(u, loads, i, (breaking, &live.coefficients));
+    /// `V_i` times the bond force density at every free node ([`Pairs::sum`]), over the
+    /// `live` bonds where bonds break, recording the bonds at the critical stretch
+    /// ([`super::fracture`]). The test is a little wide (1e-12), so that no bond
+    /// [`PdDynamics::bond_energy`] finds at `s0` is left out; under the linear law a
+    /// per-node screen `c p >= T_i` (one compare per bond on the product the force
+    /// needs anyway) flags every live bond at `s0` and a few others, and the flagged
+    /// ones get the exact test.
+    fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> Vec<[f64; 2]> {
+        let pairs = self.pairs;
+        let nodes = self.nodes();
+        let (x, volumes, families) = (&nodes.positions, &nodes.volumes, self.bonds.families);
+        let c = live.map_or(self.bonds.coefficients, |l| &l.coefficients);
+        let breaking = self.breaking.filter(|b| b.critical_stretch.is_finite());
+        let s0 = breaking.map_or(f64::INFINITY, |b| b.critical_stretch * (1.0 - 1e-12));
+        let at = PairState { positions: x, u, prescribed: &loads.prescribed, coefficients: c, volumes, screen: breaking.map_or(&[], |b| &b.screen) };
+        let at_s0 = |i: usize, b: usize| {
+            let (xi, eta) = bond_vectors(x, u, &loads.prescribed, i, families.neighbour(b) as usize);
+            self.bond_force(c[b], xi, eta, s0).1
+        };
+        let (forces, reached) = match (self.force, breaking) {
+            (BondForce::Linear, None) => pairs.sum(
+                families,
+                &at,
+                |c, xi, eta, vi, _| {
+                    let vcp = vi * c * (xi[0] * eta[0] + xi[1] * eta[1]);
+                    ([vcp * xi[0], vcp * xi[1]], false)
+                },
+                |_, _| false,
+            ),
+            (BondForce::Linear, Some(_)) => pairs.sum(
+                families,
+                &at,
+                |c, xi, eta, vi, screen| {
+                    let cp = c * (xi[0] * eta[0] + xi[1] * eta[1]);
+                    ([vi * cp * xi[0], vi * cp * xi[1]], cp >= screen * (1.0 - 1e-12))
+                },
+                at_s0,
+            ),
+            (BondForce::BondStretch, _) => pairs.sum(
+                families,
+                &at,
+                |c, xi, eta, vi, _| {
+                    let (g, at) = bond_stretch_force(c, xi, eta, s0);
+                    ([vi * g[0], vi * g[1]], at)
+                },
+                at_s0,
+            ),
+        };
+        if let Some(breaking) = breaking.filter(|_| !reached.is_empty()) {
+            breaking.record(&reached);
         }
-        match self.force {
-            BondForce::Linear => self.bonds.force_at(i, |j| self.displacement(u, loads, j)),
-            BondForce::BondStretch => {
-                let mut f = [0.0, 0.0];
-                self.live_bonds(u, loads, i, self.bonds.coefficients, |_, c, xi, eta| {
-                    let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
-                    f = [f[0] + g[0], f[1] + g[1]];
-                });
-                f
-            }
-        }
+        forces
     }
 
     /// The force of one bond with coefficient `c` on its node (module docs), and whether
@@ -165,75 +204,7 @@ impl PdDynamics<'_> {
                 let p = xi[0] * eta[0] + xi[1] * eta[1];
                 ([c * p * xi[0], c * p * xi[1]], (c != 0.0) & (p >= s0 * r2))
             }
-            BondForce::BondStretch => {
-                let r = r2.sqrt();
-                let y = [xi[0] + eta[0], xi[1] + eta[1]];
-                let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
-                // c |xi|^3 s / |xi + eta|, s = (|xi + eta| - |xi|) / |xi|.
-                let k = c * r2 * (ry - r) / ry;
-                ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= s0 * r))
-            }
-        }
-    }
-
-    /// [`PdDynamics::force`] over the live bonds, recording those at the critical
-    /// stretch; the test is a little wide (1e-12), so that no bond
-    /// [`PdDynamics::bond_energy`] finds at `s0` is left out. The linear law has its own
-    /// loop: the same sums as [`PdDynamics::bond_force`], with the law chosen once per
-    /// node and the displacement of a free neighbour read directly.
-    fn force_breaking(&self, u: &[f64], loads: &Instant, i: usize, (breaking, live): (&Breaking, &[f64])) -> [f64; 2] {
-        let s0 = breaking.critical_stretch * (1.0 - 1e-12);
-        let (mut f, mut reached) = ([0.0, 0.0], false);
-        match self.force {
-            BondForce::Linear => {
-                // The screen `c p >= T_i` (one compare per bond) lets through every live
-                // bond at s0 and a few others; those get the exact test.
-                let (x, free, screen) = (&self.nodes().positions, self.nodes().free, breaking.screen[i] * (1.0 - 1e-12));
-                let ui = self.displacement(u, loads, i);
-                for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
-                    let j = j as usize;
-                    let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { loads.prescribed[j - free] };
-                    let xi = [x[j][0] - x[i][0], x[j][1] - x[i][1]];
-                    let (c, p) = (live[b], xi[0] * (uj[0] - ui[0]) + xi[1] * (uj[1] - ui[1]));
-                    let cp = c * p;
-                    f[0] += cp * xi[0];
-                    f[1] += cp * xi[1];
-                    if cp >= screen {
-                        reached |= (c != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1]));
-                    }
-                }
-            }
-            BondForce::BondStretch => self.live_bonds(u, loads, i, live, |_, c, xi, eta| {
-                let (g, at) = self.bond_force(c, xi, eta, s0);
-                f = [f[0] + g[0], f[1] + g[1]];
-                reached |= at;
-            }),
-        }
-        // Rare: the node has a bond at s0 (or, under the linear law, passed the screen); a
-        // second pass names them.
-        if reached {
-            let mut bonds = Vec::new();
-            self.live_bonds(u, loads, i, live, |b, c, xi, eta| {
-                if self.bond_force(c, xi, eta, s0).1 {
-                    bonds.push(b);
-                }
-            });
-            if !bonds.is_empty() {
-                breaking.record(i, &bonds);
-            }
-        }
-        f
-    }
-
-    /// For every bond `b` of free node `i`: `(b, c_ij, xi, eta)`, `c_ij` from `live`
-    /// (zero once broken).
-    fn live_bonds(&self, u: &[f64], loads: &Instant, i: usize, live: &[f64], mut visit: impl FnMut(usize, f64, [f64; 2], [f64; 2])) {
-        let x = &self.nodes().positions;
-        let ui = self.displacement(u, loads, i);
-        for (b, &j) in self.bonds.families.range(i).zip(self.bonds.families.of(i)) {
-            let j = j as usize;
-            let uj = self.displacement(u, loads, j);
-            visit(b, live[b], [x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]]);
+            BondForce::BondStretch => bond_stretch_force(c, xi, eta, s0),
         }
     }
 
@@ -244,20 +215,8 @@ impl PdDynamics<'_> {
                 let p = xi[0] * eta[0] + xi[1] * eta[1];
                 (0.5 * c * p * p, p / (xi[0] * xi[0] + xi[1] * xi[1]))
             }
-            BondForce::BondStretch => {
-                let r = (xi[0] * xi[0] + xi[1] * xi[1]).sqrt();
-                let s = (((xi[0] + eta[0]).powi(2) + (xi[1] + eta[1]).powi(2)).sqrt() - r) / r;
-                (0.5 * c * r.powi(4) * s * s, s)
-            }
+            BondForce::BondStretch => bond_stretch_energy(c, xi, eta),
         }
-    }
-
-    /// Sum of the micropotentials `w_ij` of the bonds of free node `i` (module docs).
-    fn micropotential(&self, u: &[f64], loads: &Instant, i: usize, live: Option<&Live>) -> f64 {
-        let coefficients = live.map_or(self.bonds.coefficients, |l| &l.coefficients);
-        let mut w = 0.0;
-        self.live_bonds(u, loads, i, coefficients, |_, c, xi, eta| w += self.bond_energy(c, xi, eta).0);
-        w
     }
 
     /// Every node's displacement (the free ones from `u`, the collar's of `loads`) and
@@ -304,17 +263,25 @@ impl PdDynamics<'_> {
         let (nodes, dofs) = (self.nodes(), self.dofs());
         let loads = self.loads(t);
         let live = self.breaking.map(Breaking::live);
-        let (kin, el, ext) = (0..nodes.free)
+        let (kin, ext) = (0..nodes.free)
             .into_par_iter()
             .map(|i| {
                 let vol = nodes.volumes[i];
                 let (ui, vi) = (dofs.displacement(u, i), dofs.displacement(v, i));
                 let kin = 0.5 * self.density * vol * (vi[0].powi(2) + vi[1].powi(2));
-                let w = self.micropotential(u, &loads, i, live.as_deref());
                 let b = loads.body_force[i];
-                (kin, 0.5 * vol * w, -vol * (b[0] * ui[0] + b[1] * ui[1]))
+                (kin, -vol * (b[0] * ui[0] + b[1] * ui[1]))
             })
-            .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+            .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let c = live.as_deref().map_or(self.bonds.coefficients, |l| &l.coefficients);
+        let at = PairState { positions: &nodes.positions, u, prescribed: &loads.prescribed, coefficients: c, volumes: &nodes.volumes, screen: &[] };
+        let el = match self.force {
+            BondForce::Linear => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| {
+                let p = xi[0] * eta[0] + xi[1] * eta[1];
+                0.5 * c * p * p
+            }),
+            BondForce::BondStretch => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| bond_stretch_energy(c, xi, eta).0),
+        };
         let dilatation = self.theta(u, &loads).map_or(0.0, |theta| self.dilatation.map_or(0.0, |d| d.energy(nodes, &theta)));
         let (broken, released) = self.breaking.map_or((0, 0.0), |b| b.released());
         [kin, el + dilatation, ext, released, broken as f64]
@@ -355,6 +322,38 @@ impl PdDynamics<'_> {
     }
 }
 
+/// The bond-stretch force `c |xi|^3 s (xi + eta) / |xi + eta|` (module docs) and whether
+/// the bond is live and at `s0` or beyond (`|xi + eta| - |xi| >= s0 |xi|`).
+#[inline(always)]
+fn bond_stretch_force(c: f64, xi: [f64; 2], eta: [f64; 2], s0: f64) -> ([f64; 2], bool) {
+    let r2 = xi[0] * xi[0] + xi[1] * xi[1];
+    let r = r2.sqrt();
+    let y = [xi[0] + eta[0], xi[1] + eta[1]];
+    let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
+    // c |xi|^3 s / |xi + eta|, s = (|xi + eta| - |xi|) / |xi|.
+    let k = c * r2 * (ry - r) / ry;
+    ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= s0 * r))
+}
+
+/// The bond-stretch micropotential `c |xi|^4 s^2 / 2` (module docs) and the stretch `s`.
+#[inline(always)]
+fn bond_stretch_energy(c: f64, xi: [f64; 2], eta: [f64; 2]) -> (f64, f64) {
+    let r = (xi[0] * xi[0] + xi[1] * xi[1]).sqrt();
+    let s = (((xi[0] + eta[0]).powi(2) + (xi[1] + eta[1]).powi(2)).sqrt() - r) / r;
+    (0.5 * c * r.powi(4) * s * s, s)
+}
+
+/// `(xi, eta)` of the bond from free node `i` to node `j`: positions `x`, free nodes'
+/// displacements `u` (interleaved), the collar's `prescribed` (node `free + k` is
+/// `prescribed[k]`, `free = x.len() - prescribed.len()`).
+#[inline(always)]
+fn bond_vectors(x: &[[f64; 2]], u: &[f64], prescribed: &[[f64; 2]], i: usize, j: usize) -> ([f64; 2], [f64; 2]) {
+    let free = x.len() - prescribed.len();
+    let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - free] };
+    let ui = [u[2 * i], u[2 * i + 1]];
+    ([x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]])
+}
+
 impl SecondOrderSystem for PdDynamics<'_> {
     fn len(&self) -> usize {
         self.dofs().len()
@@ -367,8 +366,10 @@ impl SecondOrderSystem for PdDynamics<'_> {
         let loads = self.loads(t);
         let theta = self.theta(u, &loads);
         let live = self.breaking.map(Breaking::live);
+        let forces = self.bond_forces(u, &loads, live.as_deref());
+        let volumes = &self.nodes().volumes;
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
-            let mut f = self.force(u, &loads, i, live.as_deref());
+            let mut f = [forces[i][0] / volumes[i], forces[i][1] / volumes[i]];
             if let (Some(d), Some(theta)) = (self.dilatation, theta.as_deref()) {
                 let g = d.force_at(self.nodes(), theta, i);
                 f = [f[0] + g[0], f[1] + g[1]];
@@ -381,21 +382,23 @@ impl SecondOrderSystem for PdDynamics<'_> {
 
     /// Bonds that reached the critical stretch break, and their forces leave `state.a`
     /// (the same as evaluating it again, for the broken bonds' work only).
-    fn settle(&self, state: &mut State) {
-        let Some(breaking) = self.breaking else { return };
+    fn settle(&self, state: &mut State) -> bool {
+        let Some(breaking) = self.breaking else { return false };
         // Most steps break nothing: the loads of the instant are read only when some do.
         let candidates = breaking.candidates();
         if candidates.is_empty() {
-            return;
+            return false;
         }
         let loads = self.loads(state.t);
         let dofs = self.dofs();
-        for (k, b, c) in self.break_bonds(breaking, &candidates, state, &loads) {
+        let broken = self.break_bonds(breaking, &candidates, state, &loads);
+        for &(k, b, c) in &broken {
             let (xi, eta) = self.bond_vectors(&state.u, &loads, k, b);
             let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
             state.a[dofs.dof(k, 0)] -= g[0] / self.density;
             state.a[dofs.dof(k, 1)] -= g[1] / self.density;
         }
+        !broken.is_empty()
     }
 
     fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {

@@ -263,10 +263,9 @@ impl Breaking {
         self.reached.lock().expect("no panic holds it").clear();
     }
 
-    /// Record the bonds `bonds` of free node `i` found at the critical stretch by this
-    /// evaluation (only nodes that have some call it).
-    pub fn record(&self, i: usize, bonds: &[usize]) {
-        self.reached.lock().expect("no panic holds it").extend(bonds.iter().map(|&b| (i, b)));
+    /// Record the bonds `(node, bond)` found at the critical stretch by this evaluation.
+    pub fn record(&self, found: &[(usize, usize)]) {
+        self.reached.lock().expect("no panic holds it").extend_from_slice(found);
     }
 
     /// The bonds `(node, bond)` the last evaluation found at the critical stretch, in

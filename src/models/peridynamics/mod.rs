@@ -38,6 +38,7 @@ pub mod kernel;
 pub mod loads;
 pub mod nodes;
 pub mod operator;
+pub mod pairs;
 pub mod params;
 pub mod simulation;
 pub mod solve;

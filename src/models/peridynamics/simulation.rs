@@ -6,6 +6,7 @@
 use super::dynamics::{PdDynamics, VaryingLoads};
 use super::fracture::Breaking;
 use super::loads::LoadLayer;
+use super::pairs::Pairs;
 use super::solve::Discretisation;
 use super::PdParams;
 use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
@@ -13,8 +14,11 @@ use crate::models::dynamics::history::TimeSamples;
 use crate::models::dynamics::{DynamicsParams, State};
 use crate::physics::case::Case;
 use crate::physics::elasticity::conditions::Value;
-use crate::stages::{Progress, RunError, StageTimer, StageTimings};
+use crate::stages::{Progress, RunError, Stage, StageTimer, StageTimings};
 use std::collections::BTreeMap;
+
+/// The force loop's layout ([`Pairs`]): the weights' symmetry checked.
+pub const PAIRS: Stage = Stage::new("pairs");
 
 /// The result of a time-dependent peridynamic run.
 pub struct Simulation {
@@ -88,6 +92,11 @@ pub fn simulate_sampled(
         let s0 = f.critical_stretch(&disc.micromodulus).unwrap_or(f64::INFINITY);
         Breaking::new(&disc.nodes.positions, &disc.families, &disc.weights.coefficients, &f.cuts(&case.domain), s0)
     });
+    let pairs = timer.run(PAIRS, || {
+        let pairs = Pairs::new(&disc.nodes, &disc.families, &disc.weights.coefficients);
+        let note = if pairs.directed() { "each bond from both ends: the weights are not symmetric" } else { "each bond once: the weights are symmetric" };
+        Ok((pairs, note.to_string()))
+    })?;
     let system = PdDynamics {
         bonds: disc.bonds(),
         body_force: &body_force,
@@ -96,6 +105,7 @@ pub fn simulate_sampled(
         dilatation: disc.dilatation.as_ref(),
         varying,
         breaking: breaking.as_ref(),
+        pairs: &pairs,
     };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let dofs = disc.nodes.dofs();
