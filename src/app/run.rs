@@ -414,7 +414,7 @@ fn write_dynamic<M: Serialize>(
         ModelParams::Navier { .. } => None,
     };
     let horizon = peridynamics.map(|pd| pd.horizon);
-    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, horizon);
+    let mut checks = warnings::dynamic(d.energies, threshold, p.case.loads().depend_on_time(), d.estimate, (horizon, d.report.integrator));
     if let Some(dynamics) = &p.case.dynamics {
         let spacing = match peridynamics {
             Some(pd) => pd.horizon / pd.ratio,

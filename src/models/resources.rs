@@ -44,7 +44,7 @@ use crate::models::navier::dynamic_estimate::richardson_applies;
 use crate::models::navier::estimate::{reference_approximation, EstimateMethod};
 use crate::models::navier::NavierParams;
 use crate::output::{available_memory, available_memory_bytes};
-use crate::models::peridynamics::PdParams;
+use crate::models::peridynamics::{PdParams, PointSet, Quadrature};
 use crate::scene::problem::{Problem, ProblemError};
 use serde::Serialize;
 
@@ -228,11 +228,35 @@ fn navier_on(case: &Case, params: &NavierParams, nodes: f64, taken: Option<Stati
     MemoryEstimate { nodes, unknowns: k * nodes, nonzeros, bonds: None, peak_bytes: bytes + BASE_BYTES, driver }
 }
 
-/// A peridynamic run with `params` on the domain of `case`.
+/// Bytes per bond of an explicit peridynamic run's peak (the weights stage or the time
+/// loop): family index (4 B), coefficient (8 B) and the weights' working copy, measured
+/// 17-19 B per bond (full-area at 2e7 bonds, the Delaunay interior-3 rule at 3.8e8:
+/// docs/notebook/2026-11-29-bond-pairs.md); the compatible rule's moment fits hold
+/// more (35 B measured).
+const DYNAMIC_BYTES_PER_BOND: f64 = 20.0;
+
+/// [`DYNAMIC_BYTES_PER_BOND`] of the compatible rule.
+const DYNAMIC_COMPATIBLE_BYTES_PER_BOND: f64 = 36.0;
+
+/// Bytes per bond that breaking adds: the live coefficients and the broken flags
+/// ([`crate::models::peridynamics::fracture::Breaking`]).
+const BREAKING_BYTES_PER_BOND: f64 = 9.0;
+
+/// Points of a Delaunay set of spacing `h` per point of the lattice rule with the
+/// same triangle rule: measured 0.86 on the plate with a hole (21 930 of 25 500 at m = 6,
+/// 245 592 of 283 800 at m = 10; the fill makes fewer than two triangles per `h^2`).
+const DELAUNAY_DENSITY: f64 = 0.87;
+
+/// A peridynamic run with `params` on the domain of `case`: `nodes_per_cell / h^2`
+/// nodes per unit area (the rule's points in a lattice cell of side `h = delta / m`;
+/// [`DELAUNAY_DENSITY`] of it on a Delaunay set), each with `pi m^2` cells' worth of
+/// bonds.
 pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     let h = params.horizon / params.ratio;
-    let nodes = case.domain.area_estimate(400) / (h * h);
-    let per_node = std::f64::consts::PI * params.ratio * params.ratio;
+    let delaunay = if params.points == PointSet::Delaunay { DELAUNAY_DENSITY } else { 1.0 };
+    let density = params.nodes_per_cell() as f64 * delaunay;
+    let nodes = case.domain.area_estimate(400) / (h * h) * density;
+    let per_node = std::f64::consts::PI * params.ratio * params.ratio * density;
     let bonds = nodes * per_node;
     let bond_nonzeros = 4.0 * nodes * (per_node + 1.0);
     // The solid's dilatation is applied by its product when the solver runs GMRES with
@@ -248,7 +272,14 @@ pub fn peridynamics(case: &Case, params: &PdParams) -> MemoryEstimate {
     // pd_manufactured: 152 MB measured, 230 MB when they were counted with the
     // solver); a dynamic run keeps its families through the time loop. The
     // dilatation's stay through both.
-    let run = if case.dynamics.is_some() { bonds * 32.0 + solve } else { (bonds * 32.0 + 12.0 * nonzeros).max(solve) };
+    // An explicit run solves nothing: its peak is its bonds'.
+    let run = if case.dynamics.is_some() {
+        let per_bond = if params.quadrature == Quadrature::Compatible { DYNAMIC_COMPATIBLE_BYTES_PER_BOND } else { DYNAMIC_BYTES_PER_BOND };
+        let breaking = if params.fracture.is_some() { BREAKING_BYTES_PER_BOND } else { 0.0 };
+        bonds * (per_bond + breaking)
+    } else {
+        (bonds * 32.0 + 12.0 * nonzeros).max(solve)
+    };
     let peak_bytes = run + dilatation + BASE_BYTES;
     MemoryEstimate { nodes, unknowns: 2.0 * nodes, nonzeros, bonds: Some(bonds), peak_bytes, driver: "peridynamics.horizon" }
 }
@@ -261,14 +292,16 @@ pub fn of(p: &Problem) -> MemoryEstimate {
             // The local-model estimate's Navier run comes after the nonlocal one (none
             // where bonds break: such runs have no estimate).
             if p.navier.estimate.method.peridynamics_estimates() && pd.fracture.is_none() {
-                e.peak_bytes = e.peak_bytes.max(of(&p.local_reference()).peak_bytes);
+                let local = of(&p.local_reference()).peak_bytes;
                 // The discretisation estimate: the run at twice m (four times the nodes
-                // and the bonds per node), after the run: a static run's, and a dynamic
-                // one's below m = 6 (from m = 6 it takes the run at m / 2).
-                if p.case.dynamics.is_none() || pd.ratio < 6.0 {
-                    let fine = PdParams { ratio: 2.0 * pd.ratio, ..*pd };
-                    e.peak_bytes = e.peak_bytes.max(peridynamics(&p.case, &fine).peak_bytes);
-                }
+                // and the bonds per node): a static run's, and a dynamic one's below
+                // m = 6 (from m = 6 it takes the run at m / 2).
+                let ratio = if p.case.dynamics.is_none() || pd.ratio < 6.0 { 2.0 * pd.ratio } else { 0.5 * pd.ratio };
+                let discretisation = peridynamics(&p.case, &PdParams { ratio, ..*pd }).peak_bytes;
+                // Each runs after the other while the run's own arrays are still held
+                // (measured: the explicit steel plate at delta = 0.05, 25 MB through the
+                // time loop and 40 MB with the local model's run beside it).
+                e.peak_bytes += local.max(discretisation) - BASE_BYTES;
             }
             e
         }

@@ -34,7 +34,7 @@ pub fn energy_drift(energies: &[EnergyRow]) -> f64 {
 /// and the energy drift ([`energy_drift`]) above `threshold` is warned, unless
 /// `loads_vary` (loads that depend on time do work, so the total is not conserved: a
 /// note says the check was not made).
-pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool, estimate: &Estimate, horizon: Option<f64>) -> Checks {
+pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool, estimate: &Estimate, (horizon, integrator): (Option<f64>, Integrator)) -> Checks {
     let mut checks = Checks::default();
     match horizon {
         Some(horizon) => estimate_of_peridynamics(estimate, threshold, horizon, true, &mut checks),
@@ -66,11 +66,16 @@ pub fn dynamic(energies: &[EnergyRow], threshold: f64, loads_vary: bool, estimat
     }
     let drift = energy_drift(energies);
     if exceeds(drift, threshold) {
+        // RK4 is offered unless the run already takes it.
+        let remedy = match integrator {
+            Integrator::Rk4 => "try a smaller dynamics.time_step (or dynamics.safety)",
+            _ => "try dynamics.integrator = \"rk4\" or a smaller dynamics.time_step",
+        };
         checks.warnings.push(Warning {
             check: "energy-drift",
             message: format!(
                 "the total energy changed by up to {drift:.1e} of its scale over the run (threshold {threshold:.0e}): \
-                 the time integration is inaccurate; try dynamics.integrator = \"rk4\" or a smaller dynamics.time_step"
+                 the time integration is inaccurate; {remedy}"
             ),
         });
     }
@@ -195,12 +200,17 @@ mod tests {
             (0..50).map(|k| (k as f64 * 0.1).sin()).map(|s| [0.0, 100.0 * s * s, 100.0 * (1.0 - s * s), 0.0, 0.0, 0.0]).collect();
         assert!(energy_drift(&conserved) < 1e-14);
         let off = Estimate::Off;
-        assert!(dynamic(&conserved, 1e-2, false, &off, None).warnings.is_empty());
+        assert!(dynamic(&conserved, 1e-2, false, &off, (None, Integrator::Verlet)).warnings.is_empty());
         let mut wandering = conserved.clone();
         wandering[20][1] += 3.0;
         assert!((energy_drift(&wandering) - 3.0 / 103.0).abs() < 1e-3 * 0.03, "{}", energy_drift(&wandering));
-        assert_eq!(dynamic(&wandering, 1e-2, false, &off, None).warnings[0].check, "energy-drift");
-        let varying = dynamic(&wandering, 1e-2, true, &off, None);
+        let drifted = dynamic(&wandering, 1e-2, false, &off, (None, Integrator::Verlet));
+        assert_eq!(drifted.warnings[0].check, "energy-drift");
+        assert!(drifted.warnings[0].message.contains("integrator = \"rk4\""));
+        // A run that takes RK4 already is not offered it.
+        let rk4 = dynamic(&wandering, 1e-2, false, &off, (None, Integrator::Rk4));
+        assert!(rk4.warnings[0].message.contains("smaller dynamics.time_step") && !rk4.warnings[0].message.contains("integrator"));
+        let varying = dynamic(&wandering, 1e-2, true, &off, (None, Integrator::Verlet));
         assert!(varying.warnings.is_empty() && varying.notes.iter().any(|n| n.contains("no energy check")), "{:?}", varying.notes);
     }
 }
