@@ -140,11 +140,10 @@ impl PdDynamics<'_> {
 
     /// `V_i` times the bond force density at every free node ([`Pairs::sum`]), over the
     /// `live` bonds where bonds break, recording the bonds at the critical stretch
-    /// ([`super::fracture`]). The test is a little wide (1e-12), so that no bond
-    /// [`PdDynamics::bond_energy`] finds at `s0` is left out; under the linear law a
-    /// per-node screen `c p >= T_i` (one compare per bond on the product the force
-    /// needs anyway) flags every live bond at `s0` and a few others, and the flagged
-    /// ones get the exact test.
+    /// ([`super::fracture`]): the loop flags them without a branch, and the flagged
+    /// ones are confirmed by [`PdDynamics::bond_force`]'s test. The test is a little
+    /// wide (1e-12), so that no bond [`PdDynamics::bond_energy`] finds at `s0` is left
+    /// out.
     fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> Vec<[f64; 2]> {
         let pairs = self.pairs;
         let nodes = self.nodes();
@@ -152,7 +151,7 @@ impl PdDynamics<'_> {
         let c = live.map_or(self.bonds.coefficients, |l| &l.coefficients);
         let breaking = self.breaking.filter(|b| b.critical_stretch.is_finite());
         let s0 = breaking.map_or(f64::INFINITY, |b| b.critical_stretch * (1.0 - 1e-12));
-        let at = PairState { positions: x, u, prescribed: &loads.prescribed, coefficients: c, volumes, screen: breaking.map_or(&[], |b| &b.screen) };
+        let at = PairState { positions: x, u, prescribed: &loads.prescribed, coefficients: c, volumes };
         let at_s0 = |i: usize, b: usize| {
             let (xi, eta) = bond_vectors(x, u, &loads.prescribed, i, families.neighbour(b) as usize);
             self.bond_force(c[b], xi, eta, s0).1
@@ -161,7 +160,7 @@ impl PdDynamics<'_> {
             (BondForce::Linear, None) => pairs.sum(
                 families,
                 &at,
-                |c, xi, eta, vi, _| {
+                |c, xi, eta, vi| {
                     let vcp = vi * c * (xi[0] * eta[0] + xi[1] * eta[1]);
                     ([vcp * xi[0], vcp * xi[1]], false)
                 },
@@ -170,16 +169,18 @@ impl PdDynamics<'_> {
             (BondForce::Linear, Some(_)) => pairs.sum(
                 families,
                 &at,
-                |c, xi, eta, vi, screen| {
-                    let cp = c * (xi[0] * eta[0] + xi[1] * eta[1]);
-                    ([vi * cp * xi[0], vi * cp * xi[1]], cp >= screen * (1.0 - 1e-12))
+                |c, xi, eta, vi| {
+                    let p = xi[0] * eta[0] + xi[1] * eta[1];
+                    let cp = c * p;
+                    // Live and at s0 (a broken bond, c = 0, stays stretched: not flagged).
+                    ([vi * cp * xi[0], vi * cp * xi[1]], (cp != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1])))
                 },
                 at_s0,
             ),
             (BondForce::BondStretch, _) => pairs.sum(
                 families,
                 &at,
-                |c, xi, eta, vi, _| {
+                |c, xi, eta, vi| {
                     let (g, at) = bond_stretch_force(c, xi, eta, s0);
                     ([vi * g[0], vi * g[1]], at)
                 },
@@ -274,7 +275,7 @@ impl PdDynamics<'_> {
             })
             .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
         let c = live.as_deref().map_or(self.bonds.coefficients, |l| &l.coefficients);
-        let at = PairState { positions: &nodes.positions, u, prescribed: &loads.prescribed, coefficients: c, volumes: &nodes.volumes, screen: &[] };
+        let at = PairState { positions: &nodes.positions, u, prescribed: &loads.prescribed, coefficients: c, volumes: &nodes.volumes };
         let el = match self.force {
             BondForce::Linear => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| {
                 let p = xi[0] * eta[0] + xi[1] * eta[1];

@@ -200,11 +200,6 @@ pub struct Breaking {
     released: Mutex<(usize, f64)>,
     /// Bonds broken from the start by the pre-cracks (both directions counted).
     pub precracked: usize,
-    /// Per free node, `T_i = s0 min_b c_b |xi_b|^2` over its bonds (minus infinity when
-    /// a coefficient is not positive): a live bond at the linearised critical stretch
-    /// has `c (xi . eta) >= s0 c |xi|^2 >= T_i`, so `c (xi . eta) < T_i` on every bond
-    /// clears a node with one compare per bond ([`Breaking::screen`]).
-    pub screen: Vec<f64>,
 }
 
 /// The bonds as they stand: per bond of the families, its coefficient `c_ij` (zero once
@@ -228,27 +223,12 @@ impl Breaking {
         let precracked = broken.iter().filter(|&&b| b).count();
         let live_coefficients: Vec<f64> = coefficients.iter().zip(&broken).map(|(&c, &cut)| if cut { 0.0 } else { c }).collect();
         let reached = Mutex::new(Vec::new());
-        let screen = (0..families.len())
-            .into_par_iter()
-            .map(|i| {
-                let at = |j: u32| [x[j as usize][0] - x[i][0], x[j as usize][1] - x[i][1]];
-                families.range(i).zip(families.of(i)).fold(f64::INFINITY, |t, (b, &j)| {
-                    let (c, xi) = (coefficients[b], at(j));
-                    if c > 0.0 {
-                        t.min(critical_stretch * c * (xi[0] * xi[0] + xi[1] * xi[1]))
-                    } else {
-                        f64::NEG_INFINITY
-                    }
-                })
-            })
-            .collect();
         Breaking {
             critical_stretch,
             live: RwLock::new(Live { coefficients: live_coefficients, broken }),
             reached,
             released: Mutex::new((0, 0.0)),
             precracked,
-            screen,
         }
     }
 

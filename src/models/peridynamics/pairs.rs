@@ -86,13 +86,13 @@ impl Pairs {
     }
 
     /// `F_i = sum_{j > i} g_ij - sum_{j < i} g_ji` over the pairs of the state `at`
-    /// (directed: `F_i = sum_j g_ij`), `(g, flag) = law(c_ij, xi, eta, V_i, T_i)` for
+    /// (directed: `F_i = sum_j g_ij`), `(g, flag) = law(c_ij, xi, eta, V_i)` for
     /// bond `b` of node `i` to node `j` (collar nodes take nothing), and the bonds
     /// `(i, b)` that `law` flags and `confirm(i, b)` confirms. Bonds go in blocks of 64 ([`block_sum`]), the flagged
     /// ones of a block confirmed after it.
     pub fn sum<L, C>(&self, families: &Families, at: &PairState, law: L, confirm: C) -> (Vec<[f64; 2]>, Vec<(usize, usize)>)
     where
-        L: Fn(f64, [f64; 2], [f64; 2], f64, f64) -> ([f64; 2], bool) + Sync,
+        L: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool) + Sync,
         C: Fn(usize, usize) -> bool + Sync,
     {
         let free = self.first.len();
@@ -178,7 +178,7 @@ fn node_energy(at: PairState, (i, start, js): (usize, usize, &[u32]), directed: 
 
 /// What [`Pairs::sum`] reads: node positions, the free nodes' displacements
 /// (interleaved), the collar's prescribed ones (node `free + k` is `prescribed[k]`), the
-/// bond coefficients, the volumes and a per-node screen (empty: none).
+/// bond coefficients and the volumes.
 #[derive(Clone, Copy)]
 pub struct PairState<'a> {
     /// Positions of all nodes.
@@ -191,8 +191,6 @@ pub struct PairState<'a> {
     pub coefficients: &'a [f64],
     /// `V_i` per node.
     pub volumes: &'a [f64],
-    /// `T_i` per free node, handed to the law (empty: infinity).
-    pub screen: &'a [f64],
 }
 
 /// The sum of `law`'s forces over bonds `start + k` of node `i` to `js[k]` (at most 64),
@@ -206,17 +204,17 @@ fn block_sum<const SCATTER: bool>(
     at: PairState,
     (i, start, js): (usize, usize, &[u32]),
     force: &mut [[f64; 2]],
-    law: &impl Fn(f64, [f64; 2], [f64; 2], f64, f64) -> ([f64; 2], bool),
+    law: &impl Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool),
 ) -> ([f64; 2], u64) {
-    let PairState { positions: x, u, prescribed, coefficients, volumes, screen } = at;
+    let PairState { positions: x, u, prescribed, coefficients, volumes } = at;
     let free = x.len() - prescribed.len();
-    let (xi, ui, vi, ti) = (x[i], [u[2 * i], u[2 * i + 1]], volumes[i], screen.get(i).copied().unwrap_or(f64::INFINITY));
+    let (xi, ui, vi) = (x[i], [u[2 * i], u[2 * i + 1]], volumes[i]);
     let c = &coefficients[start..start + js.len()];
     let (mut f, mut flags) = ([0.0, 0.0], 0u64);
     for (k, (&j, &c)) in js.iter().zip(c).enumerate() {
         let j = j as usize;
         let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - free] };
-        let (g, flag) = law(c, [x[j][0] - xi[0], x[j][1] - xi[1]], [uj[0] - ui[0], uj[1] - ui[1]], vi, ti);
+        let (g, flag) = law(c, [x[j][0] - xi[0], x[j][1] - xi[1]], [uj[0] - ui[0], uj[1] - ui[1]], vi);
         f[0] += g[0];
         f[1] += g[1];
         if let Some(fj) = force.get_mut(j).filter(|_| SCATTER) {
@@ -258,8 +256,8 @@ mod tests {
         assert!(!pairs.directed(), "V_i c_ij = V_i V_j / |xi|^3 is symmetric");
         let u: Vec<f64> = x[..nodes.free].iter().flat_map(|p| [(3.0 * p[0]).sin(), p[0] * p[1]]).collect();
         let prescribed: Vec<[f64; 2]> = x[nodes.free..].iter().map(|p| [0.1 * p[1], -0.2 * p[0]]).collect();
-        let at = PairState { positions: x, u: &u, prescribed: &prescribed, coefficients: &c, volumes: &nodes.volumes, screen: &[] };
-        let law = |c: f64, xi: [f64; 2], eta: [f64; 2], vi: f64, _: f64| {
+        let at = PairState { positions: x, u: &u, prescribed: &prescribed, coefficients: &c, volumes: &nodes.volumes };
+        let law = |c: f64, xi: [f64; 2], eta: [f64; 2], vi: f64| {
             let p = xi[0] * eta[0] + xi[1] * eta[1];
             ([vi * c * p * xi[0], vi * c * p * xi[1]], p > 0.0)
         };
@@ -270,7 +268,7 @@ mod tests {
             for (b, &j) in families.range(i).zip(families.of(i)) {
                 let j = j as usize;
                 let (uj, ui) = (displacement(j), displacement(i));
-                let (g, _) = law(c[b], [x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]], nodes.volumes[i], 0.0);
+                let (g, _) = law(c[b], [x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]], nodes.volumes[i]);
                 f = [f[0] + g[0], f[1] + g[1]];
             }
             f
