@@ -153,7 +153,7 @@ impl PdDynamics<'_> {
         let s0 = breaking.map_or(f64::INFINITY, |b| b.critical_stretch * (1.0 - 1e-12));
         let at = PairState { positions: x, u, prescribed: &loads.prescribed, coefficients: c, volumes };
         let at_s0 = |i: usize, b: usize| {
-            let (xi, eta) = bond_vectors(x, u, &loads.prescribed, i, families.neighbour(b) as usize);
+            let (xi, eta) = self.bond_vectors(u, loads, i, b);
             self.bond_force(c[b], xi, eta, s0).1
         };
         let (forces, reached) = match (self.force, breaking) {
@@ -212,10 +212,7 @@ impl PdDynamics<'_> {
     /// The micropotential `w` of a bond with coefficient `c` (module docs), and its stretch.
     fn bond_energy(&self, c: f64, xi: [f64; 2], eta: [f64; 2]) -> (f64, f64) {
         match self.force {
-            BondForce::Linear => {
-                let p = xi[0] * eta[0] + xi[1] * eta[1];
-                (0.5 * c * p * p, p / (xi[0] * xi[0] + xi[1] * xi[1]))
-            }
+            BondForce::Linear => linear_energy(c, xi, eta),
             BondForce::BondStretch => bond_stretch_energy(c, xi, eta),
         }
     }
@@ -277,10 +274,7 @@ impl PdDynamics<'_> {
         let c = live.as_deref().map_or(self.bonds.coefficients, |l| &l.coefficients);
         let at = PairState { positions: &nodes.positions, u, prescribed: &loads.prescribed, coefficients: c, volumes: &nodes.volumes };
         let el = match self.force {
-            BondForce::Linear => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| {
-                let p = xi[0] * eta[0] + xi[1] * eta[1];
-                0.5 * c * p * p
-            }),
+            BondForce::Linear => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| linear_energy(c, xi, eta).0),
             BondForce::BondStretch => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| bond_stretch_energy(c, xi, eta).0),
         };
         let dilatation = self.theta(u, &loads).map_or(0.0, |theta| self.dilatation.map_or(0.0, |d| d.energy(nodes, &theta)));
@@ -317,9 +311,7 @@ impl PdDynamics<'_> {
 
     /// `(xi, eta)` of bond `b` of free node `k`.
     fn bond_vectors(&self, u: &[f64], loads: &Instant, k: usize, b: usize) -> ([f64; 2], [f64; 2]) {
-        let j = self.bonds.families.neighbour(b) as usize;
-        let (x, uk, uj) = (&self.nodes().positions, self.displacement(u, loads, k), self.displacement(u, loads, j));
-        ([x[j][0] - x[k][0], x[j][1] - x[k][1]], [uj[0] - uk[0], uj[1] - uk[1]])
+        bond_vectors(&self.nodes().positions, u, &loads.prescribed, k, self.bonds.families.neighbour(b) as usize)
     }
 }
 
@@ -334,6 +326,14 @@ fn bond_stretch_force(c: f64, xi: [f64; 2], eta: [f64; 2], s0: f64) -> ([f64; 2]
     // c |xi|^3 s / |xi + eta|, s = (|xi + eta| - |xi|) / |xi|.
     let k = c * r2 * (ry - r) / ry;
     ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= s0 * r))
+}
+
+/// The linear law's micropotential `c (xi . eta)^2 / 2` (module docs) and the linearised
+/// stretch `xi . eta / |xi|^2`.
+#[inline(always)]
+fn linear_energy(c: f64, xi: [f64; 2], eta: [f64; 2]) -> (f64, f64) {
+    let p = xi[0] * eta[0] + xi[1] * eta[1];
+    (0.5 * c * p * p, p / (xi[0] * xi[0] + xi[1] * xi[1]))
 }
 
 /// The bond-stretch micropotential `c |xi|^4 s^2 / 2` (module docs) and the stretch `s`.
