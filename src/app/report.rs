@@ -162,7 +162,7 @@ mod tests {
     use crate::models::dynamics::Integrator;
 
     fn report(integrator: Integrator, time_step: f64) -> DynamicReport {
-        DynamicReport { integrator, time_step, stable_time_step: 6.655e-6, steps: 133, force_evaluations: 1, seconds: 0.1 }
+        DynamicReport { integrator, time_step, stable_time_step: 6.655e-6, steps: 133, force_evaluations: 1, seconds: 0.1, median_step_seconds: 1e-3 }
     }
 
     /// The step is printed against its own scheme's limit, never against a smaller

@@ -25,6 +25,9 @@ pub struct DynamicReport {
     pub force_evaluations: usize,
     /// Wall-clock seconds of the stepping (energies and snapshots excluded).
     pub seconds: f64,
+    /// The median step's wall-clock seconds: a step's cost with the pauses a loaded
+    /// machine puts into a few steps left out (`seconds / steps` counts them).
+    pub median_step_seconds: f64,
 }
 
 /// The state handed to a snapshot writer: nodal displacement and velocity at step
@@ -138,8 +141,9 @@ pub fn history_steps(steps: usize) -> Vec<usize> {
 /// Integrate `system` from `state` over `grid` with the scheme of `params`, calling
 /// `visit` at the steps [`is_snapshot`] picks and at the steps `also` (sorted; the
 /// callback tells them apart; `(grid, also)` is the schedule), and recording `energies` (kinetic,
-/// elastic, external) every [`energy_every`]-th step, at the last one and at every step
-/// where [`SecondOrderSystem::settle`] changed the forces (bonds broke). The loop is the [`INTEGRATE`] stage
+/// elastic, external) every [`energy_every`]-th step, at the last one and at the first
+/// step where [`SecondOrderSystem::settle`] changed the forces (the first bonds broke; a
+/// row at every such step cost a step's time again where a plate shatters). The loop is the [`INTEGRATE`] stage
 /// of `timer`, interruptible by Ctrl-C between steps (`pipeline::interrupt`). Returns
 /// the report and the history.
 pub fn integrate(
@@ -165,8 +169,9 @@ pub fn integrate(
     }
     let progress = timer.progress();
     let _listening = interrupt::Interruptible::listen();
-    let looped = timer.run(INTEGRATE, || {
-        let mut looped = 0.0;
+    let (looped, median_step_seconds) = timer.run(INTEGRATE, || {
+        let (mut looped, mut broken) = (0.0, false);
+        let mut step_seconds = Vec::with_capacity(steps);
         for step in 1..=steps {
             if interrupt::requested() {
                 return Err(RunError::Interrupted { step, t: state.t, signal: interrupt::signal() });
@@ -174,12 +179,15 @@ pub fn integrate(
             let ts = std::time::Instant::now();
             let t0 = state.t;
             params.integrator.step(system, state, dt);
-            let changed = system.settle(state);
-            looped += ts.elapsed().as_secs_f64();
+            let first_break = system.settle(state) && !broken;
+            broken |= first_break;
+            let took = ts.elapsed().as_secs_f64();
+            looped += took;
+            step_seconds.push(took as f32);
             if state.u.iter().chain(&state.a).any(|v| !v.is_finite()) {
                 return Err(system.explain(t0, state.t).unwrap_or(RunError::Diverged { step, t: state.t }));
             }
-            if step % energy_every == 0 || step == steps || changed {
+            if step % energy_every == 0 || step == steps || first_break {
                 record(state, &mut history);
             }
             if visited(step) {
@@ -187,7 +195,9 @@ pub fn integrate(
             }
             progress.advance(step as u64, steps as u64, "steps");
         }
-        Ok((looped, format!("{steps} steps")))
+        let middle = step_seconds.len() / 2;
+        let median = if step_seconds.is_empty() { 0.0 } else { f64::from(*step_seconds.select_nth_unstable_by(middle, f32::total_cmp).1) };
+        Ok(((looped, median), format!("{steps} steps")))
     })?;
     let report = DynamicReport {
         integrator: params.integrator,
@@ -196,6 +206,7 @@ pub fn integrate(
         steps,
         force_evaluations: 1 + steps * params.integrator.evaluations(),
         seconds: looped,
+        median_step_seconds,
     };
     Ok((report, history))
 }

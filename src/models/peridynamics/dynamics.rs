@@ -20,6 +20,7 @@
 //! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
 //! [`crate::models::dynamics::Integrator::stability_factor`].
 
+use super::block::Layout;
 use super::dilatation::Dilatation;
 use super::family::Families;
 use super::loads::LoadLayer;
@@ -28,7 +29,7 @@ use super::operator::Bonds;
 use super::pairs::{PairState, Pairs};
 use super::{strain, BondForce};
 use crate::physics::case::Case;
-use super::fracture::{Breaking, Live};
+use super::fracture::{Breaking, Live, SERIAL_BELOW};
 use crate::models::dynamics::driver::Energies;
 use crate::models::dynamics::{SecondOrderSystem, State};
 use crate::physics::elasticity::dofs::DofMap;
@@ -40,6 +41,7 @@ use rayon::prelude::*;
 use std::borrow::Cow;
 
 /// The semi-discrete peridynamic system of one discretisation.
+#[derive(Clone, Copy)]
 pub struct PdDynamics<'a> {
     /// Bonds and their coefficients.
     pub bonds: Bonds<'a>,
@@ -62,6 +64,7 @@ pub struct PdDynamics<'a> {
 
 /// Loads that depend on time: the body force densities of the free nodes and the
 /// prescribed displacements of the collar, evaluated at every force evaluation.
+#[derive(Clone, Copy)]
 pub struct VaryingLoads<'a> {
     /// The case (body force, boundary conditions).
     pub case: &'a Case,
@@ -140,10 +143,9 @@ impl PdDynamics<'_> {
 
     /// `V_i` times the bond force density at every free node ([`Pairs::sum`]), over the
     /// `live` bonds where bonds break, recording the bonds at the critical stretch
-    /// ([`super::fracture`]): the loop flags them without a branch, and the flagged
-    /// ones are confirmed by [`PdDynamics::bond_force`]'s test. The test is a little
-    /// wide (1e-12), so that no bond [`PdDynamics::bond_energy`] finds at `s0` is left
-    /// out.
+    /// ([`super::fracture`]): the loop flags them without a branch by
+    /// [`PdDynamics::bond_force`]'s test. The test is a little wide (1e-12), so that no
+    /// bond [`PdDynamics::bond_energy`] finds at `s0` is left out.
     fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> Vec<[f64; 2]> {
         let pairs = self.pairs;
         let nodes = self.nodes();
@@ -152,39 +154,41 @@ impl PdDynamics<'_> {
         let breaking = self.breaking.filter(|b| b.critical_stretch.is_finite());
         let s0 = breaking.map_or(f64::INFINITY, |b| b.critical_stretch * (1.0 - 1e-12));
         let at = PairState { positions: x, u, prescribed: &loads.prescribed, coefficients: c, volumes };
-        let at_s0 = |i: usize, b: usize| {
-            let (xi, eta) = self.bond_vectors(u, loads, i, b);
-            self.bond_force(c[b], xi, eta, s0).1
-        };
         let (forces, reached) = match (self.force, breaking) {
             (BondForce::Linear, None) => pairs.sum(
                 families,
                 &at,
-                |c, xi, eta, vi| {
-                    let vcp = vi * c * (xi[0] * eta[0] + xi[1] * eta[1]);
-                    ([vcp * xi[0], vcp * xi[1]], false)
-                },
-                |_, _| false,
+                (
+                    |c, xi: [f64; 2], eta: [f64; 2], vi| {
+                        let vcp = vi * c * (xi[0] * eta[0] + xi[1] * eta[1]);
+                        ([vcp * xi[0], vcp * xi[1]], false)
+                    },
+                    Layout::Fused,
+                ),
             ),
             (BondForce::Linear, Some(_)) => pairs.sum(
                 families,
                 &at,
-                |c, xi, eta, vi| {
-                    let p = xi[0] * eta[0] + xi[1] * eta[1];
-                    let cp = c * p;
-                    // Live and at s0 (a broken bond, c = 0, stays stretched: not flagged).
-                    ([vi * cp * xi[0], vi * cp * xi[1]], (cp != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1])))
-                },
-                at_s0,
+                (
+                    |c, xi: [f64; 2], eta: [f64; 2], vi| {
+                        let p = xi[0] * eta[0] + xi[1] * eta[1];
+                        let cp = c * p;
+                        // Live and at s0 (a broken bond, c = 0, stays stretched: not flagged).
+                        ([vi * cp * xi[0], vi * cp * xi[1]], (cp != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1])))
+                    },
+                    Layout::Fused,
+                ),
             ),
             (BondForce::BondStretch, _) => pairs.sum(
                 families,
                 &at,
-                |c, xi, eta, vi| {
-                    let (g, at) = bond_stretch_force(c, xi, eta, s0);
-                    ([vi * g[0], vi * g[1]], at)
-                },
-                at_s0,
+                (
+                    |c, xi, eta, vi| {
+                        let (g, at) = bond_stretch_force(c, xi, eta, s0);
+                        ([vi * g[0], vi * g[1]], at)
+                    },
+                    Layout::Columns,
+                ),
             ),
         };
         if let Some(breaking) = breaking.filter(|_| !reached.is_empty()) {
@@ -283,35 +287,41 @@ impl PdDynamics<'_> {
     }
 
     /// Break the bonds whose stretch at `state` is at least the critical one, both
-    /// directions at once, among those the last force evaluation found there
+    /// directions at once, among the `candidates` the last force evaluation found there
     /// ([`super::fracture`]); the energy a pair held (`V_i w_ij / 2 + V_j w_ji / 2`, its
-    /// share of `E_el`) is released. The bonds broken, `(node, bond, coefficient)`.
-    fn break_bonds(&self, breaking: &Breaking, candidates: &[(usize, usize)], state: &State, loads: &Instant) -> Vec<(usize, usize, f64)> {
+    /// share of `E_el`) is released. Each bond is read once: its reverse is `(-xi,
+    /// -eta)` (the laws' `w` are even, their forces odd). The bonds broken, each seen
+    /// from its node: `(node, coefficient, xi, eta)`.
+    fn break_bonds(&self, breaking: &Breaking, candidates: &[(usize, usize)], state: &State, loads: &Instant) -> Vec<(usize, f64, [f64; 2], [f64; 2])> {
         let (nodes, families) = (self.nodes(), self.bonds.families);
         let s0 = breaking.critical_stretch;
-        let found: Vec<(usize, usize, usize)> = {
+        // Per bond at s0: its two ends `(node, bond, xi, eta)`, the reverse when `j` is free.
+        type End = (usize, usize, [f64; 2], [f64; 2]);
+        let ends: Vec<End> = {
             let live = breaking.live();
-            candidates
-                .par_iter()
-                .filter(|&&(i, b)| {
-                    let c = live.coefficients[b];
-                    let (xi, eta) = self.bond_vectors(&state.u, loads, i, b);
-                    c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0
-                })
-                .map(|&(i, b)| (i, families.neighbour(b) as usize, b))
-                .collect()
+            let ends_of = |&(i, b): &(usize, usize)| {
+                let (c, j) = (live.coefficients[b], families.neighbour(b) as usize);
+                let (xi, eta) = bond_vectors(&nodes.positions, &state.u, &loads.prescribed, i, j);
+                let at = c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0;
+                let reverse = (at && j < nodes.free)
+                    .then(|| families.of(j).binary_search(&(i as u32)).ok())
+                    .flatten()
+                    .map(|p| (j, families.range(j).start + p, [-xi[0], -xi[1]], [-eta[0], -eta[1]]));
+                at.then_some((i, b, xi, eta)).into_iter().chain(reverse)
+            };
+            if candidates.len() < SERIAL_BELOW {
+                candidates.iter().flat_map(ends_of).collect()
+            } else {
+                candidates.par_iter().flat_map_iter(ends_of).collect()
+            }
         };
-        // Bond `b` of free node `k` with coefficient `c`, before it breaks: its share of E_el.
-        let share = |k: usize, b: usize, c: f64| {
-            let (xi, eta) = self.bond_vectors(&state.u, loads, k, b);
-            0.5 * nodes.volumes[k] * self.bond_energy(c, xi, eta).0
+        let bonds: Vec<(usize, usize)> = ends.iter().map(|e| (e.0, e.1)).collect();
+        let held = |k: usize, c: f64| {
+            let (n, _, xi, eta) = ends[k];
+            0.5 * nodes.volumes[n] * self.bond_energy(c, xi, eta).0
         };
-        breaking.break_bonds(families, &found, nodes.free, &share)
-    }
-
-    /// `(xi, eta)` of bond `b` of free node `k`.
-    fn bond_vectors(&self, u: &[f64], loads: &Instant, k: usize, b: usize) -> ([f64; 2], [f64; 2]) {
-        bond_vectors(&self.nodes().positions, u, &loads.prescribed, k, self.bonds.families.neighbour(b) as usize)
+        let coefficients = breaking.break_bonds(&bonds, &held);
+        ends.iter().zip(coefficients).filter_map(|(&(n, _, xi, eta), c)| c.map(|c| (n, c, xi, eta))).collect()
     }
 }
 
@@ -393,8 +403,7 @@ impl SecondOrderSystem for PdDynamics<'_> {
         let loads = self.loads(state.t);
         let dofs = self.dofs();
         let broken = self.break_bonds(breaking, &candidates, state, &loads);
-        for &(k, b, c) in &broken {
-            let (xi, eta) = self.bond_vectors(&state.u, &loads, k, b);
+        for &(k, c, xi, eta) in &broken {
             let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
             state.a[dofs.dof(k, 0)] -= g[0] / self.density;
             state.a[dofs.dof(k, 1)] -= g[1] / self.density;

@@ -183,6 +183,11 @@ fn segments_cross(p0: Point, p1: Point, q0: Point, q1: Point) -> bool {
         || (d4 == 0.0 && within(p0, p1, q1))
 }
 
+/// Bonds at the critical stretch below which a step's breaking runs on one thread: waking
+/// the pool costs tens of microseconds, about what a few hundred bonds cost
+/// (docs/notebook/2026-11-30-block-kernels.md).
+pub const SERIAL_BELOW: usize = 512;
+
 /// The bonds of a dynamic run that break: their coefficients while they hold (zero once
 /// broken), which free nodes had a bond at the critical stretch at the last force
 /// evaluation, and what breaking released.
@@ -256,45 +261,31 @@ impl Breaking {
         c
     }
 
-    /// Break each bond `(i, j, b)` (bond `b` of node `i` to `j`) and its reverse in `j`'s
-    /// family when `j` is free, releasing `share(k, b, c)` (the energy bond `b` of node
-    /// `k` with coefficient `c` held) of each: the bonds broken, `(node, bond,
-    /// coefficient)`, each once.
-    pub fn break_bonds(
-        &self,
-        families: &Families,
-        bonds: &[(usize, usize, usize)],
-        free: usize,
-        share: &(dyn Fn(usize, usize, f64) -> f64 + Sync),
-    ) -> Vec<(usize, usize, f64)> {
-        // The reverse bonds are found in parallel, the bonds marked in one pass under the
-        // lock, and their energies summed in parallel again.
-        // Per bond: `(node, bond)` and its reverse `(node, bond)` when the other end is free.
-        type Pair = ((usize, usize), Option<(usize, usize)>);
-        let pairs: Vec<Pair> = bonds
-            .par_iter()
-            .map(|&(i, j, b)| {
-                let reverse = (j < free)
-                    .then(|| families.of(j).binary_search(&(i as u32)).ok().map(|p| (j, families.range(j).start + p)))
-                    .flatten();
-                ((i, b), reverse)
-            })
-            .collect();
-        let mut gone = Vec::new();
-        {
+    /// Break each bond `(node, bond)` of `bonds` that is not broken yet, releasing
+    /// `held(k, c)` (the energy bond `bonds[k]` with coefficient `c` held): per bond, its
+    /// coefficient when this call broke it.
+    pub fn break_bonds(&self, bonds: &[(usize, usize)], held: &(dyn Fn(usize, f64) -> f64 + Sync)) -> Vec<Option<f64>> {
+        let gone: Vec<Option<f64>> = {
             let mut live = self.live.write().expect("no panic holds it");
-            for &(forward, reverse) in &pairs {
-                for (k, bond) in std::iter::once(forward).chain(reverse) {
-                    if !live.broken[bond] {
-                        gone.push((k, bond, live.coefficients[bond]));
+            bonds
+                .iter()
+                .map(|&(_, bond)| {
+                    (!live.broken[bond]).then(|| {
+                        let c = live.coefficients[bond];
                         (live.broken[bond], live.coefficients[bond]) = (true, 0.0);
-                    }
-                }
-            }
-        }
-        let energy: f64 = gone.par_iter().map(|&(k, bond, c)| share(k, bond, c)).sum();
+                        c
+                    })
+                })
+                .collect()
+        };
+        let energy_of = |(k, c): (usize, &Option<f64>)| c.map(|c| held(k, c));
+        let (count, energy) = if gone.len() < SERIAL_BELOW {
+            gone.iter().enumerate().filter_map(energy_of).fold((0, 0.0), |(n, e), w| (n + 1, e + w))
+        } else {
+            gone.par_iter().enumerate().filter_map(energy_of).fold(|| (0, 0.0), |(n, e), w| (n + 1, e + w)).reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
+        };
         let mut r = self.released.lock().expect("no panic holds it");
-        r.0 += gone.len();
+        r.0 += count;
         r.1 += energy;
         gone
     }

@@ -22,10 +22,12 @@
 //! (fictitious nodes at traction and free edges), [`stiffness`] (the static system and
 //! its solve, the dilatation assembled or applied), [`solve`] (the static run),
 //! [`discretisation`] (its estimated discretisation error at the same horizon),
-//! [`dynamics`] (bond forces, energies, stable step), [`fracture`] (bonds that break,
+//! [`dynamics`] (bond forces, energies, stable step), [`pairs`] (the force loop over
+//! bond pairs) and [`block`] (its kernels over blocks of bonds), [`fracture`] (bonds that break,
 //! pre-cracks, damage) and [`simulation`] (the time-dependent run).
 
 pub mod assembly;
+pub mod block;
 pub mod body;
 pub mod compatible;
 pub mod dilatation;

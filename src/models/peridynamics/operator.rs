@@ -16,6 +16,7 @@ use crate::linalg::Csr;
 use rayon::prelude::*;
 
 /// Families with their bond coefficients.
+#[derive(Clone, Copy)]
 pub struct Bonds<'a> {
     /// Nodes (positions, volumes, constrained values).
     pub nodes: &'a PdNodes,

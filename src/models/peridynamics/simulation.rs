@@ -9,7 +9,7 @@ use super::loads::LoadLayer;
 use super::pairs::Pairs;
 use super::solve::Discretisation;
 use super::PdParams;
-use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot};
+use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot, TimeGrid};
 use crate::models::dynamics::history::TimeSamples;
 use crate::models::dynamics::{DynamicsParams, State};
 use crate::physics::case::Case;
@@ -83,8 +83,71 @@ pub fn simulate_sampled(
     mut snapshot: impl FnMut(Snapshot) -> Result<(), RunError>,
 ) -> Result<Simulation, RunError> {
     let mut timer = StageTimer::new(progress);
+    let (finish, discretisation) = with_system(case, params, dynamics, &mut timer, |system, disc, mut state, grid, timer| {
+        let breaking = system.breaking;
+        let dofs = disc.nodes.dofs();
+        let free = &disc.nodes.positions[..disc.nodes.free];
+        let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
+        let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
+        let samples = if keep_history { TimeSamples::own(grid.steps, grid.dt) } else { TimeSamples::none() };
+        let mut kept = BTreeMap::new();
+        let (report, energies) = integrate(system, &energy, &mut state, (grid, &samples.steps), dynamics, timer, |step, s| {
+            let (u, v) = (nodal(&s.u), nodal(&s.v));
+            if is_snapshot(step, grid.steps, dynamics) {
+                let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
+                let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes.volumes, &disc.families));
+                snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref(), damage: damage.as_deref() })?;
+            }
+            if samples.keeps(step) {
+                kept.insert(step, (s.t, u, v));
+            }
+            Ok(())
+        })?;
+        let history = samples.states(&kept);
+        drop(kept);
+        let throughput =
+            report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
+        let (u, v) = (nodal(&state.u), nodal(&state.v));
+        let fracture = breaking.as_ref().map(|b| {
+            let damage = b.damage(&disc.nodes.volumes, &disc.families);
+            let (broken, released) = b.released();
+            FractureReport {
+                critical_stretch: b.critical_stretch.is_finite().then_some(b.critical_stretch),
+                precracked_bonds: b.precracked,
+                broken_bonds: broken,
+                released_energy: released,
+                damaged_nodes: damage.iter().filter(|&&d| d > 0.0).count(),
+                largest_damage: damage.iter().copied().fold(0.0, f64::max),
+            }
+        });
+        Ok(move |discretisation| Simulation {
+            discretisation,
+            u,
+            v,
+            report,
+            energies,
+            bond_updates_per_second_per_thread: throughput,
+            history,
+            fracture,
+            timings: StageTimings::default(),
+        })
+    })?;
+    Ok(Simulation { timings: timer.finish(), ..finish(discretisation) })
+}
+
+/// Build what a time-dependent run integrates (the discretisation, the loads, the bonds
+/// that break, the force loop's pairs; each a stage of `timer`) and hand `run` the
+/// system, its discretisation, the initial state and the time grid; `run`'s result and
+/// the discretisation back.
+pub fn with_system<R>(
+    case: &Case,
+    params: &PdParams,
+    dynamics: &DynamicsParams,
+    timer: &mut StageTimer,
+    run: impl FnOnce(&PdDynamics, &Discretisation, State, TimeGrid, &mut StageTimer) -> Result<R, RunError>,
+) -> Result<(R, Discretisation), RunError> {
     let exact = case.exact_solution();
-    let disc = Discretisation::new(case, params, exact.as_deref(), &mut timer)?;
+    let disc = Discretisation::new(case, params, exact.as_deref(), timer)?;
     let layer = LoadLayer::new(&case.domain, &case.conditions, &disc.nodes);
     let body_force = layer.forces(&case.body_force, &case.conditions, exact.as_deref(), &disc.nodes)?;
     let varying = case.loads().depend_on_time().then_some(VaryingLoads { case, layer: &layer, exact: exact.as_deref() });
@@ -113,49 +176,7 @@ pub fn simulate_sampled(
         dofs.from_displacements(|i| f.explicit_at(free[i]).expect("validated: an initial state is a constant or an expression"))
     };
     let grid = time_grid(system.stable_time_step(), dynamics)?;
-    let mut state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
-    let nodal = |x: &[f64]| dofs.displacements(x, dofs.nodes());
-    let energy = |s: &State| system.energies(s.t, &s.u, &s.v);
-    let samples = if keep_history { TimeSamples::own(grid.steps, grid.dt) } else { TimeSamples::none() };
-    let mut kept = BTreeMap::new();
-    let (report, energies) = integrate(&system, &energy, &mut state, (grid, &samples.steps), dynamics, &mut timer, |step, s| {
-        let (u, v) = (nodal(&s.u), nodal(&s.v));
-        if is_snapshot(step, grid.steps, dynamics) {
-            let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
-            let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes.volumes, &disc.families));
-            snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref(), damage: damage.as_deref() })?;
-        }
-        if samples.keeps(step) {
-            kept.insert(step, (s.t, u, v));
-        }
-        Ok(())
-    })?;
-    let history = samples.states(&kept);
-    drop(kept);
-    let throughput =
-        report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
-    let (u, v) = (nodal(&state.u), nodal(&state.v));
-    let fracture = breaking.as_ref().map(|b| {
-        let damage = b.damage(&disc.nodes.volumes, &disc.families);
-        let (broken, released) = b.released();
-        FractureReport {
-            critical_stretch: b.critical_stretch.is_finite().then_some(b.critical_stretch),
-            precracked_bonds: b.precracked,
-            broken_bonds: broken,
-            released_energy: released,
-            damaged_nodes: damage.iter().filter(|&&d| d > 0.0).count(),
-            largest_damage: damage.iter().copied().fold(0.0, f64::max),
-        }
-    });
-    Ok(Simulation {
-        discretisation: disc,
-        u,
-        v,
-        report,
-        energies,
-        bond_updates_per_second_per_thread: throughput,
-        history,
-        fracture,
-        timings: timer.finish(),
-    })
+    let state = State::new(&system, 0.0, flat(&dynamics.initial_displacement), flat(&dynamics.initial_velocity));
+    let result = run(&system, &disc, state, grid, timer)?;
+    Ok((result, disc))
 }
