@@ -14,7 +14,6 @@
 //! it. Neither fuses a multiply and an add, and the sums run in bond order in both, so
 //! the results are the same to the bit whichever runs. Measured: docs/notebook/2026-11-30-block-kernels.md.
 
-
 /// Bonds per block (the flags of a block fit a `u64`).
 pub const BLOCK: usize = 64;
 
@@ -95,6 +94,44 @@ pub struct PairState<'a> {
     pub coefficients: &'a [f64],
     /// `V_i` per node.
     pub volumes: &'a [f64],
+}
+
+/// A bond the force loop flagged, with what it read of it: bond `bond` of free node
+/// `node` to `neighbour`, its coefficient and `(xi, eta)`. Read while the block's data
+/// is in the cache, so that the breaking after the step need not fetch it again
+/// ([`super::dynamics`], [`super::pairs::Pairs::sum`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Flagged {
+    /// The free node.
+    pub node: usize,
+    /// The bond, an index into the families.
+    pub bond: usize,
+    /// The node at the bond's other end.
+    pub neighbour: usize,
+    /// `c_ij` as the loop read it.
+    pub coefficient: f64,
+    /// `x_j - x_i`.
+    pub xi: [f64; 2],
+    /// `u_j - u_i` at the evaluated state.
+    pub eta: [f64; 2],
+}
+
+impl Flagged {
+    /// Bond `b` of free node `i` to node `j` at the state `at`.
+    pub(super) fn read(at: &PairState, i: usize, b: usize, j: usize) -> Flagged {
+        let PairState { positions: x, u, prescribed, coefficients, .. } = *at;
+        let free = x.len() - prescribed.len();
+        let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - free] };
+        let ui = [u[2 * i], u[2 * i + 1]];
+        Flagged {
+            node: i,
+            bond: b,
+            neighbour: j,
+            coefficient: coefficients[b],
+            xi: [x[j][0] - x[i][0], x[j][1] - x[i][1]],
+            eta: [uj[0] - ui[0], uj[1] - ui[1]],
+        }
+    }
 }
 
 /// One block's bonds as columns: `xi` and `eta` in, the law's `g` and flag out.

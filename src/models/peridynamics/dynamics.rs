@@ -26,7 +26,7 @@ use super::family::Families;
 use super::loads::LoadLayer;
 use super::nodes::PdNodes;
 use super::operator::Bonds;
-use super::pairs::{PairState, Pairs};
+use super::pairs::{Flagged, PairState, Pairs};
 use super::{strain, BondForce};
 use crate::physics::case::Case;
 use super::fracture::{Breaking, Live, SERIAL_BELOW};
@@ -146,7 +146,7 @@ impl PdDynamics<'_> {
     /// ([`super::fracture`]): the loop flags them without a branch by
     /// [`PdDynamics::bond_force`]'s test. The test is a little wide (1e-12), so that no
     /// bond [`PdDynamics::bond_energy`] finds at `s0` is left out.
-    fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> Vec<[f64; 2]> {
+    fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> (Vec<[f64; 2]>, Vec<Flagged>) {
         let pairs = self.pairs;
         let nodes = self.nodes();
         let (x, volumes, families) = (&nodes.positions, &nodes.volumes, self.bonds.families);
@@ -191,10 +191,7 @@ impl PdDynamics<'_> {
                 ),
             ),
         };
-        if let Some(breaking) = breaking.filter(|_| !reached.is_empty()) {
-            breaking.record(&reached);
-        }
-        forces
+        (forces, reached)
     }
 
     /// The force of one bond with coefficient `c` on its node (module docs), and whether
@@ -289,25 +286,30 @@ impl PdDynamics<'_> {
     /// Break the bonds whose stretch at `state` is at least the critical one, both
     /// directions at once, among the `candidates` the last force evaluation found there
     /// ([`super::fracture`]); the energy a pair held (`V_i w_ij / 2 + V_j w_ji / 2`, its
-    /// share of `E_el`) is released. Each bond is read once: its reverse is `(-xi,
-    /// -eta)` (the laws' `w` are even, their forces odd). The bonds broken, each seen
-    /// from its node: `(node, coefficient, xi, eta)`.
-    fn break_bonds(&self, breaking: &Breaking, candidates: &[(usize, usize)], state: &State, loads: &Instant) -> Vec<(usize, f64, [f64; 2], [f64; 2])> {
+    /// share of `E_el`) is released. What the loop read of each bond is used when
+    /// `fresh` (it evaluated this state: Verlet and RK4 end on it); else each bond is read
+    /// again at `state`. A bond is read at most once: its reverse is `(-xi, -eta)` (the
+    /// laws' `w` are even, their forces odd). The bonds broken, each seen from its node:
+    /// `(node, coefficient, xi, eta)`.
+    fn break_bonds(&self, breaking: &Breaking, (candidates, fresh): (&[Flagged], bool), state: &State) -> Vec<(usize, f64, [f64; 2], [f64; 2])> {
         let (nodes, families) = (self.nodes(), self.bonds.families);
         let s0 = breaking.critical_stretch;
         // Per bond at s0: its two ends `(node, bond, xi, eta)`, the reverse when `j` is free.
         type End = (usize, usize, [f64; 2], [f64; 2]);
         let ends: Vec<End> = {
-            let live = breaking.live();
-            let ends_of = |&(i, b): &(usize, usize)| {
-                let (c, j) = (live.coefficients[b], families.neighbour(b) as usize);
-                let (xi, eta) = bond_vectors(&nodes.positions, &state.u, &loads.prescribed, i, j);
+            let again = (!fresh).then(|| (breaking.live(), self.loads(state.t)));
+            let ends_of = |f: &Flagged| {
+                let (i, j) = (f.node, f.neighbour);
+                let (c, (xi, eta)) = match &again {
+                    None => (f.coefficient, (f.xi, f.eta)),
+                    Some((live, loads)) => (live.coefficients[f.bond], bond_vectors(&nodes.positions, &state.u, &loads.prescribed, i, j)),
+                };
                 let at = c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0;
                 let reverse = (at && j < nodes.free)
                     .then(|| families.of(j).binary_search(&(i as u32)).ok())
                     .flatten()
                     .map(|p| (j, families.range(j).start + p, [-xi[0], -xi[1]], [-eta[0], -eta[1]]));
-                at.then_some((i, b, xi, eta)).into_iter().chain(reverse)
+                at.then_some((i, f.bond, xi, eta)).into_iter().chain(reverse)
             };
             if candidates.len() < SERIAL_BELOW {
                 candidates.iter().flat_map(ends_of).collect()
@@ -377,7 +379,10 @@ impl SecondOrderSystem for PdDynamics<'_> {
         let loads = self.loads(t);
         let theta = self.theta(u, &loads);
         let live = self.breaking.map(Breaking::live);
-        let forces = self.bond_forces(u, &loads, live.as_deref());
+        let (forces, reached) = self.bond_forces(u, &loads, live.as_deref());
+        if let Some(breaking) = self.breaking.filter(|_| !reached.is_empty()) {
+            breaking.record(reached, t, u);
+        }
         let volumes = &self.nodes().volumes;
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
             let mut f = [forces[i][0] / volumes[i], forces[i][1] / volumes[i]];
@@ -395,14 +400,12 @@ impl SecondOrderSystem for PdDynamics<'_> {
     /// (the same as evaluating it again, for the broken bonds' work only).
     fn settle(&self, state: &mut State) -> bool {
         let Some(breaking) = self.breaking else { return false };
-        // Most steps break nothing: the loads of the instant are read only when some do.
-        let candidates = breaking.candidates();
+        let (candidates, fresh) = breaking.candidates(state.t, &state.u);
         if candidates.is_empty() {
             return false;
         }
-        let loads = self.loads(state.t);
         let dofs = self.dofs();
-        let broken = self.break_bonds(breaking, &candidates, state, &loads);
+        let broken = self.break_bonds(breaking, (&candidates, fresh), state);
         for &(k, c, xi, eta) in &broken {
             let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
             state.a[dofs.dof(k, 0)] -= g[0] / self.density;

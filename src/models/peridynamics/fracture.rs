@@ -32,6 +32,7 @@ use super::Kernel;
 use crate::domain::{CsgOp, Domain, Point, Primitive};
 use rayon::prelude::*;
 use serde::Serialize;
+use super::block::Flagged;
 use std::sync::{Mutex, RwLock, RwLockReadGuard};
 
 /// The most pre-cracks a scene may give.
@@ -197,14 +198,22 @@ pub struct Breaking {
     /// Read by every force evaluation (one lock per evaluation, plain loads in the bond
     /// loop), written after the steps in which bonds break.
     live: RwLock<Live>,
-    /// The live bonds `(node, bond)` at the critical stretch at the last force
-    /// evaluation (cleared as each evaluation starts).
-    reached: Mutex<Vec<(usize, usize)>>,
+    /// The live bonds at the critical stretch at the last force evaluation, with what
+    /// the loop read of them and where it evaluated (cleared as each evaluation starts).
+    reached: Mutex<Reached>,
     /// Bonds broken since the start (both directions counted), and the elastic energy
     /// they held when they broke (J per unit thickness).
     released: Mutex<(usize, f64)>,
     /// Bonds broken from the start by the pre-cracks (both directions counted).
     pub precracked: usize,
+}
+
+/// What the last force evaluation flagged, and where it evaluated: `(t, the address of
+/// the displacements)`.
+#[derive(Default)]
+struct Reached {
+    bonds: Vec<Flagged>,
+    at: Option<(f64, usize)>,
 }
 
 /// The bonds as they stand: per bond of the families, its coefficient `c_ij` (zero once
@@ -227,7 +236,7 @@ impl Breaking {
             .collect();
         let precracked = broken.iter().filter(|&&b| b).count();
         let live_coefficients: Vec<f64> = coefficients.iter().zip(&broken).map(|(&c, &cut)| if cut { 0.0 } else { c }).collect();
-        let reached = Mutex::new(Vec::new());
+        let reached = Mutex::new(Reached::default());
         Breaking {
             critical_stretch,
             live: RwLock::new(Live { coefficients: live_coefficients, broken }),
@@ -245,20 +254,23 @@ impl Breaking {
     /// Forget the bonds the previous force evaluation found at the critical stretch
     /// (called as an evaluation starts).
     pub fn start_evaluation(&self) {
-        self.reached.lock().expect("no panic holds it").clear();
+        *self.reached.lock().expect("no panic holds it") = Reached::default();
     }
 
-    /// Record the bonds `(node, bond)` found at the critical stretch by this evaluation.
-    pub fn record(&self, found: &[(usize, usize)]) {
-        self.reached.lock().expect("no panic holds it").extend_from_slice(found);
+    /// Record the bonds `found` at the critical stretch by the evaluation at time `t` of
+    /// the displacements `u` (in node and bond order).
+    pub fn record(&self, found: Vec<Flagged>, t: f64, u: &[f64]) {
+        debug_assert!(found.windows(2).all(|w| (w[0].node, w[0].bond) < (w[1].node, w[1].bond)));
+        *self.reached.lock().expect("no panic holds it") = Reached { bonds: found, at: Some((t, u.as_ptr() as usize)) };
     }
 
-    /// The bonds `(node, bond)` the last evaluation found at the critical stretch, in
-    /// node and bond order (the same order whatever the threads did).
-    pub fn candidates(&self) -> Vec<(usize, usize)> {
-        let mut c = std::mem::take(&mut *self.reached.lock().expect("no panic holds it"));
-        c.sort_unstable();
-        c
+    /// The bonds the last evaluation found at the critical stretch, in node and bond
+    /// order, and whether it evaluated the displacements `u` at time `t` (then what it read
+    /// of them holds at that state).
+    pub fn candidates(&self, t: f64, u: &[f64]) -> (Vec<Flagged>, bool) {
+        let reached = std::mem::take(&mut *self.reached.lock().expect("no panic holds it"));
+        let fresh = reached.at == Some((t, u.as_ptr() as usize));
+        (reached.bonds, fresh)
     }
 
     /// Break each bond `(node, bond)` of `bonds` that is not broken yet, releasing

@@ -11,7 +11,7 @@
 //! shares are contiguous ranges of nodes with about equal numbers of bonds, each
 //! summing into its own buffer, reused between evaluations.
 
-pub use super::block::PairState;
+pub use super::block::{Flagged, PairState};
 use super::block::{Columns, Kernel, Layout, BLOCK};
 use super::family::Families;
 use super::nodes::PdNodes;
@@ -87,9 +87,9 @@ impl Pairs {
     /// `F_i = sum_{j > i} g_ij - sum_{j < i} g_ji` over the pairs of the state `at`
     /// (directed: `F_i = sum_j g_ij`), `(g, flag) = law(c_ij, xi, eta, V_i)` for
     /// bond `b` of node `i` to node `j` (collar nodes take nothing), and the bonds
-    /// `(i, b)` that `law` flags, in node and bond order. Bonds go in blocks of
-    /// [`BLOCK`] in the `layout` ([`super::block`]).
-    pub fn sum<L>(&self, families: &Families, at: &PairState, (law, layout): (L, Layout)) -> (Vec<[f64; 2]>, Vec<(usize, usize)>)
+    /// that `law` flags with what the loop read of them ([`Flagged`]), in node and bond
+    /// order. Bonds go in blocks of [`BLOCK`] in the `layout` ([`super::block`]).
+    pub fn sum<L>(&self, families: &Families, at: &PairState, (law, layout): (L, Layout)) -> (Vec<[f64; 2]>, Vec<Flagged>)
     where
         L: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool) + Sync,
     {
@@ -97,7 +97,7 @@ impl Pairs {
         let kernel = Kernel::new(layout);
         let mut buffers = std::mem::take(&mut *self.buffers.lock().expect("no panic holds it"));
         buffers.resize_with(self.shares.len(), || vec![[0.0; 2]; free]);
-        let reached: Vec<Vec<(usize, usize)>> = buffers
+        let reached: Vec<Vec<Flagged>> = buffers
             .par_iter_mut()
             .zip(&self.shares)
             .map(|(force, share)| {
@@ -117,7 +117,8 @@ impl Pairs {
                         };
                         force[i] = [force[i][0] + g[0], force[i][1] + g[1]];
                         while flags != 0 {
-                            reached.push((i, start + flags.trailing_zeros() as usize));
+                            let k = flags.trailing_zeros() as usize;
+                            reached.push(Flagged::read(at, i, start + k, js[k] as usize));
                             flags &= flags - 1;
                         }
                     }
@@ -238,6 +239,16 @@ mod tests {
             })
             .collect();
         assert!(!expected.is_empty() && expected.len() < families.bonds() / 2);
+        let flagged: Vec<(usize, usize)> = flagged
+            .iter()
+            .map(|f| {
+                let j = families.neighbour(f.bond) as usize;
+                let (uj, ui) = (displacement(j), displacement(f.node));
+                let (xi, eta) = ([x[j][0] - x[f.node][0], x[j][1] - x[f.node][1]], [uj[0] - ui[0], uj[1] - ui[1]]);
+                assert_eq!((f.neighbour, f.coefficient, f.xi, f.eta), (j, c[f.bond], xi, eta), "what the loop read");
+                (f.node, f.bond)
+            })
+            .collect();
         assert_eq!(flagged, expected);
         // One bond's coefficient off by 1e-9 of itself: not symmetric, so every bond is
         // visited from both ends, and the sum is again the directed one.
