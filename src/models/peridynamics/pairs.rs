@@ -222,10 +222,10 @@ mod tests {
             f
         };
         let (mut largest, mut error) = (0.0f64, 0.0f64);
-        for i in 0..nodes.free {
+        for (i, sum) in forces.iter().enumerate().take(nodes.free) {
             let f = directed_force(i, &c);
             largest = largest.max(f[0].abs()).max(f[1].abs());
-            error = error.max((f[0] - forces[i][0]).abs()).max((f[1] - forces[i][1]).abs());
+            error = error.max((f[0] - sum[0]).abs()).max((f[1] - sum[1]).abs());
         }
         assert!(error <= 1e-12 * largest, "pair sum off by {error:e} of {largest:e}");
         // The flagged bonds are the upper bonds with p > 0, each once, in order.
@@ -258,9 +258,9 @@ mod tests {
         assert!(directed.directed());
         let at = PairState { coefficients: &skewed, ..at };
         let (forces, _) = directed.sum(&families, &at, (law, Layout::Columns));
-        for i in 0..nodes.free {
+        for (i, sum) in forces.iter().enumerate().take(nodes.free) {
             let f = directed_force(i, &skewed);
-            assert!((f[0] - forces[i][0]).abs().max((f[1] - forces[i][1]).abs()) <= 1e-12 * largest, "directed sum at node {i}");
+            assert!((f[0] - sum[0]).abs().max((f[1] - sum[1]).abs()) <= 1e-12 * largest, "directed sum at node {i}");
         }
     }
 }
