@@ -119,18 +119,8 @@ pub struct Flagged {
 impl Flagged {
     /// Bond `b` of free node `i` to node `j` at the state `at`.
     pub(super) fn read(at: &PairState, i: usize, b: usize, j: usize) -> Flagged {
-        let PairState { positions: x, u, prescribed, coefficients, .. } = *at;
-        let free = x.len() - prescribed.len();
-        let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - free] };
-        let ui = [u[2 * i], u[2 * i + 1]];
-        Flagged {
-            node: i,
-            bond: b,
-            neighbour: j,
-            coefficient: coefficients[b],
-            xi: [x[j][0] - x[i][0], x[j][1] - x[i][1]],
-            eta: [uj[0] - ui[0], uj[1] - ui[1]],
-        }
+        let (xi, eta) = bond_vectors(at.positions, at.u, at.prescribed, i, j);
+        Flagged { node: i, bond: b, neighbour: j, coefficient: at.coefficients[b], xi, eta }
     }
 }
 
@@ -195,6 +185,17 @@ fn in_layout<const SCATTER: bool, const COLUMNS: bool, L: BondLaw>(
     } else {
         fused::<SCATTER, L>(at, bonds, force, law)
     }
+}
+
+/// `(xi, eta)` of the bond from free node `i` to node `j`: positions `x`, free nodes'
+/// displacements `u` (interleaved), the collar's `prescribed` (node `free + k` is
+/// `prescribed[k]`, `free = x.len() - prescribed.len()`).
+#[inline(always)]
+pub fn bond_vectors(x: &[[f64; 2]], u: &[f64], prescribed: &[[f64; 2]], i: usize, j: usize) -> ([f64; 2], [f64; 2]) {
+    let free = x.len() - prescribed.len();
+    let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - free] };
+    let ui = [u[2 * i], u[2 * i + 1]];
+    ([x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]])
 }
 
 /// `u_j`: a free node's from `u` (the free nodes' pairs), a collar node's from

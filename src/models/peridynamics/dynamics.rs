@@ -20,7 +20,7 @@
 //! `dt_stable = sqrt(2 rho / max_i sum_j |c_ij| |xi_ij|^2)`, times
 //! [`crate::models::dynamics::Integrator::stability_factor`].
 
-use super::block::Layout;
+use super::block::{bond_vectors, Layout};
 use super::dilatation::Dilatation;
 use super::family::Families;
 use super::loads::LoadLayer;
@@ -356,16 +356,6 @@ fn bond_stretch_energy(c: f64, xi: [f64; 2], eta: [f64; 2]) -> (f64, f64) {
     (0.5 * c * r.powi(4) * s * s, s)
 }
 
-/// `(xi, eta)` of the bond from free node `i` to node `j`: positions `x`, free nodes'
-/// displacements `u` (interleaved), the collar's `prescribed` (node `free + k` is
-/// `prescribed[k]`, `free = x.len() - prescribed.len()`).
-#[inline(always)]
-fn bond_vectors(x: &[[f64; 2]], u: &[f64], prescribed: &[[f64; 2]], i: usize, j: usize) -> ([f64; 2], [f64; 2]) {
-    let free = x.len() - prescribed.len();
-    let uj = if j < free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - free] };
-    let ui = [u[2 * i], u[2 * i + 1]];
-    ([x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]])
-}
 
 impl SecondOrderSystem for PdDynamics<'_> {
     fn len(&self) -> usize {
