@@ -23,15 +23,15 @@
 use super::block::{bond_vectors, Layout};
 use super::dilatation::Dilatation;
 use super::family::Families;
+use super::fracture::{Breaking, Live};
 use super::loads::LoadLayer;
 use super::nodes::PdNodes;
 use super::operator::Bonds;
 use super::pairs::{Flagged, PairState, Pairs};
 use super::{strain, BondForce};
-use crate::physics::case::Case;
-use super::fracture::{Breaking, Live, SERIAL_BELOW};
 use crate::models::dynamics::driver::Energies;
 use crate::models::dynamics::{SecondOrderSystem, State};
+use crate::physics::case::Case;
 use crate::physics::elasticity::dofs::DofMap;
 use crate::physics::elasticity::material::Material;
 use crate::physics::elasticity::stress::StressField;
@@ -39,6 +39,7 @@ use crate::physics::exact::{self, ExactSolution};
 use crate::stages::RunError;
 use rayon::prelude::*;
 use std::borrow::Cow;
+use std::ops::Range;
 
 /// The semi-discrete peridynamic system of one discretisation.
 #[derive(Clone, Copy)]
@@ -170,7 +171,7 @@ impl PdDynamics<'_> {
                 families,
                 &at,
                 (
-                    |c, xi: [f64; 2], eta: [f64; 2], vi| {
+                    move |c, xi: [f64; 2], eta: [f64; 2], vi| {
                         let p = xi[0] * eta[0] + xi[1] * eta[1];
                         let cp = c * p;
                         // Live and at s0 (a broken bond, c = 0, stays stretched: not flagged).
@@ -183,7 +184,7 @@ impl PdDynamics<'_> {
                 families,
                 &at,
                 (
-                    |c, xi, eta, vi| {
+                    move |c, xi, eta, vi| {
                         let (g, at) = bond_stretch_force(c, xi, eta, s0);
                         ([vi * g[0], vi * g[1]], at)
                     },
@@ -208,6 +209,15 @@ impl PdDynamics<'_> {
             }
             BondForce::BondStretch => bond_stretch_force(c, xi, eta, s0),
         }
+    }
+
+    /// The damage of every free node where bonds break ([`Breaking::damage`], each pair
+    /// read from the bond the force loop visits when it visits each pair once).
+    pub fn damage(&self) -> Option<Vec<f64>> {
+        let breaking = self.breaking?;
+        let upper = |i: usize| self.pairs.upper(self.bonds.families, i);
+        let visited: Option<&(dyn Fn(usize) -> Range<usize> + Sync)> = (!self.pairs.directed()).then_some(&upper);
+        Some(breaking.damage(&self.nodes().volumes, self.bonds.families, visited))
     }
 
     /// The micropotential `w` of a bond with coefficient `c` (module docs), and its stretch.
@@ -235,14 +245,15 @@ impl PdDynamics<'_> {
         let worst = (0..self.nodes().free)
             .into_par_iter()
             .map(|i| {
-                dilatation.as_ref().map_or(0.0, |b| b[i]) + families
-                    .range(i)
-                    .zip(families.of(i))
-                    .map(|(b, &j)| {
-                        let j = j as usize;
-                        self.bonds.coefficients[b].abs() * ((x[j][0] - x[i][0]).powi(2) + (x[j][1] - x[i][1]).powi(2))
-                    })
-                    .sum::<f64>()
+                dilatation.as_ref().map_or(0.0, |b| b[i])
+                    + families
+                        .range(i)
+                        .zip(families.of(i))
+                        .map(|(b, &j)| {
+                            let j = j as usize;
+                            self.bonds.coefficients[b].abs() * ((x[j][0] - x[i][0]).powi(2) + (x[j][1] - x[i][1]).powi(2))
+                        })
+                        .sum::<f64>()
             })
             .reduce(|| 0.0, f64::max);
         (2.0 * self.density / worst).sqrt()
@@ -282,49 +293,6 @@ impl PdDynamics<'_> {
         let (broken, released) = self.breaking.map_or((0, 0.0), |b| b.released());
         [kin, el + dilatation, ext, released, broken as f64]
     }
-
-    /// Break the bonds whose stretch at `state` is at least the critical one, both
-    /// directions at once, among the `candidates` the last force evaluation found there
-    /// ([`super::fracture`]); the energy a pair held (`V_i w_ij / 2 + V_j w_ji / 2`, its
-    /// share of `E_el`) is released. What the loop read of each bond is used when
-    /// `fresh` (it evaluated this state: Verlet and RK4 end on it); else each bond is read
-    /// again at `state`. A bond is read at most once: its reverse is `(-xi, -eta)` (the
-    /// laws' `w` are even, their forces odd). The bonds broken, each seen from its node:
-    /// `(node, coefficient, xi, eta)`.
-    fn break_bonds(&self, breaking: &Breaking, (candidates, fresh): (&[Flagged], bool), state: &State) -> Vec<(usize, f64, [f64; 2], [f64; 2])> {
-        let (nodes, families) = (self.nodes(), self.bonds.families);
-        let s0 = breaking.critical_stretch;
-        // Per bond at s0: its two ends `(node, bond, xi, eta)`, the reverse when `j` is free.
-        type End = (usize, usize, [f64; 2], [f64; 2]);
-        let ends: Vec<End> = {
-            let again = (!fresh).then(|| (breaking.live(), self.loads(state.t)));
-            let ends_of = |f: &Flagged| {
-                let (i, j) = (f.node, f.neighbour);
-                let (c, (xi, eta)) = match &again {
-                    None => (f.coefficient, (f.xi, f.eta)),
-                    Some((live, loads)) => (live.coefficients[f.bond], bond_vectors(&nodes.positions, &state.u, &loads.prescribed, i, j)),
-                };
-                let at = c != 0.0 && self.bond_energy(c, xi, eta).1 >= s0;
-                let reverse = (at && j < nodes.free)
-                    .then(|| families.of(j).binary_search(&(i as u32)).ok())
-                    .flatten()
-                    .map(|p| (j, families.range(j).start + p, [-xi[0], -xi[1]], [-eta[0], -eta[1]]));
-                at.then_some((i, f.bond, xi, eta)).into_iter().chain(reverse)
-            };
-            if candidates.len() < SERIAL_BELOW {
-                candidates.iter().flat_map(ends_of).collect()
-            } else {
-                candidates.par_iter().flat_map_iter(ends_of).collect()
-            }
-        };
-        let bonds: Vec<(usize, usize)> = ends.iter().map(|e| (e.0, e.1)).collect();
-        let held = |k: usize, c: f64| {
-            let (n, _, xi, eta) = ends[k];
-            0.5 * nodes.volumes[n] * self.bond_energy(c, xi, eta).0
-        };
-        let coefficients = breaking.break_bonds(&bonds, &held);
-        ends.iter().zip(coefficients).filter_map(|(&(n, _, xi, eta), c)| c.map(|c| (n, c, xi, eta))).collect()
-    }
 }
 
 /// The bond-stretch force `c |xi|^3 s (xi + eta) / |xi + eta|` (module docs) and whether
@@ -355,7 +323,6 @@ fn bond_stretch_energy(c: f64, xi: [f64; 2], eta: [f64; 2]) -> (f64, f64) {
     let s = (((xi[0] + eta[0]).powi(2) + (xi[1] + eta[1]).powi(2)).sqrt() - r) / r;
     (0.5 * c * r.powi(4) * s * s, s)
 }
-
 
 impl SecondOrderSystem for PdDynamics<'_> {
     fn len(&self) -> usize {
@@ -394,18 +361,138 @@ impl SecondOrderSystem for PdDynamics<'_> {
         if candidates.is_empty() {
             return false;
         }
-        let dofs = self.dofs();
-        let broken = self.break_bonds(breaking, (&candidates, fresh), state);
-        for &(k, c, xi, eta) in &broken {
+        let (nodes, dofs, s0) = (self.nodes(), self.dofs(), breaking.critical_stretch);
+        // What the loop read holds when it evaluated this state (Verlet, RK4); else (emu)
+        // each bond is read again at `state`.
+        let again = (!fresh).then(|| self.loads(state.t));
+        let once = !self.pairs.directed();
+        let State { u, a, .. } = state;
+        breaking.break_each(&candidates, |f| {
+            let (i, j, c) = (f.node, f.neighbour, f.coefficient);
+            let (xi, eta) = again.as_ref().map_or((f.xi, f.eta), |loads| bond_vectors(&nodes.positions, u, &loads.prescribed, i, j));
+            let (w, s) = self.bond_energy(c, xi, eta);
+            if s < s0 {
+                return None;
+            }
             let (g, _) = self.bond_force(c, xi, eta, f64::INFINITY);
-            state.a[dofs.dof(k, 0)] -= g[0] / self.density;
-            state.a[dofs.dof(k, 1)] -= g[1] / self.density;
-        }
-        !broken.is_empty()
+            a[dofs.dof(i, 0)] -= g[0] / self.density;
+            a[dofs.dof(i, 1)] -= g[1] / self.density;
+            let vi = nodes.volumes[i];
+            if once && j < nodes.free {
+                // The pair's force on j, `-V_i f_ij / V_j`, leaves with it, and the energy
+                // it held (`V_i w_ij`, both halves).
+                let share = vi / nodes.volumes[j];
+                a[dofs.dof(j, 0)] += share * g[0] / self.density;
+                a[dofs.dof(j, 1)] += share * g[1] / self.density;
+                Some((vi * w, 2))
+            } else {
+                Some((0.5 * vi * w, 1))
+            }
+        })
     }
 
     fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
         let v = self.varying.as_ref()?;
         [t0, 0.5 * (t0 + t1), t1].into_iter().find_map(|t| v.at(self.nodes(), t).err())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::models::peridynamics::fracture::{CriticalStretch, Fracture};
+    use crate::models::peridynamics::test_case::plate_bonds;
+    use std::collections::HashSet;
+
+    /// On the clamped plate with symmetric weights, a displacement that stretches the
+    /// bonds across `x = 1/2` past `s0`: the loop that visits each pair once and the loop
+    /// that visits every bond from both ends (the same weights, the pairs told they are
+    /// not symmetric) break the same bonds (the same count, the same damage) and release
+    /// the same energy, and leave the same acceleration, that of evaluating again without
+    /// the broken bonds, each to round-off (1e-12: sums of about 30 terms in another order).
+    #[test]
+    fn both_loops_break_the_same_bonds() {
+        let (domain, nodes, families, c, skewed) = plate_bonds();
+        let (x, free) = (&nodes.positions, nodes.free);
+        let once = Pairs::new(&nodes, &families, &c);
+        let both = Pairs::new(&nodes, &families, &skewed);
+        assert!(!once.directed() && both.directed());
+        let body_force = vec![[0.0; 2]; free];
+        let u: Vec<f64> = x[..free].iter().flat_map(|p| [1e-2 * ((p[0] - 0.5) / 0.05).tanh(), 1e-3 * p[1]]).collect();
+        let fracture = Fracture::new(Some(CriticalStretch::Given(2e-2)), &[]).unwrap();
+        let run = |pairs: &Pairs, force: BondForce| {
+            let breaking = Breaking::new(x, &families, &c, &fracture.cuts(&domain), 2e-2);
+            let system = PdDynamics {
+                bonds: Bonds { nodes: &nodes, families: &families, coefficients: &c },
+                body_force: &body_force,
+                density: 1.0,
+                force,
+                dilatation: None,
+                varying: None,
+                breaking: Some(&breaking),
+                pairs,
+            };
+            let mut state = State::new(&system, 0.0, u.clone(), vec![0.0; u.len()]);
+            assert!(system.settle(&mut state));
+            // Settling is evaluating again without the broken bonds.
+            let mut again = vec![0.0; u.len()];
+            system.acceleration(0.0, &state.u, &mut again);
+            let largest = again.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            assert!(again.iter().zip(&state.a).all(|(p, q)| (p - q).abs() <= 1e-12 * largest), "{force:?}: settled and evaluated again");
+            let (count, released) = breaking.released();
+            (state.a, count, released, system.damage().unwrap())
+        };
+        for force in [BondForce::Linear, BondForce::BondStretch] {
+            let (a1, n1, e1, d1) = run(&once, force);
+            let (a2, n2, e2, d2) = run(&both, force);
+            assert!(n1 > 0 && n1 < families.bonds() / 4, "{force:?}: {n1} of {} bonds broke", families.bonds());
+            assert_eq!(n1, n2, "{force:?}: bonds broken");
+            assert!((e1 - e2).abs() <= 1e-12 * e1, "{force:?}: released {e1} and {e2}");
+            let largest = a1.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            assert!(a1.iter().zip(&a2).all(|(p, q)| (p - q).abs() <= 1e-12 * largest), "{force:?}: accelerations");
+            assert!(d1.iter().zip(&d2).all(|(p, q)| (p - q).abs() <= 1e-14), "{force:?}: damage");
+        }
+    }
+
+    /// Pairs broken by their visited bond alone (the loop visits each pair once) give
+    /// every node the damage of the pairs counted from both ends, `sum_{pair broken} V_j /
+    /// sum_j V_j`, on the clamped plate with every third visited bond broken.
+    #[test]
+    fn damage_reads_each_pair_from_its_visited_bond() {
+        let (domain, nodes, families, c, _) = plate_bonds();
+        let (x, v, free) = (&nodes.positions, &nodes.volumes, nodes.free);
+        let pairs = Pairs::new(&nodes, &families, &c);
+        let fracture = Fracture::new(Some(CriticalStretch::Given(1.0)), &[]).unwrap();
+        let breaking = Breaking::new(x, &families, &c, &fracture.cuts(&domain), 1.0);
+        let body_force = vec![[0.0; 2]; free];
+        let system = PdDynamics {
+            bonds: Bonds { nodes: &nodes, families: &families, coefficients: &c },
+            body_force: &body_force,
+            density: 1.0,
+            force: BondForce::Linear,
+            dilatation: None,
+            varying: None,
+            breaking: Some(&breaking),
+            pairs: &pairs,
+        };
+        let marked: Vec<Flagged> = (0..free)
+            .flat_map(|i| pairs.upper(&families, i).map(move |b| (i, b)))
+            .step_by(3)
+            .map(|(i, b)| {
+                let j = families.neighbour(b) as usize;
+                Flagged { node: i, bond: b, neighbour: j, coefficient: c[b], xi: [0.0; 2], eta: [0.0; 2] }
+            })
+            .collect();
+        assert!(breaking.break_each(&marked, |_| Some((0.0, 2))));
+        let gone: HashSet<(usize, usize)> = marked.iter().map(|f| (f.node, f.neighbour)).collect();
+        let damage = system.damage().unwrap();
+        assert!(damage.iter().any(|&d| d > 0.3) && damage.iter().all(|&d| d < 1.0));
+        for (i, d) in damage.iter().enumerate() {
+            let (all, lost) = families.of(i).iter().fold((0.0, 0.0), |(all, lost), &j| {
+                let j = j as usize;
+                (all + v[j], lost + if gone.contains(&(i.min(j), i.max(j))) { v[j] } else { 0.0 })
+            });
+            assert!((d - lost / all).abs() <= 1e-14, "node {i}: {d} against {}", lost / all);
+        }
     }
 }

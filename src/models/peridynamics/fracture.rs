@@ -26,13 +26,14 @@
 //! A pre-crack is a segment no bond crosses: its bonds are broken from the start (static
 //! runs: their coefficients are zero), as peer codes define pre-cracks.
 
+use super::block::Flagged;
 use super::family::Families;
 use super::kernel::{radial_integral, Micromodulus};
 use super::Kernel;
 use crate::domain::{CsgOp, Domain, Point, Primitive};
 use rayon::prelude::*;
 use serde::Serialize;
-use super::block::Flagged;
+use std::ops::Range;
 use std::sync::{Mutex, RwLock, RwLockReadGuard};
 
 /// The most pre-cracks a scene may give.
@@ -87,7 +88,8 @@ impl Fracture {
 
     /// What no bond of `domain` crosses from the start ([`Cuts`]).
     pub fn cuts<'a>(&'a self, domain: &'a Domain) -> Cuts<'a> {
-        let notches = domain.regions.iter().skip(1).filter(|r| r.op == CsgOp::Subtract).map(|r| (&r.primitive, r.primitive.bounding_box())).collect();
+        let notches =
+            domain.regions.iter().skip(1).filter(|r| r.op == CsgOp::Subtract).map(|r| (&r.primitive, r.primitive.bounding_box())).collect();
         Cuts { cracks: self.cracks(), notches }
     }
 
@@ -184,11 +186,6 @@ fn segments_cross(p0: Point, p1: Point, q0: Point, q1: Point) -> bool {
         || (d4 == 0.0 && within(p0, p1, q1))
 }
 
-/// Bonds at the critical stretch below which a step's breaking runs on one thread: waking
-/// the pool costs tens of microseconds, about what a few hundred bonds cost
-/// (docs/notebook/2026-11-30-block-kernels.md).
-pub const SERIAL_BELOW: usize = 512;
-
 /// The bonds of a dynamic run that break: their coefficients while they hold (zero once
 /// broken), which free nodes had a bond at the critical stretch at the last force
 /// evaluation, and what breaking released.
@@ -273,33 +270,37 @@ impl Breaking {
         (reached.bonds, fresh)
     }
 
-    /// Break each bond `(node, bond)` of `bonds` that is not broken yet, releasing
-    /// `held(k, c)` (the energy bond `bonds[k]` with coefficient `c` held): per bond, its
-    /// coefficient when this call broke it.
-    pub fn break_bonds(&self, bonds: &[(usize, usize)], held: &(dyn Fn(usize, f64) -> f64 + Sync)) -> Vec<Option<f64>> {
-        let gone: Vec<Option<f64>> = {
+    /// Break, in the order given, each bond of `candidates` (those of the last force
+    /// evaluation, their coefficients as it read them: nothing writes them between an
+    /// evaluation and the breaking after it) that `breaks(candidate)` breaks: it returns
+    /// the energy the bond released and how many bond directions that counts (two
+    /// where the force loop visits a pair once, [`Pairs`]). Whether any broke.
+    ///
+    /// Only the candidates' own bonds are marked: where the loop visits each pair once
+    /// from its lower node, the pair's state is that bond's (the reverse bond keeps its
+    /// state from the start, and [`Breaking::damage`] reads the pair); where it visits
+    /// every bond from both ends, both ends are flagged at once (the stretch is the same
+    /// to the bit from either end) and each breaks on its own. The marking only writes:
+    /// the candidates are scattered over the bonds, and a read of each would wait for
+    /// memory.
+    pub fn break_each(&self, candidates: &[Flagged], mut breaks: impl FnMut(&Flagged) -> Option<(f64, usize)>) -> bool {
+        let (mut count, mut energy) = (0, 0.0);
+        {
             let mut live = self.live.write().expect("no panic holds it");
-            bonds
-                .iter()
-                .map(|&(_, bond)| {
-                    (!live.broken[bond]).then(|| {
-                        let c = live.coefficients[bond];
-                        (live.broken[bond], live.coefficients[bond]) = (true, 0.0);
-                        c
-                    })
-                })
-                .collect()
-        };
-        let energy_of = |(k, c): (usize, &Option<f64>)| c.map(|c| held(k, c));
-        let (count, energy) = if gone.len() < SERIAL_BELOW {
-            gone.iter().enumerate().filter_map(energy_of).fold((0, 0.0), |(n, e), w| (n + 1, e + w))
-        } else {
-            gone.par_iter().enumerate().filter_map(energy_of).fold(|| (0, 0.0), |(n, e), w| (n + 1, e + w)).reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1))
-        };
+            let Live { coefficients, broken } = &mut *live;
+            for f in candidates {
+                debug_assert!(!broken[f.bond] && coefficients[f.bond] == f.coefficient && f.coefficient != 0.0);
+                if let Some((w, n)) = breaks(f) {
+                    (broken[f.bond], coefficients[f.bond]) = (true, 0.0);
+                    count += n;
+                    energy += w;
+                }
+            }
+        }
         let mut r = self.released.lock().expect("no panic holds it");
         r.0 += count;
         r.1 += energy;
-        gone
+        count > 0
     }
 
     /// `(bonds broken since the start, energy they released)`.
@@ -308,27 +309,45 @@ impl Breaking {
     }
 
     /// Damage of every free node: the share of its family's volume behind broken bonds,
-    /// `phi_i = sum_{j broken} V_j / sum_j V_j` (0 intact, 1 detached).
-    pub fn damage(&self, volumes: &[f64], families: &Families) -> Vec<f64> {
+    /// `phi_i = sum_{j broken} V_j / sum_j V_j` (0 intact, 1 detached). With `visited`
+    /// (the bonds the force loop visits from each node when it visits each pair once,
+    /// `pairs::Pairs::upper`) a pair is broken when its visited bond is
+    /// ([`Breaking::break_each`]); without, each bond is read from its own end.
+    pub fn damage(&self, volumes: &[f64], families: &Families, visited: Option<&(dyn Fn(usize) -> Range<usize> + Sync)>) -> Vec<f64> {
         let live = self.live();
-        (0..families.len())
-            .into_par_iter()
-            .map(|i| {
-                let (mut all, mut lost) = (0.0, 0.0);
-                for (b, &j) in families.range(i).zip(families.of(i)) {
-                    let v = volumes[j as usize];
-                    all += v;
-                    if live.broken[b] {
-                        lost += v;
-                    }
-                }
-                if all > 0.0 {
-                    lost / all
-                } else {
-                    0.0
-                }
-            })
-            .collect()
+        let free = families.len();
+        let family: Vec<f64> = (0..free).into_par_iter().map(|i| families.of(i).iter().map(|&j| volumes[j as usize]).sum()).collect();
+        let lost: Vec<f64> = match visited {
+            None => (0..free)
+                .into_par_iter()
+                .map(|i| families.range(i).zip(families.of(i)).filter(|&(b, _)| live.broken[b]).map(|(_, &j)| volumes[j as usize]).sum())
+                .collect(),
+            Some(visited) => {
+                // Each broken pair counted at both ends, from its visited bond; one buffer
+                // per contiguous range of nodes, summed.
+                let chunk = free.div_ceil(rayon::current_num_threads().max(1)).max(1);
+                let parts: Vec<Vec<f64>> = (0..free)
+                    .step_by(chunk)
+                    .collect::<Vec<_>>()
+                    .into_par_iter()
+                    .map(|start| {
+                        let mut lost = vec![0.0; free];
+                        for i in start..(start + chunk).min(free) {
+                            for b in visited(i).filter(|&b| live.broken[b]) {
+                                let j = families.neighbour(b) as usize;
+                                lost[i] += volumes[j];
+                                if j < free {
+                                    lost[j] += volumes[i];
+                                }
+                            }
+                        }
+                        lost
+                    })
+                    .collect();
+                (0..free).into_par_iter().map(|i| parts.iter().map(|p| p[i]).sum()).collect()
+            }
+        };
+        family.iter().zip(&lost).map(|(&all, &lost)| if all > 0.0 { lost / all } else { 0.0 }).collect()
     }
 }
 

@@ -57,6 +57,7 @@ pub use solve::{solve, Discretisation, PdSolution};
 /// A small plate shared by the stage tests of this model.
 #[cfg(test)]
 pub(crate) mod test_case {
+    use super::family::Families;
     use super::nodes::{self, Body, PdNodes};
     use super::{BondForce, EdgeTreatment, Kernel, PdParams, PointSet, Quadrature, Solid, SurfaceCorrection};
     use crate::domain::Domain;
@@ -93,5 +94,26 @@ pub(crate) mod test_case {
     /// The nodes of the plate of [`plate`] for `params`.
     pub(crate) fn plate_nodes(domain: &Domain, conditions: &[BoundaryCondition], params: &PdParams) -> PdNodes {
         nodes::generate(&Body::new(domain, conditions, None, params), params)
+    }
+
+    /// The clamped plate of [`plate`] at `delta = 0.1`, `m = 3` (free nodes and a collar),
+    /// its families and symmetric bond weights `c_ij = V_j / |xi|^3` (`V_i c_ij = V_j
+    /// c_ji`), and one copy of them made asymmetric (one bond's weight off by 1e-9).
+    pub(crate) fn plate_bonds() -> (Domain, PdNodes, Families, Vec<f64>, Vec<f64>) {
+        let (domain, conditions) = plate([0.0, 0.0]);
+        let nodes = plate_nodes(&domain, &conditions, &params(0.1, Quadrature::FullArea));
+        let families = Families::within(&nodes.positions, nodes.free, 0.1 * (1.0 + 1e-9));
+        let (x, v) = (&nodes.positions, &nodes.volumes);
+        let c: Vec<f64> = (0..nodes.free)
+            .flat_map(|i| {
+                families.of(i).iter().map(move |&j| {
+                    let j = j as usize;
+                    v[j] / (x[j][0] - x[i][0]).hypot(x[j][1] - x[i][1]).powi(3)
+                })
+            })
+            .collect();
+        let mut skewed = c.clone();
+        skewed[families.range(nodes.free / 2).start] *= 1.0 + 1e-9;
+        (domain, nodes, families, c, skewed)
     }
 }

@@ -11,8 +11,8 @@
 //! shares are contiguous ranges of nodes with about equal numbers of bonds, each
 //! summing into its own buffer, reused between evaluations.
 
-pub use super::block::{Flagged, PairState};
 use super::block::{Columns, Kernel, Layout, BLOCK};
+pub use super::block::{Flagged, PairState};
 use super::family::Families;
 use super::nodes::PdNodes;
 use rayon::prelude::*;
@@ -177,8 +177,7 @@ fn node_energy(at: PairState, (i, start, js): (usize, usize, &[u32]), directed: 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::models::peridynamics::test_case::{params, plate, plate_nodes};
-    use crate::models::peridynamics::Quadrature;
+    use crate::models::peridynamics::test_case::plate_bonds;
 
     /// On the clamped plate (free nodes, a collar, symmetric weights `c_ij = V_j /
     /// |xi|^3`): the pair sum is the directed sum `V_i sum_j c_ij (xi . eta) xi` to
@@ -187,19 +186,8 @@ mod tests {
     /// again gives the directed sum.
     #[test]
     fn the_pair_sum_is_the_directed_sum() {
-        let (domain, conditions) = plate([0.0, 0.0]);
-        let nodes = plate_nodes(&domain, &conditions, &params(0.1, Quadrature::FullArea));
-        let families = Families::within(&nodes.positions, nodes.free, 0.1 * (1.0 + 1e-9));
+        let (_, nodes, families, c, skewed) = plate_bonds();
         let x = &nodes.positions;
-        let volumes = &nodes.volumes;
-        let c: Vec<f64> = (0..nodes.free)
-            .flat_map(|i| {
-                families
-                    .of(i)
-                    .iter()
-                    .map(move |&j| volumes[j as usize] / (x[j as usize][0] - x[i][0]).hypot(x[j as usize][1] - x[i][1]).powi(3))
-            })
-            .collect();
         let pairs = Pairs::new(&nodes, &families, &c);
         assert!(!pairs.directed(), "V_i c_ij = V_i V_j / |xi|^3 is symmetric");
         let u: Vec<f64> = x[..nodes.free].iter().flat_map(|p| [(3.0 * p[0]).sin(), p[0] * p[1]]).collect();
@@ -252,8 +240,6 @@ mod tests {
         assert_eq!(flagged, expected);
         // One bond's coefficient off by 1e-9 of itself: not symmetric, so every bond is
         // visited from both ends, and the sum is again the directed one.
-        let mut skewed = c.clone();
-        skewed[families.range(nodes.free / 2).start] *= 1.0 + 1e-9;
         let directed = Pairs::new(&nodes, &families, &skewed);
         assert!(directed.directed());
         let at = PairState { coefficients: &skewed, ..at };

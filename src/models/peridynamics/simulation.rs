@@ -94,8 +94,9 @@ pub fn simulate_sampled(
         let (report, energies) = integrate(system, &energy, &mut state, (grid, &samples.steps), dynamics, timer, |step, s| {
             let (u, v) = (nodal(&s.u), nodal(&s.v));
             if is_snapshot(step, grid.steps, dynamics) {
-                let stress = (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
-                let damage = breaking.as_ref().map(|b| b.damage(&disc.nodes.volumes, &disc.families));
+                let stress =
+                    (case.outputs.stress || case.outputs.von_mises).then(|| system.stress(&case.material, &disc.families, s.t, &u));
+                let damage = system.damage();
                 snapshot(Snapshot { step, t: s.t, positions: free, u: &u, v: &v, stress: stress.as_ref(), damage: damage.as_deref() })?;
             }
             if samples.keeps(step) {
@@ -105,11 +106,12 @@ pub fn simulate_sampled(
         })?;
         let history = samples.states(&kept);
         drop(kept);
-        let throughput =
-            report.force_evaluations as f64 * disc.families.bonds() as f64 / report.seconds.max(1e-12) / rayon::current_num_threads() as f64;
+        let throughput = report.force_evaluations as f64 * disc.families.bonds() as f64
+            / report.seconds.max(1e-12)
+            / rayon::current_num_threads() as f64;
         let (u, v) = (nodal(&state.u), nodal(&state.v));
         let fracture = breaking.as_ref().map(|b| {
-            let damage = b.damage(&disc.nodes.volumes, &disc.families);
+            let damage = system.damage().unwrap_or_default();
             let (broken, released) = b.released();
             FractureReport {
                 critical_stretch: b.critical_stretch.is_finite().then_some(b.critical_stretch),
@@ -157,7 +159,11 @@ pub fn with_system<R>(
     });
     let pairs = timer.run(PAIRS, || {
         let pairs = Pairs::new(&disc.nodes, &disc.families, &disc.weights.coefficients);
-        let note = if pairs.directed() { "each bond from both ends: the weights are not symmetric" } else { "each bond once: the weights are symmetric" };
+        let note = if pairs.directed() {
+            "each bond from both ends: the weights are not symmetric"
+        } else {
+            "each bond once: the weights are symmetric"
+        };
         Ok((pairs, note.to_string()))
     })?;
     let system = PdDynamics {
