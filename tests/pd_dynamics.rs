@@ -7,8 +7,8 @@ mod common;
 use common::*;
 use mlsm::models::dynamics::Integrator;
 use mlsm::models::peridynamics::simulate;
-use mlsm::stages::{RunError, Silent};
 use mlsm::scene::problem::{Model, Problem};
+use mlsm::stages::{RunError, Silent};
 
 /// Final time, displacement (flat) and energy history of a run.
 type Run = (f64, Vec<f64>, Vec<mlsm::models::dynamics::driver::EnergyRow>);
@@ -171,5 +171,30 @@ fn snapshots_carry_the_stress_of_their_state() {
         assert!(seen.len() >= 2, "{model:?}: {seen:?}");
         assert_eq!(seen[0], (0, 0.0), "{model:?}: the undeformed start has no stress");
         assert!(seen.last().unwrap().1 > 0.0, "{model:?}: no stress after the pulse started: {seen:?}");
+    }
+}
+
+/// Under Verlet the force loop sums the elastic energy of the evaluation that ends each
+/// step, so the history has a row at every step (the energy-drift check reads them all);
+/// under `emu`, whose evaluation is at the start of the step, the energies cost a pass
+/// over the bonds and the rows stay at every fourth step. Both histories start at the
+/// same energy, and Verlet's rows move the total by no more than its own bound above.
+#[test]
+fn verlet_records_every_step() {
+    for (integrator, every) in [("verlet", 1), ("emu", 4)] {
+        let p = plate(&[("dynamics.integrator", s(integrator)), ("dynamics.end_time", f(2e-4))]);
+        let sim = simulate(&p.case, p.model.peridynamics().unwrap(), p.case.dynamics.as_ref().unwrap(), &Silent, |_| Ok(())).unwrap();
+        let steps = sim.report.steps;
+        let rows: Vec<f64> = sim.energies.iter().map(|e| e[0]).collect();
+        let dt = sim.report.time_step;
+        eprintln!("{integrator}: {steps} steps, {} rows", rows.len());
+        assert_eq!(rows.len(), steps / every + 1 + usize::from(steps % every != 0), "{integrator}: rows");
+        assert!(
+            rows.windows(2).take(steps / every).all(|w| ((w[1] - w[0]) / dt - every as f64).abs() < 1e-6),
+            "{integrator}: a row every {every} steps"
+        );
+        let e0 = sim.energies[0][1] + sim.energies[0][2];
+        let drift = sim.energies.iter().map(|e| (e[1] + e[2] + e[3] - e0).abs() / e0).fold(0.0, f64::max);
+        assert!(integrator != "verlet" || (drift > 0.0 && drift < 5e-3), "{integrator}: {drift}");
     }
 }

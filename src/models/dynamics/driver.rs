@@ -1,8 +1,8 @@
 //! The time loop shared by every model: step size from the stability limit,
 //! snapshots, the energy history and a throughput report.
 
-use crate::physics::elasticity::stress::StressField;
 use super::{DynamicsParams, Integrator, SecondOrderSystem, State};
+use crate::physics::elasticity::stress::StressField;
 use crate::scene::choice::Choice;
 use crate::stages::{interrupt, RunError, Stage, StageTimer};
 use serde::Serialize;
@@ -119,12 +119,19 @@ fn evenly_spaced(step: usize, steps: usize, n: usize) -> bool {
     }
 }
 
-/// The energy history's cadence: a row every `k`-th step. The energies cost about one
-/// force evaluation (a pass over the operator or the bonds), so `k` keeps them within a
-/// quarter of the stepping (`k >= 4 / evaluations per step`: every fourth step with
-/// Verlet and `emu`, every step with RK4) and the history within about 1000 rows.
-pub fn energy_every(steps: usize, integrator: Integrator) -> usize {
-    steps.div_ceil(1000).max(4usize.div_ceil(integrator.evaluations()))
+/// The energy history's cadence: a row every `k`-th step, the history within about 1000
+/// rows. Where the energies cost about one force evaluation (a pass over the operator or
+/// the bonds), `k` keeps them within a quarter of the stepping as well (`k >= 4 /
+/// evaluations per step`: every fourth step with Verlet and `emu`, every step with RK4);
+/// where the step's last evaluation kept them (`from_evaluation`: peridynamics under
+/// Verlet), every step.
+pub fn energy_every(steps: usize, integrator: Integrator, from_evaluation: bool) -> usize {
+    let rows = steps.div_ceil(1000);
+    if from_evaluation {
+        rows.max(1)
+    } else {
+        rows.max(4usize.div_ceil(integrator.evaluations()))
+    }
 }
 
 /// States over the history at which a dynamic run's error is estimated (besides none
@@ -157,7 +164,7 @@ pub fn integrate(
 ) -> Result<(DynamicReport, Vec<EnergyRow>), RunError> {
     let TimeGrid { dt, steps, stable } = grid;
     let visited = |step: usize| is_snapshot(step, steps, params) || also.binary_search(&step).is_ok();
-    let energy_every = energy_every(steps, params.integrator);
+    let energy_every = energy_every(steps, params.integrator, system.energies_from_evaluation());
     let mut history = Vec::with_capacity(steps.min(1000) + 2);
     let record = |s: &State, history: &mut Vec<EnergyRow>| {
         let [k, e, x, r, b] = energies(s);

@@ -41,6 +41,12 @@ pub trait SecondOrderSystem: Sync {
     fn settle(&self, _state: &mut State) -> bool {
         false
     }
+    /// Whether the energies of a state cost no pass over the operator, because the
+    /// evaluation that ended the step kept them (the energy history then has a row at
+    /// every step, [`driver::energy_every`]). No by default.
+    fn energies_from_evaluation(&self) -> bool {
+        false
+    }
 }
 
 /// Time, displacement, velocity and the last acceleration.

@@ -1,6 +1,7 @@
-//! One block of the force loop: up to [`BLOCK`] bonds of node `i`, `(g, flag) =
+//! One block of the force loop: up to [`BLOCK`] bonds of node `i`, `(g, flag, e) =
 //! law(c_ij, xi, eta, V_i)` per bond, `g` summed on `i` and (pairs) taken from `j`, the
-//! flags returned as the bits of a `u64` ([`super::pairs`]).
+//! flags returned as the bits of a `u64`, the bonds' energies `e` summed, a pair's whole
+//! and a bond's to the collar or seen from both ends half ([`super::pairs`]).
 //!
 //! Two layouts of the same operations, chosen by the law ([`Layout`]):
 //! - **fused**: gather, law and scatter in one loop per bond. The linear law's few
@@ -17,9 +18,11 @@
 /// Bonds per block (the flags of a block fit a `u64`).
 pub const BLOCK: usize = 64;
 
-/// A law of the force loop: `(g, flag) = law(c_ij, xi, eta, V_i)`.
-pub trait BondLaw: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool) {}
-impl<F: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool)> BondLaw for F {}
+/// A law of the force loop: `(g, flag, e) = law(c_ij, xi, eta, V_i)`: the force `g = V_i
+/// f_ij`, whether the bond is flagged, and its energy `e = V_i w_ij` (0 where the loop does
+/// not sum the energy).
+pub trait BondLaw: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool, f64) {}
+impl<F: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool, f64)> BondLaw for F {}
 
 /// How a block is evaluated (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,8 +53,10 @@ impl Kernel {
     }
 
     /// The sum of `law`'s forces over bonds `start + k` of node `i` to `js[k]` (at most
-    /// [`BLOCK`]), each subtracted from `force[j]` when `j` is free and `SCATTER`, and
-    /// the flags (bit `k`: bond `start + k`). `columns` is the caller's scratch.
+    /// [`BLOCK`]), each subtracted from `force[j]` when `j` is free and `SCATTER`, the
+    /// flags (bit `k`: bond `start + k`), and the sum of the energies, each whole where
+    /// `j` is free and `SCATTER` (the pair's) and half otherwise. `columns` is the
+    /// caller's scratch.
     #[inline]
     pub fn sum<const SCATTER: bool, L: BondLaw>(
         self,
@@ -60,7 +65,7 @@ impl Kernel {
         force: &mut [[f64; 2]],
         law: &L,
         columns: &mut Columns,
-    ) -> ([f64; 2], u64) {
+    ) -> ([f64; 2], u64, f64) {
         debug_assert!(bonds.2.len() <= BLOCK);
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
@@ -129,12 +134,13 @@ pub struct Columns {
     xi: [[f64; BLOCK]; 2],
     eta: [[f64; BLOCK]; 2],
     g: [[f64; BLOCK]; 2],
+    e: [f64; BLOCK],
     flag: [bool; BLOCK],
 }
 
 impl Default for Columns {
     fn default() -> Self {
-        Columns { xi: [[0.0; BLOCK]; 2], eta: [[0.0; BLOCK]; 2], g: [[0.0; BLOCK]; 2], flag: [false; BLOCK] }
+        Columns { xi: [[0.0; BLOCK]; 2], eta: [[0.0; BLOCK]; 2], g: [[0.0; BLOCK]; 2], e: [0.0; BLOCK], flag: [false; BLOCK] }
     }
 }
 
@@ -150,7 +156,7 @@ fn baseline<const SCATTER: bool, const COLUMNS: bool, L: BondLaw>(
     force: &mut [[f64; 2]],
     law: &L,
     columns: &mut Columns,
-) -> ([f64; 2], u64) {
+) -> ([f64; 2], u64, f64) {
     in_layout::<SCATTER, COLUMNS, L>(at, bonds, force, law, columns)
 }
 
@@ -167,7 +173,7 @@ unsafe fn avx2<const SCATTER: bool, const COLUMNS: bool, L: BondLaw>(
     force: &mut [[f64; 2]],
     law: &L,
     columns: &mut Columns,
-) -> ([f64; 2], u64) {
+) -> ([f64; 2], u64, f64) {
     in_layout::<SCATTER, COLUMNS, L>(at, bonds, force, law, columns)
 }
 
@@ -179,7 +185,7 @@ fn in_layout<const SCATTER: bool, const COLUMNS: bool, L: BondLaw>(
     force: &mut [[f64; 2]],
     law: &L,
     columns: &mut Columns,
-) -> ([f64; 2], u64) {
+) -> ([f64; 2], u64, f64) {
     if COLUMNS {
         in_columns::<SCATTER, L>(at, bonds, force, law, columns)
     } else {
@@ -218,27 +224,40 @@ fn fused<const SCATTER: bool, L: BondLaw>(
     (i, start, js): (usize, usize, &[u32]),
     force: &mut [[f64; 2]],
     law: &L,
-) -> ([f64; 2], u64) {
+) -> ([f64; 2], u64, f64) {
     let PairState { positions: x, u, prescribed, coefficients, volumes } = at;
     let free = x.len() - prescribed.len();
     // One bounds check per node's displacement (the interleaved `u` as pairs).
     let u = u.as_chunks::<2>().0;
     let (xi, ui, vi) = (x[i], u[i], volumes[i]);
     let c = &coefficients[start..start + js.len()];
-    let (mut f, mut flags) = ([0.0, 0.0], 0u64);
+    let (mut f, mut flags, mut energy) = ([0.0, 0.0], 0u64, 0.0);
     for (k, (&j, &c)) in js.iter().zip(c).enumerate() {
         let j = j as usize;
         let uj = displacement(u, prescribed, free, j);
-        let (g, flag) = law(c, [x[j][0] - xi[0], x[j][1] - xi[1]], [uj[0] - ui[0], uj[1] - ui[1]], vi);
+        let (g, flag, e) = law(c, [x[j][0] - xi[0], x[j][1] - xi[1]], [uj[0] - ui[0], uj[1] - ui[1]], vi);
         f[0] += g[0];
         f[1] += g[1];
+        energy += share::<SCATTER>(j < free) * e;
         if let Some(fj) = force.get_mut(j).filter(|_| SCATTER) {
             fj[0] -= g[0];
             fj[1] -= g[1];
         }
         flags |= u64::from(flag) << k;
     }
-    (f, flags)
+    (f, flags, energy)
+}
+
+/// The share of a bond's energy in the sum: a pair's whole (`j` free, visited once:
+/// `SCATTER`), half of a bond to the collar (the collar's own half is not counted) or of
+/// a bond seen from both ends.
+#[inline(always)]
+fn share<const SCATTER: bool>(free: bool) -> f64 {
+    if SCATTER && free {
+        1.0
+    } else {
+        0.5
+    }
 }
 
 /// The columns layout: the bond vectors gathered, the law over the columns (no loads
@@ -250,14 +269,14 @@ fn in_columns<const SCATTER: bool, L: BondLaw>(
     force: &mut [[f64; 2]],
     law: &L,
     columns: &mut Columns,
-) -> ([f64; 2], u64) {
+) -> ([f64; 2], u64, f64) {
     let PairState { positions: x, u, prescribed, coefficients, volumes } = at;
     let free = x.len() - prescribed.len();
     let n = js.len().min(BLOCK);
     let (js, c) = (&js[..n], &coefficients[start..start + n]);
     let u = u.as_chunks::<2>().0;
     let (xi, ui, vi) = (x[i], u[i], volumes[i]);
-    let Columns { xi: cx, eta: ce, g: cg, flag: cf } = columns;
+    let Columns { xi: cx, eta: ce, g: cg, e: cw, flag: cf } = columns;
     for (k, &j) in js.iter().enumerate() {
         let j = j as usize;
         let uj = displacement(u, prescribed, free, j);
@@ -267,16 +286,18 @@ fn in_columns<const SCATTER: bool, L: BondLaw>(
         ce[1][k] = uj[1] - ui[1];
     }
     for k in 0..n {
-        let (g, flag) = law(c[k], [cx[0][k], cx[1][k]], [ce[0][k], ce[1][k]], vi);
+        let (g, flag, e) = law(c[k], [cx[0][k], cx[1][k]], [ce[0][k], ce[1][k]], vi);
         cg[0][k] = g[0];
         cg[1][k] = g[1];
+        cw[k] = e;
         cf[k] = flag;
     }
-    let mut f = [0.0, 0.0];
+    let (mut f, mut energy) = ([0.0, 0.0], 0.0);
     for (k, &j) in js.iter().enumerate() {
         let g = [cg[0][k], cg[1][k]];
         f[0] += g[0];
         f[1] += g[1];
+        energy += share::<SCATTER>((j as usize) < free) * cw[k];
         if let Some(fj) = force.get_mut(j as usize).filter(|_| SCATTER) {
             fj[0] -= g[0];
             fj[1] -= g[1];
@@ -288,14 +309,14 @@ fn in_columns<const SCATTER: bool, L: BondLaw>(
             flags |= u64::from(b) << k;
         }
     }
-    (f, flags)
+    (f, flags, energy)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Every compiled kernel gives the same forces and flags to the bit, on a block of
+    /// Every compiled kernel gives the same forces, flags and energy to the bit, on a block of
     /// 61 bonds (a partial block), with the bond-stretch law's roots and division and
     /// collar nodes among the neighbours.
     #[test]
@@ -314,7 +335,7 @@ mod tests {
             let y = [xi[0] + eta[0], xi[1] + eta[1]];
             let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
             let k = vi * c * r * r * (ry - r) / ry;
-            ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= 1e-4 * r))
+            ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= 1e-4 * r), 0.5 * vi * c * r * r * (ry - r) * (ry - r))
         };
         let mut columns = Columns::default();
         let mut results = Vec::new();
@@ -322,14 +343,16 @@ mod tests {
             for avx2 in [false, Kernel::new(layout).avx2] {
                 let kernel = Kernel { layout, avx2 };
                 let mut force = vec![[0.0; 2]; free];
-                let (g, flags) = kernel.sum::<true, _>(at, (3, 10, &js), &mut force, &law, &mut columns);
-                results.push((g, flags, force));
+                let (g, flags, energy) = kernel.sum::<true, _>(at, (3, 10, &js), &mut force, &law, &mut columns);
+                results.push((g, flags, force, energy));
             }
         }
         assert!(results[0].1 != 0 && results[0].1 != (1 << 61) - 1, "some bonds flagged, not all");
+        assert!(results[0].3 > 0.0, "the energy is summed");
         for r in &results[1..] {
             assert_eq!(r.0.map(f64::to_bits), results[0].0.map(f64::to_bits));
             assert_eq!(r.1, results[0].1);
+            assert_eq!(r.3.to_bits(), results[0].3.to_bits());
             assert!(r.2.iter().zip(&results[0].2).all(|(a, b)| a.map(f64::to_bits) == b.map(f64::to_bits)));
         }
     }

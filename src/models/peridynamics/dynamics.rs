@@ -61,6 +61,10 @@ pub struct PdDynamics<'a> {
     /// The force loop: each bond once where the weights are symmetric
     /// ([`super::pairs`]).
     pub pairs: &'a Pairs,
+    /// Whether each force evaluation also sums the elastic energy, kept for the energy
+    /// history: for integrators whose last evaluation of a step is of the step's state
+    /// (Verlet), whose history then costs no pass over the bonds.
+    pub energy_in_loop: bool,
 }
 
 /// Loads that depend on time: the body force densities of the free nodes and the
@@ -146,8 +150,9 @@ impl PdDynamics<'_> {
     /// `live` bonds where bonds break, recording the bonds at the critical stretch
     /// ([`super::fracture`]): the loop flags them without a branch by
     /// [`PdDynamics::bond_force`]'s test. The test is a little wide (1e-12), so that no
-    /// bond [`PdDynamics::bond_energy`] finds at `s0` is left out.
-    fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> (Vec<[f64; 2]>, Vec<Flagged>) {
+    /// bond [`PdDynamics::bond_energy`] finds at `s0` is left out. And the bonds' elastic
+    /// energy ([`Pairs::energy`]'s sum) where [`PdDynamics::energy_in_loop`], else 0.
+    fn bond_forces(&self, u: &[f64], loads: &Instant, live: Option<&Live>) -> (Vec<[f64; 2]>, Vec<Flagged>, f64) {
         let pairs = self.pairs;
         let nodes = self.nodes();
         let (x, volumes, families) = (&nodes.positions, &nodes.volumes, self.bonds.families);
@@ -155,44 +160,15 @@ impl PdDynamics<'_> {
         let breaking = self.breaking.filter(|b| b.critical_stretch.is_finite());
         let s0 = breaking.map_or(f64::INFINITY, |b| b.critical_stretch * (1.0 - 1e-12));
         let at = PairState { positions: x, u, prescribed: &loads.prescribed, coefficients: c, volumes };
-        let (forces, reached) = match (self.force, breaking) {
-            (BondForce::Linear, None) => pairs.sum(
-                families,
-                &at,
-                (
-                    |c, xi: [f64; 2], eta: [f64; 2], vi| {
-                        let vcp = vi * c * (xi[0] * eta[0] + xi[1] * eta[1]);
-                        ([vcp * xi[0], vcp * xi[1]], false)
-                    },
-                    Layout::Fused,
-                ),
-            ),
-            (BondForce::Linear, Some(_)) => pairs.sum(
-                families,
-                &at,
-                (
-                    move |c, xi: [f64; 2], eta: [f64; 2], vi| {
-                        let p = xi[0] * eta[0] + xi[1] * eta[1];
-                        let cp = c * p;
-                        // Live and at s0 (a broken bond, c = 0, stays stretched: not flagged).
-                        ([vi * cp * xi[0], vi * cp * xi[1]], (cp != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1])))
-                    },
-                    Layout::Fused,
-                ),
-            ),
-            (BondForce::BondStretch, _) => pairs.sum(
-                families,
-                &at,
-                (
-                    move |c, xi, eta, vi| {
-                        let (g, at) = bond_stretch_force(c, xi, eta, s0);
-                        ([vi * g[0], vi * g[1]], at)
-                    },
-                    Layout::Columns,
-                ),
-            ),
-        };
-        (forces, reached)
+        let (linear, bond_stretch) = (Layout::Fused, Layout::Columns);
+        match (self.force, breaking.is_some(), self.energy_in_loop) {
+            (BondForce::Linear, false, false) => pairs.sum(families, &at, (linear_law::<false, false>(s0), linear)),
+            (BondForce::Linear, false, true) => pairs.sum(families, &at, (linear_law::<false, true>(s0), linear)),
+            (BondForce::Linear, true, false) => pairs.sum(families, &at, (linear_law::<true, false>(s0), linear)),
+            (BondForce::Linear, true, true) => pairs.sum(families, &at, (linear_law::<true, true>(s0), linear)),
+            (BondForce::BondStretch, _, false) => pairs.sum(families, &at, (bond_stretch_law::<false>(s0), bond_stretch)),
+            (BondForce::BondStretch, _, true) => pairs.sum(families, &at, (bond_stretch_law::<true>(s0), bond_stretch)),
+        }
     }
 
     /// The force of one bond with coefficient `c` on its node (module docs), and whether
@@ -207,7 +183,10 @@ impl PdDynamics<'_> {
                 let p = xi[0] * eta[0] + xi[1] * eta[1];
                 ([c * p * xi[0], c * p * xi[1]], (c != 0.0) & (p >= s0 * r2))
             }
-            BondForce::BondStretch => bond_stretch_force(c, xi, eta, s0),
+            BondForce::BondStretch => {
+                let (g, at, _) = bond_stretch_force(c, xi, eta, s0);
+                (g, at)
+            }
         }
     }
 
@@ -283,29 +262,63 @@ impl PdDynamics<'_> {
                 (kin, -vol * (b[0] * ui[0] + b[1] * ui[1]))
             })
             .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-        let c = live.as_deref().map_or(self.bonds.coefficients, |l| &l.coefficients);
-        let at = PairState { positions: &nodes.positions, u, prescribed: &loads.prescribed, coefficients: c, volumes: &nodes.volumes };
-        let el = match self.force {
-            BondForce::Linear => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| linear_energy(c, xi, eta).0),
-            BondForce::BondStretch => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| bond_stretch_energy(c, xi, eta).0),
-        };
-        let dilatation = self.theta(u, &loads).map_or(0.0, |theta| self.dilatation.map_or(0.0, |d| d.energy(nodes, &theta)));
+        // Kept by the evaluation of this state (Verlet's last), else a pass over the bonds.
+        let el = self.pairs.kept_energy(t, u).unwrap_or_else(|| {
+            let c = live.as_deref().map_or(self.bonds.coefficients, |l| &l.coefficients);
+            let at = PairState { positions: &nodes.positions, u, prescribed: &loads.prescribed, coefficients: c, volumes: &nodes.volumes };
+            let bonds = match self.force {
+                BondForce::Linear => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| linear_energy(c, xi, eta).0),
+                BondForce::BondStretch => self.pairs.energy(self.bonds.families, &at, |c, xi, eta| bond_stretch_energy(c, xi, eta).0),
+            };
+            bonds + self.theta(u, &loads).map_or(0.0, |theta| self.dilatation.map_or(0.0, |d| d.energy(nodes, &theta)))
+        });
         let (broken, released) = self.breaking.map_or((0, 0.0), |b| b.released());
-        [kin, el + dilatation, ext, released, broken as f64]
+        [kin, el, ext, released, broken as f64]
     }
 }
 
-/// The bond-stretch force `c |xi|^3 s (xi + eta) / |xi + eta|` (module docs) and whether
-/// the bond is live and at `s0` or beyond (`|xi + eta| - |xi| >= s0 |xi|`).
+/// The linear law of the force loop ([`super::block::BondLaw`]): `g = V_i c (xi . eta) xi`
+/// (module docs); flagged where live (`c != 0`) and at `s0` (`xi . eta >= s0 |xi|^2`)
+/// when `FLAG`; the energy `V_i c (xi . eta)^2 / 2` when `ENERGY`, else 0.
 #[inline(always)]
-fn bond_stretch_force(c: f64, xi: [f64; 2], eta: [f64; 2], s0: f64) -> ([f64; 2], bool) {
+fn linear_law<const FLAG: bool, const ENERGY: bool>(s0: f64) -> impl Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool, f64) + Sync {
+    move |c, xi, eta, vi| {
+        let p = xi[0] * eta[0] + xi[1] * eta[1];
+        if FLAG {
+            let cp = c * p;
+            let e = if ENERGY { 0.5 * vi * cp * p } else { 0.0 };
+            // Live and at s0 (a broken bond, c = 0, stays stretched: not flagged).
+            ([vi * cp * xi[0], vi * cp * xi[1]], (cp != 0.0) & (p >= s0 * (xi[0] * xi[0] + xi[1] * xi[1])), e)
+        } else {
+            let vcp = vi * c * p;
+            let e = if ENERGY { 0.5 * vcp * p } else { 0.0 };
+            ([vcp * xi[0], vcp * xi[1]], false, e)
+        }
+    }
+}
+
+/// The bond-stretch law of the force loop: `V_i` times [`bond_stretch_force`], flagged at
+/// `s0` (infinite: never), with its energy `V_i w` when `ENERGY`, else 0.
+#[inline(always)]
+fn bond_stretch_law<const ENERGY: bool>(s0: f64) -> impl Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool, f64) + Sync {
+    move |c, xi, eta, vi| {
+        let (g, at, w) = bond_stretch_force(c, xi, eta, s0);
+        ([vi * g[0], vi * g[1]], at, if ENERGY { vi * w } else { 0.0 })
+    }
+}
+
+/// The bond-stretch force `c |xi|^3 s (xi + eta) / |xi + eta|` (module docs), whether
+/// the bond is live and at `s0` or beyond (`|xi + eta| - |xi| >= s0 |xi|`), and its
+/// micropotential `c |xi|^4 s^2 / 2 = c |xi|^2 (|xi + eta| - |xi|)^2 / 2`.
+#[inline(always)]
+fn bond_stretch_force(c: f64, xi: [f64; 2], eta: [f64; 2], s0: f64) -> ([f64; 2], bool, f64) {
     let r2 = xi[0] * xi[0] + xi[1] * xi[1];
     let r = r2.sqrt();
     let y = [xi[0] + eta[0], xi[1] + eta[1]];
     let ry = (y[0] * y[0] + y[1] * y[1]).sqrt();
     // c |xi|^3 s / |xi + eta|, s = (|xi + eta| - |xi|) / |xi|.
     let k = c * r2 * (ry - r) / ry;
-    ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= s0 * r))
+    ([k * y[0], k * y[1]], (c != 0.0) & (ry - r >= s0 * r), 0.5 * c * r2 * (ry - r) * (ry - r))
 }
 
 /// The linear law's micropotential `c (xi . eta)^2 / 2` (module docs) and the linearised
@@ -336,9 +349,14 @@ impl SecondOrderSystem for PdDynamics<'_> {
         let loads = self.loads(t);
         let theta = self.theta(u, &loads);
         let live = self.breaking.map(Breaking::live);
-        let (forces, reached) = self.bond_forces(u, &loads, live.as_deref());
+        let (forces, reached, energy) = self.bond_forces(u, &loads, live.as_deref());
+        drop(live);
         if let Some(breaking) = self.breaking.filter(|_| !reached.is_empty()) {
             breaking.record(reached, t, u);
+        }
+        if self.energy_in_loop {
+            let dilatation = self.dilatation.zip(theta.as_deref()).map_or(0.0, |(d, theta)| d.energy(self.nodes(), theta));
+            self.pairs.keep_energy(t, u, energy + dilatation);
         }
         let volumes = &self.nodes().volumes;
         a.par_chunks_mut(2).enumerate().for_each(|(i, a)| {
@@ -367,7 +385,7 @@ impl SecondOrderSystem for PdDynamics<'_> {
         let again = (!fresh).then(|| self.loads(state.t));
         let once = !self.pairs.directed();
         let State { u, a, .. } = state;
-        breaking.break_each(&candidates, |f| {
+        let (broken, released) = breaking.break_each(&candidates, |f| {
             let (i, j, c) = (f.node, f.neighbour, f.coefficient);
             let (xi, eta) = again.as_ref().map_or((f.xi, f.eta), |loads| bond_vectors(&nodes.positions, u, &loads.prescribed, i, j));
             let (w, s) = self.bond_energy(c, xi, eta);
@@ -388,7 +406,14 @@ impl SecondOrderSystem for PdDynamics<'_> {
             } else {
                 Some((0.5 * vi * w, 1))
             }
-        })
+        });
+        // The energy the evaluation kept held these bonds' (the same shares).
+        self.pairs.change_kept_energy(-released);
+        broken > 0
+    }
+
+    fn energies_from_evaluation(&self) -> bool {
+        self.energy_in_loop
     }
 
     fn explain(&self, t0: f64, t1: f64) -> Option<RunError> {
@@ -409,7 +434,8 @@ mod tests {
     /// that visits every bond from both ends (the same weights, the pairs told they are
     /// not symmetric) break the same bonds (the same count, the same damage) and release
     /// the same energy, and leave the same acceleration, that of evaluating again without
-    /// the broken bonds, each to round-off (1e-12: sums of about 30 terms in another order).
+    /// the broken bonds, and the elastic energy of a pass over the live bonds in what the
+    /// evaluation kept, each to round-off (1e-12: sums of about 30 terms in another order).
     #[test]
     fn both_loops_break_the_same_bonds() {
         let (domain, nodes, families, c, skewed) = plate_bonds();
@@ -431,9 +457,15 @@ mod tests {
                 varying: None,
                 breaking: Some(&breaking),
                 pairs,
+                energy_in_loop: true,
             };
             let mut state = State::new(&system, 0.0, u.clone(), vec![0.0; u.len()]);
             assert!(system.settle(&mut state));
+            // The energy the evaluation kept, less the broken bonds', is a pass's over the
+            // live bonds (a copy of `u`: not the state the evaluation kept).
+            let kept = system.energies(0.0, &state.u, &state.v)[1];
+            let pass = system.energies(0.0, &state.u.clone(), &state.v)[1];
+            assert!(kept > 0.0 && (kept - pass).abs() <= 1e-12 * pass, "{force:?}: kept {kept:e}, pass {pass:e}");
             // Settling is evaluating again without the broken bonds.
             let mut again = vec![0.0; u.len()];
             system.acceleration(0.0, &state.u, &mut again);
@@ -474,6 +506,7 @@ mod tests {
             varying: None,
             breaking: Some(&breaking),
             pairs: &pairs,
+            energy_in_loop: false,
         };
         let marked: Vec<Flagged> = (0..free)
             .flat_map(|i| pairs.upper(&families, i).map(move |b| (i, b)))
@@ -483,7 +516,7 @@ mod tests {
                 Flagged { node: i, bond: b, neighbour: j, coefficient: c[b], xi: [0.0; 2], eta: [0.0; 2] }
             })
             .collect();
-        assert!(breaking.break_each(&marked, |_| Some((0.0, 2))));
+        assert!(breaking.break_each(&marked, |_| Some((0.0, 2))).0 > 0);
         let gone: HashSet<(usize, usize)> = marked.iter().map(|f| (f.node, f.neighbour)).collect();
         let damage = system.damage().unwrap();
         assert!(damage.iter().any(|&d| d > 0.3) && damage.iter().all(|&d| d < 1.0));

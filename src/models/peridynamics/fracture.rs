@@ -274,7 +274,8 @@ impl Breaking {
     /// evaluation, their coefficients as it read them: nothing writes them between an
     /// evaluation and the breaking after it) that `breaks(candidate)` breaks: it returns
     /// the energy the bond released and how many bond directions that counts (two
-    /// where the force loop visits a pair once, [`Pairs`]). Whether any broke.
+    /// where the force loop visits a pair once, `pairs::Pairs`). The bond directions
+    /// broken and the energy released by this call.
     ///
     /// Only the candidates' own bonds are marked: where the loop visits each pair once
     /// from its lower node, the pair's state is that bond's (the reverse bond keeps its
@@ -283,7 +284,7 @@ impl Breaking {
     /// to the bit from either end) and each breaks on its own. The marking only writes:
     /// the candidates are scattered over the bonds, and a read of each would wait for
     /// memory.
-    pub fn break_each(&self, candidates: &[Flagged], mut breaks: impl FnMut(&Flagged) -> Option<(f64, usize)>) -> bool {
+    pub fn break_each(&self, candidates: &[Flagged], mut breaks: impl FnMut(&Flagged) -> Option<(f64, usize)>) -> (usize, f64) {
         let (mut count, mut energy) = (0, 0.0);
         {
             let mut live = self.live.write().expect("no panic holds it");
@@ -300,7 +301,7 @@ impl Breaking {
         let mut r = self.released.lock().expect("no panic holds it");
         r.0 += count;
         r.1 += energy;
-        count > 0
+        (count, energy)
     }
 
     /// `(bonds broken since the start, energy they released)`.

@@ -36,6 +36,9 @@ pub struct Pairs {
     shares: Vec<Range<usize>>,
     /// Per share, a force buffer over the free nodes (reused).
     buffers: Mutex<Vec<Vec<[f64; 2]>>>,
+    /// An elastic energy the caller kept from a sum, and where it was evaluated:
+    /// `(t, the address of u, E)` ([`Pairs::keep_energy`]).
+    kept: Mutex<Option<(f64, usize, f64)>>,
 }
 
 impl Pairs {
@@ -70,7 +73,7 @@ impl Pairs {
             }
         }
         shares.push(start..free);
-        Pairs { first, directed: !symmetric, shares, buffers: Mutex::new(Vec::new()) }
+        Pairs { first, directed: !symmetric, shares, buffers: Mutex::new(Vec::new()), kept: Mutex::new(None) }
     }
 
     /// Whether every bond is visited from both ends (the weights are not symmetric).
@@ -85,24 +88,25 @@ impl Pairs {
     }
 
     /// `F_i = sum_{j > i} g_ij - sum_{j < i} g_ji` over the pairs of the state `at`
-    /// (directed: `F_i = sum_j g_ij`), `(g, flag) = law(c_ij, xi, eta, V_i)` for
-    /// bond `b` of node `i` to node `j` (collar nodes take nothing), and the bonds
+    /// (directed: `F_i = sum_j g_ij`), `(g, flag, e) = law(c_ij, xi, eta, V_i)` for
+    /// bond `b` of node `i` to node `j` (collar nodes take nothing), the bonds
     /// that `law` flags with what the loop read of them ([`Flagged`]), in node and bond
-    /// order. Bonds go in blocks of [`BLOCK`] in the `layout` ([`super::block`]).
-    pub fn sum<L>(&self, families: &Families, at: &PairState, (law, layout): (L, Layout)) -> (Vec<[f64; 2]>, Vec<Flagged>)
+    /// order, and the sum of the energies `e` as [`Pairs::energy`] counts them. Bonds go
+    /// in blocks of [`BLOCK`] in the `layout` ([`super::block`]).
+    pub fn sum<L>(&self, families: &Families, at: &PairState, (law, layout): (L, Layout)) -> (Vec<[f64; 2]>, Vec<Flagged>, f64)
     where
-        L: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool) + Sync,
+        L: Fn(f64, [f64; 2], [f64; 2], f64) -> ([f64; 2], bool, f64) + Sync,
     {
         let free = self.first.len();
         let kernel = Kernel::new(layout);
         let mut buffers = std::mem::take(&mut *self.buffers.lock().expect("no panic holds it"));
         buffers.resize_with(self.shares.len(), || vec![[0.0; 2]; free]);
-        let reached: Vec<Vec<Flagged>> = buffers
+        let reached: Vec<(Vec<Flagged>, f64)> = buffers
             .par_iter_mut()
             .zip(&self.shares)
             .map(|(force, share)| {
                 force.iter_mut().for_each(|f| *f = [0.0; 2]);
-                let mut reached = Vec::new();
+                let (mut reached, mut energy) = (Vec::new(), 0.0);
                 let mut columns = Box::<Columns>::default();
                 for i in share.clone() {
                     let upper = self.upper(families, i);
@@ -110,12 +114,13 @@ impl Pairs {
                     for (block, js) in js.chunks(BLOCK).enumerate() {
                         let start = upper.start + BLOCK * block;
                         let bonds = (i, start, js);
-                        let (g, mut flags) = if self.directed {
+                        let (g, mut flags, e) = if self.directed {
                             kernel.sum::<false, _>(*at, bonds, force, &law, &mut columns)
                         } else {
                             kernel.sum::<true, _>(*at, bonds, force, &law, &mut columns)
                         };
                         force[i] = [force[i][0] + g[0], force[i][1] + g[1]];
+                        energy += e;
                         while flags != 0 {
                             let k = flags.trailing_zeros() as usize;
                             reached.push(Flagged::read(at, i, start + k, js[k] as usize));
@@ -123,13 +128,33 @@ impl Pairs {
                         }
                     }
                 }
-                reached
+                (reached, energy)
             })
             .collect();
         let total: Vec<[f64; 2]> =
             (0..free).into_par_iter().map(|i| buffers.iter().fold([0.0; 2], |s, f| [s[0] + f[i][0], s[1] + f[i][1]])).collect();
         *self.buffers.lock().expect("no panic holds it") = buffers;
-        (total, reached.concat())
+        let energy = reached.iter().map(|r| r.1).sum();
+        (total, reached.into_iter().flat_map(|r| r.0).collect(), energy)
+    }
+
+    /// Keep the elastic energy `e` of the displacements `u` at time `t` (a sum's, with
+    /// whatever the caller adds), for [`Pairs::kept_energy`].
+    pub fn keep_energy(&self, t: f64, u: &[f64], e: f64) {
+        *self.kept.lock().expect("no panic holds it") = Some((t, u.as_ptr() as usize, e));
+    }
+
+    /// Add `de` to the kept energy (bonds broken after the sum took theirs away).
+    pub fn change_kept_energy(&self, de: f64) {
+        if let Some(k) = self.kept.lock().expect("no panic holds it").as_mut() {
+            k.2 += de;
+        }
+    }
+
+    /// The kept energy, when it is of the displacements `u` at time `t` (the same vector,
+    /// not changed since: the callers keep it from the evaluation that ends a step).
+    pub fn kept_energy(&self, t: f64, u: &[f64]) -> Option<f64> {
+        self.kept.lock().expect("no panic holds it").filter(|k| (k.0, k.1) == (t, u.as_ptr() as usize)).map(|k| k.2)
     }
 
     /// `E = 1/2 sum_i V_i sum_j w(c_ij, xi, eta)` at the state `at` over the bonds of
@@ -182,8 +207,8 @@ mod tests {
     /// On the clamped plate (free nodes, a collar, symmetric weights `c_ij = V_j /
     /// |xi|^3`): the pair sum is the directed sum `V_i sum_j c_ij (xi . eta) xi` to
     /// round-off (1e-12 of the largest force: sums of about 30 terms), every flagged
-    /// bond comes back once, and with weights made asymmetric the loop is directed and
-    /// again gives the directed sum.
+    /// bond comes back once, the loop's energy is the energy pass's, and with weights
+    /// made asymmetric the loop is directed and again gives the directed sums.
     #[test]
     fn the_pair_sum_is_the_directed_sum() {
         let (_, nodes, families, c, skewed) = plate_bonds();
@@ -195,16 +220,20 @@ mod tests {
         let at = PairState { positions: x, u: &u, prescribed: &prescribed, coefficients: &c, volumes: &nodes.volumes };
         let law = |c: f64, xi: [f64; 2], eta: [f64; 2], vi: f64| {
             let p = xi[0] * eta[0] + xi[1] * eta[1];
-            ([vi * c * p * xi[0], vi * c * p * xi[1]], p > 0.0)
+            ([vi * c * p * xi[0], vi * c * p * xi[1]], p > 0.0, 0.5 * vi * c * p * p)
         };
-        let (forces, flagged) = pairs.sum(&families, &at, (law, Layout::Fused));
+        let (forces, flagged, energy) = pairs.sum(&families, &at, (law, Layout::Fused));
+        // The loop's energy is the energy pass's (another order of the same terms).
+        let w = |c: f64, xi: [f64; 2], eta: [f64; 2]| law(c, xi, eta, 1.0).2;
+        let pass = pairs.energy(&families, &at, w);
+        assert!(energy > 0.0 && (energy - pass).abs() <= 1e-12 * pass, "loop {energy:e}, pass {pass:e}");
         let displacement = |j: usize| if j < nodes.free { [u[2 * j], u[2 * j + 1]] } else { prescribed[j - nodes.free] };
         let directed_force = |i: usize, c: &[f64]| {
             let mut f = [0.0; 2];
             for (b, &j) in families.range(i).zip(families.of(i)) {
                 let j = j as usize;
                 let (uj, ui) = (displacement(j), displacement(i));
-                let (g, _) = law(c[b], [x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]], nodes.volumes[i]);
+                let (g, _, _) = law(c[b], [x[j][0] - x[i][0], x[j][1] - x[i][1]], [uj[0] - ui[0], uj[1] - ui[1]], nodes.volumes[i]);
                 f = [f[0] + g[0], f[1] + g[1]];
             }
             f
@@ -243,7 +272,9 @@ mod tests {
         let directed = Pairs::new(&nodes, &families, &skewed);
         assert!(directed.directed());
         let at = PairState { coefficients: &skewed, ..at };
-        let (forces, _) = directed.sum(&families, &at, (law, Layout::Columns));
+        let (forces, _, energy) = directed.sum(&families, &at, (law, Layout::Columns));
+        let pass = directed.energy(&families, &at, w);
+        assert!((energy - pass).abs() <= 1e-12 * pass, "directed: loop {energy:e}, pass {pass:e}");
         for (i, sum) in forces.iter().enumerate().take(nodes.free) {
             let f = directed_force(i, &skewed);
             assert!((f[0] - sum[0]).abs().max((f[1] - sum[1]).abs()) <= 1e-12 * largest, "directed sum at node {i}");

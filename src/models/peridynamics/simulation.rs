@@ -11,6 +11,7 @@ use super::solve::Discretisation;
 use super::PdParams;
 use crate::models::dynamics::driver::{integrate, is_snapshot, time_grid, DynamicReport, EnergyRow, Snapshot, TimeGrid};
 use crate::models::dynamics::history::TimeSamples;
+use crate::models::dynamics::integrators::Integrator;
 use crate::models::dynamics::{DynamicsParams, State};
 use crate::physics::case::Case;
 use crate::physics::elasticity::conditions::Value;
@@ -175,6 +176,7 @@ pub fn with_system<R>(
         varying,
         breaking: breaking.as_ref(),
         pairs: &pairs,
+        energy_in_loop: dynamics.integrator == Integrator::Verlet,
     };
     let free = &disc.nodes.positions[..disc.nodes.free];
     let dofs = disc.nodes.dofs();
