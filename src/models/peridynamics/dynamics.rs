@@ -384,7 +384,7 @@ impl SecondOrderSystem for PdDynamics<'_> {
         // each bond is read again at `state`.
         let again = (!fresh).then(|| self.loads(state.t));
         let once = !self.pairs.directed();
-        let State { u, a, .. } = state;
+        let State { t, u, a, .. } = state;
         let (broken, released) = breaking.break_each(&candidates, |f| {
             let (i, j, c) = (f.node, f.neighbour, f.coefficient);
             let (xi, eta) = again.as_ref().map_or((f.xi, f.eta), |loads| bond_vectors(&nodes.positions, u, &loads.prescribed, i, j));
@@ -408,7 +408,7 @@ impl SecondOrderSystem for PdDynamics<'_> {
             }
         });
         // The energy the evaluation kept held these bonds' (the same shares).
-        self.pairs.change_kept_energy(-released);
+        self.pairs.change_kept_energy(*t, u, -released);
         broken > 0
     }
 

@@ -144,9 +144,10 @@ impl Pairs {
         *self.kept.lock().expect("no panic holds it") = Some((t, u.as_ptr() as usize, e));
     }
 
-    /// Add `de` to the kept energy (bonds broken after the sum took theirs away).
-    pub fn change_kept_energy(&self, de: f64) {
-        if let Some(k) = self.kept.lock().expect("no panic holds it").as_mut() {
+    /// Add `de` to the kept energy when it is of `u` at `t` (bonds broken after the sum
+    /// took theirs away).
+    pub fn change_kept_energy(&self, t: f64, u: &[f64], de: f64) {
+        if let Some(k) = self.kept.lock().expect("no panic holds it").as_mut().filter(|k| (k.0, k.1) == (t, u.as_ptr() as usize)) {
             k.2 += de;
         }
     }
