@@ -37,6 +37,7 @@ pub mod extension;
 pub mod family;
 pub mod fracture;
 pub mod kernel;
+pub mod laws;
 pub mod loads;
 pub mod nodes;
 pub mod operator;
