@@ -11,7 +11,9 @@
 # Usage: bash benches/estimate.sh [SCENE[:SPACING][@key=value,...]]...
 #   e.g. bash benches/estimate.sh kirsch "cantilever:0.035@approximation.basis=tensor"
 # Environment: PAIRS (default 3), MLSM (default target/release/mlsm), METHODS (default
-# "none auto higher-degree"; leave higher-degree out at 1e6 nodes, where it takes minutes).
+# "none auto higher-degree"; leave higher-degree out at 1e6 nodes, where it takes minutes);
+# BEFORE=<another build's mlsm> adds its `auto` run to each alternation (columns
+# "before": its estimate's seconds, its total / none and its peak / none).
 source "$(dirname "$0")/paired.sh"
 if [ ${#scenes[@]} -eq 0 ]; then
   scenes=(cantilever cantilever_traction manufactured_dirichlet manufactured_traction lame kirsch flamant gravity_dam steel_plate bracket)
@@ -26,9 +28,13 @@ for spec in "${scenes[@]}"; do
   for method in auto higher-degree none; do
     python3 benches/scene_variant.py "problems/$name.toml" "$work/$method.toml" "estimate.method=\"$method\"" "${kv[@]/#/}" > /dev/null
   done
+  methods=${METHODS:-none auto higher-degree}
+  [ -n "${BEFORE:-}" ] && methods="$methods before"
   for k in $(seq "$PAIRS"); do
-    for method in ${METHODS:-none auto higher-degree}; do
-      "$MLSM" --quiet run "$work/$method.toml" "${args[@]}" --out "$work/o_${method}_$k" > /dev/null 2>&1
+    for method in $methods; do
+      bin=$MLSM; file=$method
+      [ "$method" = before ] && { bin=$BEFORE; file=auto; }
+      "$bin" --quiet run "$work/$file.toml" "${args[@]}" --out "$work/o_${method}_$k" > /dev/null 2>&1
     done
   done
   python3 - "$work" "$PAIRS" "$spec" <<'PY'
@@ -51,6 +57,14 @@ eff = "-"
 if e and x:
     eff = f"{x['e_inf_u'] / e['e_inf_u']:.2f} / {x['e_inf_sigma'] / e['e_inf_sigma']:.2f}"
 took = x["method"] if x else "none"
-print(f"| {spec} | {auto[0]['nodes']} | {took} | {run_s:.2f} | {a_est:.2f} / {h_est:.2f} | {a_est / run_s:.2f} / {h_est / run_s:.2f} | {t_ratio:.2f} | {m_ratio:.2f} | {eff} |")
+row = f"| {spec} | {auto[0]['nodes']} | {took} | {run_s:.2f} | {a_est:.2f} / {h_est:.2f} | {a_est / run_s:.2f} / {h_est / run_s:.2f} | {t_ratio:.2f} | {m_ratio:.2f} | {eff} |"
+if os.path.exists(f"{work}/o_before_1"):
+    before = runs("before")
+    b_t = med(total(b) / total(n) for b, n in zip(before, none))
+    b_m = med(b["peak_memory_bytes"] / n["peak_memory_bytes"] for b, n in zip(before, none))
+    bx = before[0]["estimated_errors"]
+    b_eff = f"{bx['e_inf_u'] / e['e_inf_u']:.2f}" if e and bx else (f"{bx['e_inf_u']:.2e} / {x['e_inf_u']:.2e}" if bx and x else "-")
+    row += f" before: estimate {med(est(s) for s in before):.2f} s, total {b_t:.2f}, peak {b_m:.2f}, {bx['method'] if bx else 'none'}, e_inf(u) {b_eff} |"
+print(row)
 PY
 done
