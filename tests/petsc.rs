@@ -202,6 +202,35 @@ mod with_petsc {
         assert!(post < 0.6 * solve, "post-processing peak {post:e} B against the solve's {solve:e} B");
     }
 
+    /// What PETSc ran is in `summary.json` as its options database left it, and
+    /// PETSc's own instruments work: `-ksp_type bcgs -ksp_rtol 1e-9 -ksp_max_it 4000
+    /// -log_view` on one and two ranks gives `solver.petsc` with those settings and a
+    /// converged reason, and rank 0's stdout carries `-log_view`'s performance summary
+    /// (printed by `PetscFinalize`, which `main` calls at the end of the run).
+    #[test]
+    fn the_ksp_in_force_is_reported_and_log_view_works() {
+        let dir = tempfile::tempdir().unwrap();
+        let petsc_scene = petsc_cantilever(dir.path());
+        for ranks in [0, 2] {
+            let out = dir.path().join(format!("r{ranks}"));
+            let o = mlsm(
+                ranks,
+                &petsc_scene,
+                &out,
+                &["-q", "--", "-ksp_type", "bcgs", "-ksp_rtol", "1e-9", "-ksp_max_it", "4000", "-log_view"],
+            );
+            assert!(o.status.success(), "{ranks} ranks: {}", describe(&o));
+            let s = summary(&out);
+            let k = &s["solver"]["petsc"];
+            assert_eq!((k["ksp_type"].as_str(), k["pc_type"].as_str()), (Some("bcgs"), Some("gamg")), "{k}");
+            assert_eq!((k["rtol"].as_f64(), k["max_it"].as_u64()), (Some(1e-9), Some(4000)), "{k}");
+            assert!(k["converged_reason"].as_str().unwrap().starts_with("CONVERGED"), "{k}");
+            let stdout = String::from_utf8_lossy(&o.stdout);
+            assert_eq!(stdout.matches("PETSc Performance Summary").count(), 1, "{ranks} ranks: {stdout}");
+            assert!(stdout.contains("KSPSolve"), "{stdout}");
+        }
+    }
+
     /// A KSP that stops (here at the iteration limit passed through) is a solver
     /// failure: exit 3, PETSc's converged reason and the true residual in the message,
     /// and no result folder left behind.

@@ -98,6 +98,7 @@ impl Start<'_> {
             condition_estimate: None,
             solver_error: None,
             ranks: None,
+            petsc: None,
         }
     }
 

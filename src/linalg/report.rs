@@ -50,6 +50,26 @@ pub struct SolveReport {
     /// Rows, entries, halo and stage times of each MPI rank (PETSc runs only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ranks: Option<RankReport>,
+    /// What PETSc's KSP ran with, after its options database (PETSc runs only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub petsc: Option<KspSettings>,
+}
+
+/// The Krylov method and preconditioner PETSc ran, with the settings in force once
+/// the options database (`-ksp_type`, `-pc_type`, `-ksp_rtol`, `-ksp_max_it`,
+/// `PETSC_OPTIONS`) overrode the scene's, and why it stopped (in `summary.json`).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct KspSettings {
+    /// `KSPGetType`, e.g. `gmres`.
+    pub ksp_type: String,
+    /// `PCGetType`, e.g. `gamg`.
+    pub pc_type: String,
+    /// The relative tolerance in force.
+    pub rtol: f64,
+    /// The iteration limit in force.
+    pub max_it: usize,
+    /// `KSPConvergedReason`'s name, e.g. `CONVERGED_RTOL`.
+    pub converged_reason: String,
 }
 
 /// Why [`solve`] or [`assemble`] failed. Messages are plain language and say

@@ -19,7 +19,7 @@
 //! error never leaves the others waiting.
 
 use super::petsc::{self, KspDefaults, LocalRows, World};
-use crate::linalg::report::RankReport;
+use crate::linalg::report::{KspSettings, RankReport};
 use crate::linalg::scaling::row_scale;
 use crate::linalg::triplets::{compress, Entry};
 use crate::linalg::{Krylov, SolveError, SolveReport, SolverKind, SolverParams};
@@ -88,7 +88,6 @@ impl Distribution {
         self.counts[..self.world.rank].iter().sum::<usize>() * self.per_point
     }
 }
-
 
 /// The per-rank numbers `local` of every rank, in rank order.
 pub fn gather_counts(local: &[f64]) -> Result<Vec<Vec<f64>>, SolveError> {
@@ -254,6 +253,13 @@ pub fn solve(
         // PETSc's KSP holds the preconditioner; its error is not estimated here.
         solver_error: None,
         ranks: Some(rank_report(dist.world.size, local_n, owned.cols.len(), halo)?),
+        petsc: Some(KspSettings {
+            ksp_type: out.ksp_type.clone(),
+            pc_type: out.pc_type.clone(),
+            rtol: out.rtol,
+            max_it: out.max_it,
+            converged_reason: out.reason_name.clone(),
+        }),
     };
     Ok((x, report))
 }
@@ -338,7 +344,6 @@ fn check_converged(out: &petsc::KspOutcome, relative_residual: f64, method: &str
         tolerance: out.rtol,
     })
 }
-
 
 /// Every rank's `(stage, seconds)`, in rank order (collective; each rank ran the same
 /// stages, a stage another rank lacks reads 0).
