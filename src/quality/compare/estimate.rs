@@ -31,8 +31,9 @@ use std::time::Instant;
 /// Halvings of the Navier spacing a static `local-model` estimate takes at most to get
 /// a reference [`LOCAL_REFERENCE_MARGIN`] times more accurate (by its own estimate)
 /// than the difference it measures; a halving that would give the reference more nodes
-/// than the peridynamic run has is not taken either (its degree-4 basis is then
-/// accurate enough, or the check `estimate-reference` warns).
+/// than the peridynamic run has is not taken either, unless the reference is still
+/// coarser than the scene's `[nodes]` (its degree-4 basis is then accurate enough, or
+/// the check `estimate-reference` warns).
 pub const MAX_REFINEMENTS: usize = 3;
 
 /// The `local-model` estimate of the peridynamic run of `problem` whose free nodes
@@ -48,6 +49,7 @@ pub fn local_model(
 ) -> Estimate {
     let t0 = Instant::now();
     let mut navier = problem.local_reference();
+    let scene_spacing = problem.navier.fill.spacing;
     for refinement in 0.. {
         let compared = match (&navier.case.dynamics, history.is_empty()) {
             (Some(d), false) => over_history(&navier, d, positions, history),
@@ -59,7 +61,7 @@ pub fn local_model(
         };
         let coarse = e.reference_estimated_e_inf_u.is_some_and(|own| own * LOCAL_REFERENCE_MARGIN >= e.norms.e_inf_u);
         let per_node = navier.navier.formulation.unknowns(&navier.case.material).per_node();
-        let affordable = 4 * e.reference_unknowns <= positions.len() * per_node;
+        let affordable = 4 * e.reference_unknowns <= positions.len() * per_node || navier.navier.fill.spacing > scene_spacing;
         let finer = (coarse && affordable && refinement < MAX_REFINEMENTS)
             .then(|| navier.with_spacing(navier.navier.fill.spacing / 2.0).ok())
             .flatten()
