@@ -155,8 +155,8 @@ impl ModelParams {
 
 impl Problem {
     /// The Navier problem the `local-model` estimate of this (peridynamic) problem
-    /// starts from: the scene's nodes (a static one's no finer than the peridynamic
-    /// spacing); a static one with the scene's basis, or PHS r^3 with monomials of
+    /// starts from: the scene's nodes, no finer than the peridynamic spacing; a static
+    /// one with the scene's basis, or PHS r^3 with monomials of
     /// degree [`LOCAL_REFERENCE_DEGREE`] when the scene's degree is lower (so that the
     /// reference is far more accurate than the nonlocal solution it judges), and its own
     /// error estimate (`auto`: the defect estimate, 0.3 of the cost the higher-degree
@@ -177,7 +177,7 @@ impl Problem {
             let support = default_rbf_fd_support(basis.size(), navier.navier.fill.kind);
             *approximation = Approximation { basis, weight: Weight::None, support, ghost_nodes: approximation.ghost_nodes };
         }
-        // A static reference starts at the peridynamic spacing `delta / m` where that is
+        // The reference starts at the peridynamic spacing `delta / m` where that is
         // coarser than the scene's `[nodes]`, and is refined from there as far as its
         // margin asks (`quality::compare::estimate::local_model`): the degree-4 reference
         // at the peridynamic spacing is already far more accurate than the model
@@ -185,9 +185,13 @@ impl Problem {
         // pd_manufactured (225 peridynamic nodes) the scene's 1 681 nodes made a reference
         // 1e4 times more accurate than the difference (own estimate 2.3e-6 against
         // 1.8e-2) for 12 times the run's time; at 256 nodes its own estimate is 1.1e-4
-        // and the difference reads the same to three digits
+        // and the difference reads the same to three digits. A dynamic reference too,
+        // with no own estimate to refine by (as at the scene's spacing): its integration
+        // costs as the cube of `1 / h` (nodes times steps), and on the shipped dynamic
+        // scenes its own error at the peridynamic spacing stays some 40 times below the
+        // difference it measures
         // (docs/notebook/2026-11-30-pd-reference-at-its-spacing.md).
-        let start = self.model.peridynamics().filter(|_| !dynamic).map_or(0.0, |pd| pd.spacing());
+        let start = self.model.peridynamics().map_or(0.0, |pd| pd.spacing());
         if start > navier.navier.fill.spacing {
             if let Ok(coarser) = navier.with_spacing(start) {
                 return coarser;
