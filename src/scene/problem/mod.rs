@@ -153,6 +153,11 @@ impl ModelParams {
     }
 }
 
+/// The most a dynamic `local-model` reference's spacing exceeds the scene's
+/// ([`Problem::local_reference`]): without an own estimate to check it by, its error, of
+/// order 2 in `h`, grows at most four times over the reference at the scene's spacing.
+pub const DYNAMIC_REFERENCE_COARSENING: f64 = 2.0;
+
 impl Problem {
     /// The Navier problem the `local-model` estimate of this (peridynamic) problem
     /// starts from: the scene's nodes, no finer than the peridynamic spacing; a static
@@ -186,13 +191,20 @@ impl Problem {
         // 1e4 times more accurate than the difference (own estimate 2.3e-6 against
         // 1.8e-2) for 12 times the run's time; at 256 nodes its own estimate is 1.1e-4
         // and the difference reads the same to three digits. A dynamic reference too,
-        // with no own estimate to refine by (as at the scene's spacing): its integration
+        // with no own estimate to refine by (as at the scene's spacing), so no coarser
+        // than [`DYNAMIC_REFERENCE_COARSENING`] times the scene's spacing: its integration
         // costs as the cube of `1 / h` (nodes times steps), and on the shipped dynamic
-        // scenes its own error at the peridynamic spacing stays some 40 times below the
-        // difference it measures
-        // (docs/notebook/2026-11-30-pd-reference-at-its-spacing.md).
-        let start = self.model.peridynamics().map_or(0.0, |pd| pd.spacing());
-        if start > navier.navier.fill.spacing {
+        // scenes (1.67 times) its own error stays some 40 times below the difference it
+        // measures (docs/notebook/2026-11-30-pd-reference-at-its-spacing.md).
+        let scene = navier.navier.fill.spacing;
+        let start = self.model.peridynamics().map_or(0.0, |pd| {
+            if dynamic {
+                pd.spacing().min(DYNAMIC_REFERENCE_COARSENING * scene)
+            } else {
+                pd.spacing()
+            }
+        });
+        if start > scene {
             if let Ok(coarser) = navier.with_spacing(start) {
                 return coarser;
             }
