@@ -19,7 +19,7 @@
 //! error never leaves the others waiting.
 
 use super::petsc::{self, KspDefaults, LocalRows, World};
-use crate::linalg::report::RankReport;
+use crate::linalg::report::{KspSettings, RankReport};
 use crate::linalg::scaling::row_scale;
 use crate::linalg::triplets::{compress, Entry};
 use crate::linalg::{Krylov, SolveError, SolveReport, SolverKind, SolverParams};
@@ -227,7 +227,7 @@ pub fn solve(
     let sums = residual_sums(&owned, &rhs, &x_petsc)?;
     let relative = |r2: f64, b2: f64| if b2 > 0.0 { (r2 / b2).sqrt() } else { r2.sqrt() };
     let relative_residual = relative(sums[0], sums[1]);
-    let method = format!("petsc:{}+{}", out.settings.ksp_type, out.settings.pc_type);
+    let method = format!("petsc:{}+{}", out.ksp_type, out.pc_type);
     check_converged(&out, relative_residual, &method)?;
     let mut x = vec![0.0; n];
     for (u, xu) in x.iter_mut().enumerate() {
@@ -253,7 +253,13 @@ pub fn solve(
         // PETSc's KSP holds the preconditioner; its error is not estimated here.
         solver_error: None,
         ranks: Some(rank_report(dist.world.size, local_n, owned.cols.len(), halo)?),
-        petsc: Some(out.settings.clone()),
+        petsc: Some(KspSettings {
+            ksp_type: out.ksp_type.clone(),
+            pc_type: out.pc_type.clone(),
+            rtol: out.rtol,
+            max_it: out.max_it,
+            converged_reason: out.reason_name.clone(),
+        }),
     };
     Ok((x, report))
 }
@@ -318,15 +324,14 @@ fn residual_sums(owned: &OwnedRows, rhs: &[f64], x: &[f64]) -> Result<[f64; 4], 
 /// Refuses a KSP that diverged, or whose true relative residual is above 10 x the
 /// rtol it reported reaching (NaN included).
 fn check_converged(out: &petsc::KspOutcome, relative_residual: f64, method: &str) -> Result<(), SolveError> {
-    let (rtol, reason_name) = (out.settings.rtol, &out.settings.converged_reason);
-    let within = relative_residual <= 10.0 * rtol; // false for NaN
+    let within = relative_residual <= 10.0 * out.rtol; // false for NaN
     if out.reason >= 0 && within {
         return Ok(());
     }
     let limit = if out.reason < 0 {
-        format!("PETSc's converged reason {reason_name} ({})", out.reason)
+        format!("PETSc's converged reason {} ({})", out.reason_name, out.reason)
     } else {
-        format!("PETSc reported {reason_name} but the true residual is above 10 x its rtol {rtol:e}")
+        format!("PETSc reported {} but the true residual is above 10 x its rtol {:e}", out.reason_name, out.rtol)
     };
     let hint = "try PETSc's distributed LU (-pc_type lu -pc_factor_mat_solver_type mumps), another -pc_type or a larger -ksp_max_it";
     Err(SolveError::NoConvergence {
@@ -336,7 +341,7 @@ fn check_converged(out: &petsc::KspOutcome, relative_residual: f64, method: &str
         limit,
         relative_residual,
         method: method.to_string(),
-        tolerance: rtol,
+        tolerance: out.rtol,
     })
 }
 

@@ -12,7 +12,6 @@
 //! Without the feature the same functions describe a world of one rank, and
 //! [`solve`] reports that the backend is absent.
 
-use crate::linalg::report::KspSettings;
 use std::sync::OnceLock;
 
 /// Whether this build has the PETSc backend.
@@ -130,10 +129,16 @@ pub struct KspOutcome {
     pub iterations: usize,
     /// PETSc's `KSPConvergedReason` (positive: converged, negative: diverged).
     pub reason: i64,
-    /// The Krylov method, preconditioner, tolerance and iteration limit in force, and
-    /// the reason's name (`CONVERGED_RTOL`, `DIVERGED_ITS`), as `summary.json` reports
-    /// them.
-    pub settings: KspSettings,
+    /// Its name, e.g. `CONVERGED_RTOL` or `DIVERGED_ITS`.
+    pub reason_name: String,
+    /// The Krylov method used.
+    pub ksp_type: String,
+    /// The preconditioner used.
+    pub pc_type: String,
+    /// The relative tolerance used.
+    pub rtol: f64,
+    /// The iteration limit used.
+    pub max_it: usize,
     /// Matrix, preconditioner and KSP set-up, seconds.
     pub setup_seconds: f64,
     /// `KSPSolve`, seconds.
@@ -161,7 +166,7 @@ pub fn any_rank(failed: bool) -> bool {
 
 #[cfg(feature = "petsc")]
 mod ffi {
-    use super::{KspDefaults, KspOutcome, KspSettings, LocalRows, World};
+    use super::{KspDefaults, KspOutcome, LocalRows, World};
     use std::ffi::{c_char, c_int, CStr, CString};
 
     #[repr(C)]
@@ -301,13 +306,11 @@ mod ffi {
             x,
             iterations: out.iterations as usize,
             reason: out.reason,
-            settings: KspSettings {
-                ksp_type: text(&out.ksp_type),
-                pc_type: text(&out.pc_type),
-                rtol: out.rtol,
-                max_it: out.max_it as usize,
-                converged_reason: text(&out.reason_name),
-            },
+            reason_name: text(&out.reason_name),
+            ksp_type: text(&out.ksp_type),
+            pc_type: text(&out.pc_type),
+            rtol: out.rtol,
+            max_it: out.max_it as usize,
             setup_seconds: out.setup_seconds,
             solve_seconds: out.solve_seconds,
         })
